@@ -1,0 +1,29 @@
+#pragma once
+
+#include <Eigen/Core>
+
+namespace epipole::calib {
+
+// Pinhole intrinsics K = [fx 0 cx; 0 fy cy; 0 0 1], in pixels.
+struct Intrinsics {
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+};
+
+// OpenCV's radial-tangential ("plumb bob") model, coefficients in OpenCV's order.
+struct Distortion {
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+};
+
+struct PinholeCamera {
+  Intrinsics intrinsics;
+  Distortion distortion;
+
+  // Ideal normalised image coordinates (x/z, y/z) to distorted ones.
+  Eigen::Vector2d distort(const Eigen::Vector2d& normalized) const;
+
+  // A point in the camera frame to pixel coordinates, distortion included. Throws Error for a
+  // point on or behind the image plane.
+  Eigen::Vector2d project(const Eigen::Vector3d& point) const;
+};
+
+}  // namespace epipole::calib

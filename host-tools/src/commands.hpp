@@ -1,0 +1,15 @@
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace epipole::tools {
+
+// Options every subcommand understands.
+struct GlobalOptions {
+  std::string kernels = "auto";  // auto | ref | neon
+};
+
+// Each subcommand lives in its own file and registers itself on the app.
+void add_features_command(CLI::App& app, const GlobalOptions& global);
+
+}  // namespace epipole::tools

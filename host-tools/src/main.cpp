@@ -1,0 +1,35 @@
+// epipole: the host tool for people at a desk. One binary, one subcommand per job.
+#include <exception>
+#include <iostream>
+
+#include "commands.hpp"
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/build_info.hpp"
+
+int main(int argc, char** argv) {
+  using namespace epipole;
+  CLI::App app{"Epipole stereo-vision tools: run the firmware's stages on image files.", "epipole"};
+  app.set_version_flag("--version", firmware::build_info());
+  app.require_subcommand(1);
+  app.fallthrough();
+
+  tools::GlobalOptions global;
+  app.add_option("--kernels", global.kernels, "Kernel path: auto, ref (scalar) or neon")
+      ->check(CLI::IsMember({"auto", "ref", "reference", "neon"}))
+      ->capture_default_str();
+
+  tools::add_features_command(app, global);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const Error& e) {
+    std::cerr << "epipole: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "epipole: internal error: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

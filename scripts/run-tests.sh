@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Every test: installs what is missing, fetches the data sets, builds the host, host-asan,
+# aarch64 and armhf presets and runs all their tests (the cross-built ones under qemu-user).
+# This is the README's test command and what CI runs.
+#
+#   EPIPOLE_PRESETS="host aarch64"   run a subset of the presets
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+presets=${EPIPOLE_PRESETS:-"host host-asan aarch64 armhf"}
+start=$SECONDS
+
+./scripts/setup.sh
+./scripts/fetch-data.sh
+./scripts/check-format.sh
+
+for preset in $presets; do
+  echo "=== $preset: configure and build"
+  cmake --preset "$preset" >/dev/null
+  cmake --build --preset "$preset"
+  echo "=== $preset: test"
+  ctest --preset "$preset" --output-junit "junit-$preset.xml"
+done
+
+echo "run-tests: all presets passed ($presets) in $((SECONDS - start)) s"

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs every build and test dependency of Epipole from Debian's packages.
+# Idempotent: packages already present are not fetched again. Run as root (or with sudo).
+set -euo pipefail
+
+packages=(
+  # build tools
+  build-essential cmake ninja-build pkg-config git clang-format
+  # host libraries
+  libsimde-dev libeigen3-dev libyaml-cpp-dev libgpiod-dev libcamera-dev libpng-dev libjpeg-dev
+  libcli11-dev nlohmann-json3-dev
+  # tests, benchmarks and host-only references (never linked into the firmware)
+  googletest libgtest-dev libgmock-dev libbenchmark-dev libopencv-dev
+  # cross compilers and the user-mode emulator that runs cross-built tests
+  g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user
+  # data fetching (apt-get download + dpkg-deb)
+  dpkg ca-certificates
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if ((${#missing[@]} == 0)); then
+  echo "setup: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+sudo=""
+if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
+echo "setup: installing ${#missing[@]} packages: ${missing[*]}"
+$sudo apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "setup: done"

@@ -1,0 +1,108 @@
+#include "epipole/core/image_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <random>
+
+#include "epipole/core/error.hpp"
+
+namespace epipole {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ImageFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("epipole-io-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+            "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path file(const std::string& name) const { return dir_ / name; }
+  void write_bytes(const fs::path& path, const std::string& bytes) const {
+    std::ofstream(path, std::ios::binary) << bytes;
+  }
+
+  fs::path dir_;
+};
+
+template <typename T>
+Image<T> random_image(int width, int height, unsigned seed) {
+  Image<T> image(width, height);
+  std::mt19937 rng(seed);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) image(x, y) = static_cast<T>(rng());
+  return image;
+}
+
+template <typename T>
+void expect_same(const Image<T>& a, const Image<T>& b) {
+  ASSERT_EQ(a.width(), b.width());
+  ASSERT_EQ(a.height(), b.height());
+  for (int y = 0; y < a.height(); ++y)
+    for (int x = 0; x < a.width(); ++x) ASSERT_EQ(a(x, y), b(x, y)) << x << "," << y;
+}
+
+TEST_F(ImageFiles, GrayRoundTrips) {
+  const GrayImage image = random_image<std::uint8_t>(37, 19, 1);
+  for (const char* name : {"a.png", "a.pgm", "A.PNG"}) {
+    save_image(file(name), image.view());
+    expect_same(load_gray(file(name)), image);
+  }
+}
+
+TEST_F(ImageFiles, SixteenBitRoundTrips) {
+  const Image<std::uint16_t> image = random_image<std::uint16_t>(23, 7, 2);
+  for (const char* name : {"d.png", "d.pgm"}) {
+    save_image(file(name), image.view());
+    expect_same(load_gray16(file(name)), image);
+    // Loaded as 8 bit, a 16-bit sample keeps its high byte.
+    const GrayImage narrow = load_gray(file(name));
+    EXPECT_EQ(narrow(5, 3), image(5, 3) >> 8);
+  }
+}
+
+TEST_F(ImageFiles, RgbIsWrittenAndReadAsGray) {
+  RgbImage image(4, 2);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 4; ++x) image(x, y) = {200, 100, 50};
+  save_image(file("c.png"), ImageView<const Rgb8>(image.view()));
+  const GrayImage gray = load_gray(file("c.png"));
+  // 0.299 * 200 + 0.587 * 100 + 0.114 * 50 = 124.2
+  EXPECT_NEAR(gray(1, 1), 124, 1);
+  save_image(file("c.ppm"), ImageView<const Rgb8>(image.view()));
+  EXPECT_GT(fs::file_size(file("c.ppm")), 24u);
+}
+
+TEST_F(ImageFiles, BadFilesGiveErrorsNamingTheFile) {
+  write_bytes(file("text.png"), "this is not an image");
+  write_bytes(file("truncated.png"), std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16));
+  write_bytes(file("truncated.jpg"), std::string("\xFF\xD8\xFF\xE0\0\x10JFIF", 10));
+  write_bytes(file("bad.pgm"), "P5\n12 x\n255\n");
+  write_bytes(file("short.pgm"), "P5\n4 4\n255\nabc");
+  write_bytes(file("huge.pgm"), "P5\n99999999 4\n255\n");
+  write_bytes(file("empty.png"), "");
+  for (const char* name : {"text.png", "truncated.png", "truncated.jpg", "bad.pgm", "short.pgm",
+                           "huge.pgm", "empty.png", "missing.png"}) {
+    try {
+      (void)load_gray(file(name));
+      ADD_FAILURE() << name << " loaded";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST_F(ImageFiles, WritingRejectsUnknownExtensionsAndMissingFolders) {
+  const GrayImage image = random_image<std::uint8_t>(4, 4, 3);
+  EXPECT_THROW(save_image(file("x.bmp"), image.view()), Error);
+  EXPECT_THROW(save_image(file("no/such/dir/x.png"), image.view()), Error);
+  const GrayImage empty;
+  EXPECT_THROW(save_image(file("e.png"), empty.view()), Error);
+}
+
+}  // namespace
+}  // namespace epipole

@@ -1,0 +1,94 @@
+// The epipole tool as a user runs it: exit codes, one-line errors, JSON on real images.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <array>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "test_data.hpp"
+
+namespace {
+
+struct Result {
+  int exit_code;
+  std::string out;  // stdout and stderr
+};
+
+Result run_tool(const std::string& arguments, bool merge_stderr = true) {
+  const std::string command =
+      std::string(EPIPOLE_TOOL) + " " + arguments + (merge_stderr ? " 2>&1" : " 2>/dev/null");
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) throw std::runtime_error("popen failed");
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) out += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+int lines(const std::string& text) {
+  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+}
+
+TEST(Cli, HelpAndVersion) {
+  const Result help = run_tool("--help");
+  EXPECT_EQ(help.exit_code, 0);
+  EXPECT_NE(help.out.find("features"), std::string::npos) << help.out;
+  const Result features_help = run_tool("features --help");
+  EXPECT_EQ(features_help.exit_code, 0);
+  EXPECT_NE(features_help.out.find("--threshold"), std::string::npos) << features_help.out;
+  const Result version = run_tool("--version");
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_EQ(version.out.rfind("epipole ", 0), 0u) << version.out;
+}
+
+TEST(Cli, BadArgumentsFailWithOneLine) {
+  for (const char* arguments : {"", "no-such-command", "features", "features /no/such/file.png",
+                                "features --threshold 300 x.png", "--kernels avx features x.png"}) {
+    const Result r = run_tool(arguments);
+    EXPECT_NE(r.exit_code, 0) << arguments;
+    EXPECT_GE(lines(r.out), 1) << arguments;
+  }
+}
+
+TEST(Cli, CorruptImageIsAOneLineError) {
+  const std::string path = ::testing::TempDir() + "epipole-cli-corrupt.png";
+  FILE* f = std::fopen(path.c_str(), "wb");
+  std::fputs("not a png", f);
+  std::fclose(f);
+  const Result r = run_tool("features " + path);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_NE(r.out.find(path), std::string::npos) << r.out;
+  std::remove(path.c_str());
+}
+
+TEST(Cli, FeaturesJsonOnARealImage) {
+  const std::string image = epipole::test::data_file("samples/left01.jpg").string();
+  const std::string picture = ::testing::TempDir() + "epipole-cli-corners.png";
+  const Result r =
+      run_tool("features " + image + " --threshold 20 --json --draw " + picture, false);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto json = nlohmann::json::parse(r.out);
+  EXPECT_EQ(json["width"], 640);
+  EXPECT_EQ(json["height"], 480);
+  const auto& keypoints = json["keypoints"];
+  ASSERT_GT(keypoints.size(), 100u);
+  for (const auto& k : keypoints) {
+    EXPECT_GE(k["score"].get<double>(), 20.0);
+    EXPECT_GE(k["x"].get<int>(), 3);
+    EXPECT_LT(k["x"].get<int>(), 640 - 3);
+  }
+  // Both kernel paths print the same corners.
+  const Result ref = run_tool("--kernels ref features " + image + " --threshold 20 --json", false);
+  ASSERT_EQ(ref.exit_code, 0);
+  EXPECT_EQ(nlohmann::json::parse(ref.out)["keypoints"], keypoints);
+  FILE* drawn = std::fopen(picture.c_str(), "rb");
+  ASSERT_NE(drawn, nullptr) << "no picture written";
+  std::fclose(drawn);
+  std::remove(picture.c_str());
+}
+
+}  // namespace

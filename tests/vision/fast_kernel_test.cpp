@@ -1,0 +1,159 @@
+// The NEON FAST kernel against the scalar reference, bit for bit: odd widths, odd strides,
+// unaligned rows, the minimum size, saturating intensities and every threshold class.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "epipole/core/error.hpp"
+#include "epipole/vision/fast.hpp"
+#include "random_image.hpp"
+
+namespace epipole::vision {
+namespace {
+
+struct Case {
+  int width;
+  int height;
+  int extra_stride;
+  std::size_t offset;
+};
+
+class FastKernel : public ::testing::TestWithParam<Case> {};
+
+TEST_P(FastKernel, NeonRowsEqualReference) {
+  const Case c = GetParam();
+  for (const test::Pattern pattern :
+       {test::Pattern::noise, test::Pattern::saturated, test::Pattern::blobs}) {
+    test::BufferImage image(c.width, c.height, c.width + c.extra_stride, c.offset);
+    test::fill(image.view(), pattern, static_cast<std::uint32_t>(c.width * 131 + c.height));
+    const GrayView view = image.cview();
+    for (const int threshold : {0, 1, 10, 20, 40, 100, 254, 255}) {
+      std::vector<std::uint8_t> ref_scores(c.width, 0x55), neon_scores(c.width, 0xAA);
+      std::vector<int> ref_columns(c.width), neon_columns(c.width);
+      for (int y = 3; y < c.height - 3; ++y) {
+        const int n_ref = kernels::fast_row_ref(view.row(y), view.stride(), c.width, threshold,
+                                                ref_scores.data(), ref_columns.data());
+        const int n_neon = kernels::fast_row_neon(view.row(y), view.stride(), c.width, threshold,
+                                                  neon_scores.data(), neon_columns.data());
+        ASSERT_EQ(n_ref, n_neon) << "row " << y << " threshold " << threshold;
+        ASSERT_EQ(ref_scores, neon_scores) << "row " << y << " threshold " << threshold;
+        ref_columns.resize(n_ref);
+        neon_columns.resize(n_neon);
+        ASSERT_EQ(ref_columns, neon_columns) << "row " << y << " threshold " << threshold;
+        ref_columns.resize(c.width);
+        neon_columns.resize(c.width);
+      }
+    }
+  }
+}
+
+TEST_P(FastKernel, DetectorsAgree) {
+  const Case c = GetParam();
+  test::BufferImage image(c.width, c.height, c.width + c.extra_stride, c.offset);
+  test::fill(image.view(), test::Pattern::blobs, 7);
+  for (const bool nonmax : {true, false}) {
+    FastConfig config{.width = c.width,
+                      .height = c.height,
+                      .threshold = 15,
+                      .nonmax = nonmax,
+                      .max_corners = c.width * c.height};
+    FastDetector ref(config, SimdPath::reference);
+    FastDetector neon(config, SimdPath::neon);
+    const auto a = ref.detect(image.cview());
+    const auto b = neon.detect(image.cview());
+    ASSERT_EQ(std::vector<Corner>(a.begin(), a.end()), std::vector<Corner>(b.begin(), b.end()));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Shapes, FastKernel,
+                         ::testing::Values(Case{7, 7, 0, 0}, Case{8, 9, 1, 1}, Case{21, 11, 0, 3},
+                                           Case{22, 12, 3, 1}, Case{23, 13, 17, 2},
+                                           Case{35, 10, 0, 0}, Case{37, 9, 5, 7},
+                                           Case{64, 16, 0, 0}, Case{77, 21, 13, 5},
+                                           Case{129, 17, 1, 3}, Case{640, 24, 0, 0},
+                                           Case{641, 19, 63, 1}),
+                         [](const ::testing::TestParamInfo<Case>& param_info) {
+                           const Case& c = param_info.param;
+                           return std::to_string(c.width) + "x" + std::to_string(c.height) +
+                                  "_stride" + std::to_string(c.width + c.extra_stride) + "_offset" +
+                                  std::to_string(c.offset);
+                         });
+
+TEST(FastDetector, KeepsTheStrongestWhenBounded) {
+  GrayImage image(200, 150);
+  test::fill(image.view(), test::Pattern::blobs, 3);
+  FastConfig all{
+      .width = 200, .height = 150, .threshold = 10, .nonmax = true, .max_corners = 200 * 150};
+  FastDetector unbounded(all, SimdPath::reference);
+  std::vector<Corner> every(unbounded.detect(image.view()).begin(),
+                            unbounded.detect(image.view()).end());
+  ASSERT_GT(every.size(), 40u);
+  ASSERT_FALSE(unbounded.truncated());
+
+  FastConfig some = all;
+  some.max_corners = 25;
+  FastDetector bounded(some, best_simd_path());
+  const auto kept = bounded.detect(image.view());
+  ASSERT_EQ(kept.size(), 25u);
+  EXPECT_TRUE(bounded.truncated());
+
+  // The kept set is the 25 best by (score desc, raster order), returned in raster order.
+  std::vector<Corner> expected = every;
+  std::stable_sort(expected.begin(), expected.end(),
+                   [](const Corner& a, const Corner& b) { return a.score > b.score; });
+  expected.resize(25);
+  std::sort(expected.begin(), expected.end(),
+            [](const Corner& a, const Corner& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; });
+  EXPECT_EQ(std::vector<Corner>(kept.begin(), kept.end()), expected);
+}
+
+TEST(FastDetector, FindsIsolatedDots) {
+  // A dot differs from its whole circle, so it is a corner whose score is the largest threshold
+  // below the contrast: |200 - 20| - 1 = 179. Its neighbours see one odd pixel: no corner.
+  GrayImage image(40, 30);
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x) image(x, y) = 20;
+  image(8, 6) = 200;
+  image(30, 20) = 200;
+  for (const SimdPath path : {SimdPath::reference, SimdPath::neon}) {
+    FastDetector detector({.width = 40, .height = 30, .threshold = 50, .max_corners = 100}, path);
+    const auto corners = detector.detect(image.view());
+    ASSERT_EQ(corners.size(), 2u) << to_string(path);
+    EXPECT_EQ(corners[0], (Corner{8, 6, 179.0f}));
+    EXPECT_EQ(corners[1], (Corner{30, 20, 179.0f}));
+  }
+  // A dark dot on a bright background is found the same way.
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x) image(x, y) = static_cast<std::uint8_t>(220 - image(x, y));
+  FastDetector detector({.width = 40, .height = 30, .threshold = 50, .max_corners = 100});
+  const auto corners = detector.detect(image.view());
+  ASSERT_EQ(corners.size(), 2u);
+  EXPECT_EQ(corners[0], (Corner{8, 6, 179.0f}));
+}
+
+TEST(FastDetector, RejectsBadInput) {
+  EXPECT_THROW(FastDetector({.width = 6, .height = 100}), Error);
+  EXPECT_THROW(FastDetector({.width = 100, .height = 100, .max_corners = 0}), Error);
+  FastDetector detector({.width = 32, .height = 32});
+  GrayImage wrong(33, 32);
+  EXPECT_THROW(detector.detect(wrong.view()), Error);
+}
+
+TEST(FastDetector, ClampsTheThresholdAsOpenCV) {
+  FastDetector low({.width = 16, .height = 16, .threshold = -5});
+  FastDetector high({.width = 16, .height = 16, .threshold = 300});
+  EXPECT_EQ(low.config().threshold, 0);
+  EXPECT_EQ(high.config().threshold, 255);
+}
+
+TEST(FastDetector, RunsNativeNeonOnArm) {
+#if EPIPOLE_EXPECT_NATIVE_NEON
+  EXPECT_EQ(best_simd_path(), SimdPath::neon);
+  EXPECT_EQ(simd_description().rfind("neon (native", 0), 0u) << simd_description();
+#else
+  EXPECT_EQ(simd_description().rfind("neon (SIMDe", 0), 0u) << simd_description();
+#endif
+}
+
+}  // namespace
+}  // namespace epipole::vision

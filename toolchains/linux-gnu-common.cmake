@@ -1,0 +1,24 @@
+# Shared part of the cross toolchain files; EPIPOLE_CROSS_TRIPLE, EPIPOLE_QEMU and
+# EPIPOLE_ARCH_FLAGS are set by the including file.
+set(CMAKE_C_COMPILER ${EPIPOLE_CROSS_TRIPLE}-gcc)
+set(CMAKE_CXX_COMPILER ${EPIPOLE_CROSS_TRIPLE}-g++)
+set(CMAKE_C_FLAGS_INIT "${EPIPOLE_ARCH_FLAGS}")
+set(CMAKE_CXX_FLAGS_INIT "${EPIPOLE_ARCH_FLAGS}")
+
+# Without a board sysroot, Debian's cross libc lives in /usr/<triple>.
+if(CMAKE_SYSROOT)
+  set(EPIPOLE_TARGET_ROOT ${CMAKE_SYSROOT})
+else()
+  set(EPIPOLE_TARGET_ROOT /usr/${EPIPOLE_CROSS_TRIPLE})
+endif()
+set(CMAKE_FIND_ROOT_PATH ${EPIPOLE_TARGET_ROOT})
+set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
+set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
+set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
+set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
+
+# ctest runs the cross-built test programs under qemu-user with the target's libraries.
+find_program(EPIPOLE_QEMU_PATH ${EPIPOLE_QEMU})
+if(EPIPOLE_QEMU_PATH)
+  set(CMAKE_CROSSCOMPILING_EMULATOR ${EPIPOLE_QEMU_PATH} -L ${EPIPOLE_TARGET_ROOT})
+endif()
