@@ -11,6 +11,10 @@ namespace {
 constexpr int kThreshold = 20;
 
 void fast_ours(benchmark::State& state, SimdPath path) {
+  if (!simd_path_available(path)) {
+    state.SkipWithError("this CPU cannot run this kernel path");
+    return;
+  }
   const cv::Mat& image =
       aloe_left(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   vision::FastDetector detector({.width = image.cols,
@@ -44,6 +48,7 @@ void fast_opencv(benchmark::State& state) {
 
 BENCHMARK_CAPTURE(fast_ours, ref, SimdPath::reference)->Name("fast_t20/ref")->Apply(frame_sizes);
 BENCHMARK_CAPTURE(fast_ours, neon, SimdPath::neon)->Name("fast_t20/neon")->Apply(frame_sizes);
+BENCHMARK_CAPTURE(fast_ours, avx2, SimdPath::avx2)->Name("fast_t20/avx2")->Apply(frame_sizes);
 BENCHMARK(fast_opencv)->Name("fast_t20/opencv")->Apply(frame_sizes);
 
 }  // namespace

@@ -20,28 +20,31 @@ struct Case {
 
 class FastKernel : public ::testing::TestWithParam<Case> {};
 
-TEST_P(FastKernel, NeonRowsEqualReference) {
+TEST_P(FastKernel, SimdRowsEqualReference) {
   const Case c = GetParam();
-  for (const test::Pattern pattern :
-       {test::Pattern::noise, test::Pattern::saturated, test::Pattern::blobs}) {
-    test::BufferImage image(c.width, c.height, c.width + c.extra_stride, c.offset);
-    test::fill(image.view(), pattern, static_cast<std::uint32_t>(c.width * 131 + c.height));
-    const GrayView view = image.cview();
-    for (const int threshold : {0, 1, 10, 20, 40, 100, 254, 255}) {
-      std::vector<std::uint8_t> ref_scores(c.width, 0x55), neon_scores(c.width, 0xAA);
-      std::vector<int> ref_columns(c.width), neon_columns(c.width);
-      for (int y = 3; y < c.height - 3; ++y) {
-        const int n_ref = kernels::fast_row_ref(view.row(y), view.stride(), c.width, threshold,
-                                                ref_scores.data(), ref_columns.data());
-        const int n_neon = kernels::fast_row_neon(view.row(y), view.stride(), c.width, threshold,
-                                                  neon_scores.data(), neon_columns.data());
-        ASSERT_EQ(n_ref, n_neon) << "row " << y << " threshold " << threshold;
-        ASSERT_EQ(ref_scores, neon_scores) << "row " << y << " threshold " << threshold;
-        ref_columns.resize(n_ref);
-        neon_columns.resize(n_neon);
-        ASSERT_EQ(ref_columns, neon_columns) << "row " << y << " threshold " << threshold;
-        ref_columns.resize(c.width);
-        neon_columns.resize(c.width);
+  for (const SimdPath path : available_simd_paths()) {
+    if (path == SimdPath::reference) continue;
+    kernels::FastRowKernel* const kernel = kernels::fast_row_kernel(path);
+    for (const test::Pattern pattern :
+         {test::Pattern::noise, test::Pattern::saturated, test::Pattern::blobs}) {
+      test::BufferImage image(c.width, c.height, c.width + c.extra_stride, c.offset);
+      test::fill(image.view(), pattern, static_cast<std::uint32_t>(c.width * 131 + c.height));
+      const GrayView view = image.cview();
+      for (const int threshold : {0, 1, 10, 20, 40, 100, 254, 255}) {
+        std::vector<std::uint8_t> ref_scores(c.width, 0x55), simd_scores(c.width, 0xAA);
+        std::vector<int> ref_columns(c.width), simd_columns(c.width);
+        for (int y = 3; y < c.height - 3; ++y) {
+          const std::string where = cat(to_string(path), " row ", y, " threshold ", threshold);
+          const int n_ref = kernels::fast_row_ref(view.row(y), view.stride(), c.width, threshold,
+                                                  ref_scores.data(), ref_columns.data());
+          const int n_simd = kernel(view.row(y), view.stride(), c.width, threshold,
+                                    simd_scores.data(), simd_columns.data());
+          ASSERT_EQ(n_ref, n_simd) << where;
+          ASSERT_EQ(ref_scores, simd_scores) << where;
+          ASSERT_TRUE(
+              std::equal(ref_columns.begin(), ref_columns.begin() + n_ref, simd_columns.begin()))
+              << where;
+        }
       }
     }
   }
@@ -58,10 +61,14 @@ TEST_P(FastKernel, DetectorsAgree) {
                       .nonmax = nonmax,
                       .max_corners = c.width * c.height};
     FastDetector ref(config, SimdPath::reference);
-    FastDetector neon(config, SimdPath::neon);
-    const auto a = ref.detect(image.cview());
-    const auto b = neon.detect(image.cview());
-    ASSERT_EQ(std::vector<Corner>(a.begin(), a.end()), std::vector<Corner>(b.begin(), b.end()));
+    const auto expected = ref.detect(image.cview());
+    for (const SimdPath path : available_simd_paths()) {
+      FastDetector detector(config, path);
+      const auto corners = detector.detect(image.cview());
+      ASSERT_EQ(std::vector<Corner>(expected.begin(), expected.end()),
+                std::vector<Corner>(corners.begin(), corners.end()))
+          << to_string(path);
+    }
   }
 }
 
@@ -115,7 +122,7 @@ TEST(FastDetector, FindsIsolatedDots) {
     for (int x = 0; x < 40; ++x) image(x, y) = 20;
   image(8, 6) = 200;
   image(30, 20) = 200;
-  for (const SimdPath path : {SimdPath::reference, SimdPath::neon}) {
+  for (const SimdPath path : available_simd_paths()) {
     FastDetector detector({.width = 40, .height = 30, .threshold = 50, .max_corners = 100}, path);
     const auto corners = detector.detect(image.view());
     ASSERT_EQ(corners.size(), 2u) << to_string(path);
@@ -151,7 +158,7 @@ TEST(FastDetector, RunsNativeNeonOnArm) {
   EXPECT_EQ(best_simd_path(), SimdPath::neon);
   EXPECT_EQ(simd_description().rfind("neon (native", 0), 0u) << simd_description();
 #else
-  EXPECT_EQ(simd_description().rfind("neon (SIMDe", 0), 0u) << simd_description();
+  EXPECT_NE(simd_description().find("SIMDe"), std::string::npos) << simd_description();
 #endif
 }
 

@@ -5,6 +5,7 @@
 
 #include "epipole/core/error.hpp"
 #include "fast_columns.hpp"
+#include "kernel_set.hpp"
 
 namespace epipole::vision {
 
@@ -82,6 +83,12 @@ int fast_row_ref(const std::uint8_t* row, std::ptrdiff_t stride, int width, int 
   return fast_columns_ref(row, circle, 3, width - 3, threshold, scores, columns);
 }
 
+FastRowKernel* fast_row_kernel(SimdPath path) {
+  static constexpr KernelSet<FastRowKernel> kKernels{fast_row_ref, fast_row_neon,
+                                                     EPIPOLE_AVX2_KERNEL(fast_row_avx2)};
+  return kKernels.pick(path);
+}
+
 }  // namespace kernels
 
 FastDetector::FastDetector(const FastConfig& config, SimdPath path) : config_(config), path_(path) {
@@ -130,7 +137,7 @@ std::span<const Corner> FastDetector::detect(GrayView image) {
   require(image.width() == config_.width && image.height() == config_.height,
           "FAST configured for ", config_.width, "x", config_.height, " was given a ",
           image.width(), "x", image.height(), " image");
-  const auto row_kernel = path_ == SimdPath::neon ? kernels::fast_row_neon : kernels::fast_row_ref;
+  kernels::FastRowKernel* const row_kernel = kernels::fast_row_kernel(path_);
   const int width = config_.width;
   const int height = config_.height;
   const auto w = static_cast<std::size_t>(width);

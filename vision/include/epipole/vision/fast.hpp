@@ -62,6 +62,15 @@ int fast_row_ref(const std::uint8_t* row, std::ptrdiff_t stride, int width, int 
                  std::uint8_t* scores, int* columns);
 int fast_row_neon(const std::uint8_t* row, std::ptrdiff_t stride, int width, int threshold,
                   std::uint8_t* scores, int* columns);
+// x86 builds only.
+int fast_row_avx2(const std::uint8_t* row, std::ptrdiff_t stride, int width, int threshold,
+                  std::uint8_t* scores, int* columns);
+
+using FastRowKernel = int(const std::uint8_t* row, std::ptrdiff_t stride, int width,
+                          int threshold, std::uint8_t* scores, int* columns);
+
+// The row kernel a FastDetector on this path runs.
+FastRowKernel* fast_row_kernel(SimdPath path);
 
 // The FAST score of the pixel at `p` (cv::FAST's definition): the largest threshold for which
 // it is still a corner. `circle` holds the 16 circle offsets repeated to 25 entries.
