@@ -2,6 +2,7 @@
 // unaligned rows, the minimum size, saturating intensities and every threshold class.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <vector>
 
 #include "epipole/core/error.hpp"
@@ -112,6 +113,54 @@ TEST(FastDetector, KeepsTheStrongestWhenBounded) {
   std::sort(expected.begin(), expected.end(),
             [](const Corner& a, const Corner& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; });
   EXPECT_EQ(std::vector<Corner>(kept.begin(), kept.end()), expected);
+}
+
+TEST(FastDetector, BucketsKeepTheStrongestPerCell) {
+  GrayImage image(240, 180);
+  test::fill(image.view(), test::Pattern::blobs, 9);
+  FastConfig all{.width = 240, .height = 180, .threshold = 10, .max_corners = 240 * 180};
+  FastDetector unbounded(all, SimdPath::reference);
+  const auto every_span = unbounded.detect(image.view());
+  const std::vector<Corner> every(every_span.begin(), every_span.end());
+
+  FastConfig bucketed = all;
+  bucketed.max_corners = 24;
+  bucketed.grid_columns = 4;
+  bucketed.grid_rows = 3;  // 12 cells of 60x60, 2 corners each
+  FastDetector detector(bucketed);
+  const auto kept_span = detector.detect(image.view());
+  const std::vector<Corner> kept(kept_span.begin(), kept_span.end());
+  EXPECT_TRUE(detector.truncated());
+  EXPECT_TRUE(std::is_sorted(kept.begin(), kept.end(), [](const Corner& a, const Corner& b) {
+    return a.y != b.y ? a.y < b.y : a.x < b.x;
+  }));
+
+  std::vector<Corner> expected;
+  for (int cell_y = 0; cell_y < 3; ++cell_y) {
+    for (int cell_x = 0; cell_x < 4; ++cell_x) {
+      std::vector<Corner> in_cell;
+      for (const Corner& c : every) {
+        if (c.x / 60 == cell_x && c.y / 60 == cell_y) in_cell.push_back(c);
+      }
+      std::stable_sort(in_cell.begin(), in_cell.end(),
+                       [](const Corner& a, const Corner& b) { return a.score > b.score; });
+      in_cell.resize(std::min<std::size_t>(in_cell.size(), 2));
+      expected.insert(expected.end(), in_cell.begin(), in_cell.end());
+    }
+  }
+  ASSERT_GT(expected.size(), 12u);
+  std::sort(expected.begin(), expected.end(),
+            [](const Corner& a, const Corner& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; });
+  EXPECT_EQ(kept, expected);
+}
+
+TEST(FastDetector, RejectsImpossibleGrids) {
+  EXPECT_THROW(
+      FastDetector(
+          {.width = 64, .height = 64, .max_corners = 5, .grid_columns = 3, .grid_rows = 2}),
+      Error);  // fewer corners than cells
+  EXPECT_THROW(FastDetector({.width = 64, .height = 64, .grid_columns = 0}), Error);
+  EXPECT_THROW(FastDetector({.width = 64, .height = 64, .grid_rows = 65}), Error);
 }
 
 TEST(FastDetector, FindsIsolatedDots) {

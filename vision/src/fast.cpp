@@ -91,46 +91,28 @@ FastRowKernel* fast_row_kernel(SimdPath path) {
 
 }  // namespace kernels
 
-FastDetector::FastDetector(const FastConfig& config, SimdPath path) : config_(config), path_(path) {
+namespace {
+FastConfig checked(const FastConfig& config) {
   require(config.width >= 7 && config.height >= 7, "FAST needs an image of at least 7x7, not ",
           config.width, "x", config.height);
   require(config.max_corners > 0, "FAST max_corners must be positive, not ", config.max_corners);
-  config_.threshold = std::clamp(config.threshold, 0, 255);
-  const auto w = static_cast<std::size_t>(config.width);
-  score_rows_ = std::make_unique<std::uint8_t[]>(3 * w);
-  corner_columns_ = std::make_unique<int[]>(3 * w);
-  corners_ = std::make_unique<Corner[]>(static_cast<std::size_t>(config.max_corners));
-}
-
-std::size_t FastDetector::working_set_bytes() const {
-  const auto w = static_cast<std::size_t>(config_.width);
-  return 3 * w + 3 * w * sizeof(int) +
-         static_cast<std::size_t>(config_.max_corners) * sizeof(Corner);
-}
-
-namespace {
-// Strict weak order "a is a better corner than b": higher score, then earlier in raster order.
-bool better(const Corner& a, const Corner& b) {
-  if (a.score != b.score) return a.score > b.score;
-  if (a.y != b.y) return a.y < b.y;
-  return a.x < b.x;
+  FastConfig clamped = config;
+  clamped.threshold = std::clamp(config.threshold, 0, 255);
+  return clamped;
 }
 }  // namespace
 
-void FastDetector::keep(int x, int y, int score) {
-  const Corner corner{x, y, static_cast<float>(score)};
-  Corner* begin = corners_.get();
-  if (count_ < config_.max_corners) {
-    begin[count_++] = corner;
-    if (count_ == config_.max_corners) std::make_heap(begin, begin + count_, better);
-    return;
-  }
-  // Full: a heap whose front is the weakest kept corner.
-  truncated_ = true;
-  if (!better(corner, begin[0])) return;
-  std::pop_heap(begin, begin + count_, better);
-  begin[count_ - 1] = corner;
-  std::push_heap(begin, begin + count_, better);
+FastDetector::FastDetector(const FastConfig& config, SimdPath path)
+    : config_(checked(config)),
+      path_(path),
+      score_rows_(std::make_unique<std::uint8_t[]>(3 * static_cast<std::size_t>(config.width))),
+      corner_columns_(std::make_unique<int[]>(3 * static_cast<std::size_t>(config.width))),
+      strongest_(config.width, config.height, config.max_corners, config.grid_columns,
+                 config.grid_rows) {}
+
+std::size_t FastDetector::working_set_bytes() const {
+  const auto w = static_cast<std::size_t>(config_.width);
+  return 3 * w + 3 * w * sizeof(int) + strongest_.working_set_bytes();
 }
 
 std::span<const Corner> FastDetector::detect(GrayView image) {
@@ -143,8 +125,7 @@ std::span<const Corner> FastDetector::detect(GrayView image) {
   const auto w = static_cast<std::size_t>(width);
   std::memset(score_rows_.get(), 0, 3 * w);
   int row_counts[3] = {0, 0, 0};
-  count_ = 0;
-  truncated_ = false;
+  strongest_.clear();
 
   // Rows are scored one ahead: row y-1's corners are kept once row y's scores are known.
   for (int y = 3; y < height - 2; ++y) {
@@ -170,16 +151,12 @@ std::span<const Corner> FastDetector::detect(GrayView image) {
       if (!config_.nonmax ||
           (s > prev[x - 1] && s > prev[x + 1] && s > pprev[x - 1] && s > pprev[x] &&
            s > pprev[x + 1] && s > current[x - 1] && s > current[x] && s > current[x + 1])) {
-        keep(x, y - 1, s);
+        strongest_.offer({x, y - 1, static_cast<float>(s)});
       }
     }
   }
 
-  if (truncated_) {
-    std::sort(corners_.get(), corners_.get() + count_,
-              [](const Corner& a, const Corner& b) { return a.y != b.y ? a.y < b.y : a.x < b.x; });
-  }
-  return {corners_.get(), static_cast<std::size_t>(count_)};
+  return strongest_.finish();
 }
 
 }  // namespace epipole::vision
