@@ -13,6 +13,12 @@ start=$SECONDS
 ./scripts/setup.sh
 ./scripts/fetch-data.sh
 ./scripts/check-format.sh
+for preset in $presets; do
+  case $preset in
+    aarch64) ./scripts/fetch-target-libs.sh arm64 ;;
+    armhf) ./scripts/fetch-target-libs.sh armhf ;;
+  esac
+done
 
 for preset in $presets; do
   echo "=== $preset: configure and build"

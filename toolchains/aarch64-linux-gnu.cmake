@@ -6,6 +6,7 @@
 set(CMAKE_SYSTEM_NAME Linux)
 set(CMAKE_SYSTEM_PROCESSOR aarch64)
 set(EPIPOLE_CROSS_TRIPLE aarch64-linux-gnu)
+set(EPIPOLE_DEBIAN_ARCH arm64)
 set(EPIPOLE_QEMU qemu-aarch64)
 
 set(EPIPOLE_CPU "cortex-a72" CACHE STRING "Target core for -mcpu")

@@ -6,6 +6,7 @@
 set(CMAKE_SYSTEM_NAME Linux)
 set(CMAKE_SYSTEM_PROCESSOR armv7l)
 set(EPIPOLE_CROSS_TRIPLE arm-linux-gnueabihf)
+set(EPIPOLE_DEBIAN_ARCH armhf)
 set(EPIPOLE_QEMU qemu-arm)
 
 set(EPIPOLE_CPU "cortex-a7" CACHE STRING "Target core for -mcpu")

@@ -1,5 +1,5 @@
-# Shared part of the cross toolchain files; EPIPOLE_CROSS_TRIPLE, EPIPOLE_QEMU and
-# EPIPOLE_ARCH_FLAGS are set by the including file.
+# Shared part of the cross toolchain files; EPIPOLE_CROSS_TRIPLE, EPIPOLE_DEBIAN_ARCH,
+# EPIPOLE_QEMU and EPIPOLE_ARCH_FLAGS are set by the including file.
 set(CMAKE_C_COMPILER ${EPIPOLE_CROSS_TRIPLE}-gcc)
 set(CMAKE_CXX_COMPILER ${EPIPOLE_CROSS_TRIPLE}-g++)
 set(CMAKE_C_FLAGS_INIT "${EPIPOLE_ARCH_FLAGS}")
@@ -12,6 +12,22 @@ else()
   set(EPIPOLE_TARGET_ROOT /usr/${EPIPOLE_CROSS_TRIPLE})
 endif()
 set(CMAKE_FIND_ROOT_PATH ${EPIPOLE_TARGET_ROOT})
+
+# Board-side libraries (yaml-cpp, libgpiod) unpacked from Debian's packages of the target
+# architecture by scripts/fetch-target-libs.sh; the project links their static archives, so the
+# test programs need nothing more under qemu.
+if(DEFINED ENV{EPIPOLE_TARGET_LIBS_DIR})
+  set(_target_libs_parent $ENV{EPIPOLE_TARGET_LIBS_DIR})
+elseif(DEFINED ENV{XDG_CACHE_HOME})
+  set(_target_libs_parent $ENV{XDG_CACHE_HOME}/epipole)
+else()
+  set(_target_libs_parent $ENV{HOME}/.cache/epipole)
+endif()
+set(EPIPOLE_TARGET_LIBS ${_target_libs_parent}/target-libs-${EPIPOLE_DEBIAN_ARCH}
+    CACHE PATH "Target libraries unpacked by scripts/fetch-target-libs.sh")
+if(IS_DIRECTORY ${EPIPOLE_TARGET_LIBS})
+  list(APPEND CMAKE_FIND_ROOT_PATH ${EPIPOLE_TARGET_LIBS})
+endif()
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
