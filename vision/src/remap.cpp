@@ -1,0 +1,208 @@
+#include "epipole/vision/remap.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <utility>
+
+#include "epipole/core/error.hpp"
+#include "kernel_set.hpp"
+
+namespace epipole::vision {
+
+namespace kernels {
+
+namespace {
+
+// The source pixel (x, y), or the border value outside the image.
+inline int pixel_or_border(GrayView source, int x, int y, int border) {
+  return static_cast<unsigned>(x) < static_cast<unsigned>(source.width()) &&
+                 static_cast<unsigned>(y) < static_cast<unsigned>(source.height())
+             ? source(x, y)
+             : border;
+}
+
+inline std::uint8_t blend(int s00, int s01, int s10, int s11, unsigned fraction) {
+  const int fx = static_cast<int>(fraction & (RemapMap::kFractionSteps - 1));
+  const int fy =
+      static_cast<int>((fraction >> RemapMap::kFractionBits) & (RemapMap::kFractionSteps - 1));
+  const int top = s00 * (32 - fx) + s01 * fx;
+  const int bottom = s10 * (32 - fx) + s11 * fx;
+  return static_cast<std::uint8_t>((top * (32 - fy) + bottom * fy + 512) >> 10);
+}
+
+}  // namespace
+
+void remap_row_ref(GrayView source, const std::int16_t* xy, const std::uint16_t* fractions,
+                   int width, std::uint8_t border, std::uint8_t* destination) {
+  // (x, y) has its four neighbours inside when x < inner_width and y < inner_height (unsigned).
+  const auto inner_width = static_cast<unsigned>(std::max(source.width() - 1, 0));
+  const auto inner_height = static_cast<unsigned>(std::max(source.height() - 1, 0));
+  const std::ptrdiff_t stride = source.stride();
+  for (int i = 0; i < width; ++i) {
+    const int x = xy[2 * i];
+    const int y = xy[2 * i + 1];
+    const unsigned fraction = fractions[i];
+    if (static_cast<unsigned>(x) < inner_width && static_cast<unsigned>(y) < inner_height) {
+      const std::uint8_t* p = source.row(y) + x;
+      destination[i] = blend(p[0], p[1], p[stride], p[stride + 1], fraction);
+    } else {
+      destination[i] =
+          blend(pixel_or_border(source, x, y, border), pixel_or_border(source, x + 1, y, border),
+                pixel_or_border(source, x, y + 1, border),
+                pixel_or_border(source, x + 1, y + 1, border), fraction);
+    }
+  }
+}
+
+int to_fixed_point(float v, std::int16_t* integer) {
+  // v * 32 rounded to the nearest integer, ties to even, saturated to int32; NaN -> INT32_MIN.
+  constexpr auto kMin = std::numeric_limits<std::int32_t>::min();
+  constexpr auto kMax = std::numeric_limits<std::int32_t>::max();
+  std::int32_t fixed = kMin;
+  if (!std::isnan(v)) {
+    const double scaled = static_cast<double>(v) * RemapMap::kFractionSteps;  // exact
+    if (scaled >= static_cast<double>(kMax)) {
+      fixed = kMax;
+    } else if (scaled <= static_cast<double>(kMin)) {
+      fixed = kMin;
+    } else {
+      const double below = std::floor(scaled);
+      auto rounded = static_cast<std::int64_t>(below);
+      const double rest = scaled - below;
+      if (rest > 0.5 || (rest == 0.5 && (rounded & 1) != 0)) ++rounded;
+      fixed = static_cast<std::int32_t>(std::clamp<std::int64_t>(rounded, kMin, kMax));
+    }
+  }
+  const std::int32_t whole = fixed >> RemapMap::kFractionBits;  // floor: arithmetic shift
+  *integer = static_cast<std::int16_t>(std::clamp<std::int32_t>(
+      whole, std::numeric_limits<std::int16_t>::min(), std::numeric_limits<std::int16_t>::max()));
+  return static_cast<int>(fixed & (RemapMap::kFractionSteps - 1));
+}
+
+RemapRowKernel* remap_row_kernel(SimdPath path) {
+  static constexpr KernelSet<RemapRowKernel> kKernels{remap_row_ref, remap_row_neon, nullptr};
+  return kKernels.pick(path);
+}
+
+}  // namespace kernels
+
+namespace {
+
+void require_map_size(int width, int height) {
+  require(width >= 0 && height >= 0 && width <= RemapMap::kMaxSize && height <= RemapMap::kMaxSize,
+          "remap map size ", width, "x", height, " is outside [0, ", RemapMap::kMaxSize, "]");
+}
+
+}  // namespace
+
+RemapMap::RemapMap(int width, int height) {
+  require_map_size(width, height);
+  xy_ = Image<std::int16_t>(2 * width, height);
+  fractions_ = Image<std::uint16_t>(width, height);
+  for (int y = 0; y < height; ++y) {
+    std::int16_t* xy = xy_.view().row(y);
+    for (int x = 0; x < width; ++x) {
+      xy[2 * x] = static_cast<std::int16_t>(x);
+      xy[2 * x + 1] = static_cast<std::int16_t>(y);
+    }
+    std::fill_n(fractions_.view().row(y), width, std::uint16_t{0});
+  }
+}
+
+RemapMap::RemapMap(ImageView<const std::int16_t> xy, ImageView<const std::uint16_t> fractions) {
+  require(xy.width() == 2 * fractions.width() && xy.height() == fractions.height(),
+          "remap map planes disagree: xy is ", xy.width(), "x", xy.height(),
+          " (2 int16 per pixel), fractions ", fractions.width(), "x", fractions.height());
+  require_map_size(fractions.width(), fractions.height());
+  xy_ = Image<std::int16_t>(xy.width(), xy.height());
+  fractions_ = Image<std::uint16_t>(fractions.width(), fractions.height());
+  for (int y = 0; y < xy.height(); ++y) {
+    std::copy_n(xy.row(y), xy.width(), xy_.view().row(y));
+    std::copy_n(fractions.row(y), fractions.width(), fractions_.view().row(y));
+  }
+}
+
+RemapMap RemapMap::from_float(ImageView<const float> map_x, ImageView<const float> map_y) {
+  require(same_size(map_x, map_y), "remap float maps differ in size: x is ", map_x.width(), "x",
+          map_x.height(), ", y is ", map_y.width(), "x", map_y.height());
+  RemapMap map(map_x.width(), map_x.height());
+  map.assign_float(map_x, map_y);
+  return map;
+}
+
+void RemapMap::assign_float(ImageView<const float> map_x, ImageView<const float> map_y) {
+  require(map_x.width() == width() && map_x.height() == height() && same_size(map_x, map_y),
+          "remap float maps of ", map_x.width(), "x", map_x.height(), " and ", map_y.width(), "x",
+          map_y.height(), " do not fit a ", width(), "x", height(), " map");
+  for (int v = 0; v < height(); ++v) {
+    std::int16_t* xy = xy_.view().row(v);
+    std::uint16_t* fractions = fractions_.view().row(v);
+    const float* xs = map_x.row(v);
+    const float* ys = map_y.row(v);
+    for (int u = 0; u < width(); ++u) {
+      const int fx = kernels::to_fixed_point(xs[u], &xy[2 * u]);
+      const int fy = kernels::to_fixed_point(ys[u], &xy[2 * u + 1]);
+      fractions[u] = static_cast<std::uint16_t>(fy * kFractionSteps + fx);
+    }
+  }
+}
+
+RemapMap RemapMap::clone() const {
+  RemapMap copy;
+  copy.xy_ = xy_.clone();
+  copy.fractions_ = fractions_.clone();
+  return copy;
+}
+
+Rectifier::Rectifier(const RectifierConfig& config, RemapMap map, SimdPath path)
+    : config_(config), path_(path), map_(std::move(map)) {
+  const auto in_range = [](int size) { return size >= 1 && size <= RemapMap::kMaxSize; };
+  require(in_range(config.source_width) && in_range(config.source_height), "rectifier source size ",
+          config.source_width, "x", config.source_height, " is outside [1, ", RemapMap::kMaxSize,
+          "]");
+  require(in_range(config.width) && in_range(config.height), "rectifier output size ", config.width,
+          "x", config.height, " is outside [1, ", RemapMap::kMaxSize, "]");
+  require(map_.width() == config.width && map_.height() == config.height, "rectifier map is ",
+          map_.width(), "x", map_.height(), " but the output is ", config.width, "x",
+          config.height);
+  output_ = GrayImage(config.width, config.height);
+}
+
+std::size_t Rectifier::working_set_bytes() const {
+  return map_.size_bytes() + output_.size_bytes();
+}
+
+GrayView Rectifier::rectify(GrayView source) {
+  rectify(source, output_.view());
+  return output_.view();
+}
+
+void Rectifier::rectify(GrayView source, MutableGrayView destination) {
+  require(source.width() == config_.source_width && source.height() == config_.source_height,
+          "rectifier configured for ", config_.source_width, "x", config_.source_height,
+          " sources was given a ", source.width(), "x", source.height(), " image");
+  require(destination.width() == config_.width && destination.height() == config_.height,
+          "rectifier output is ", config_.width, "x", config_.height, ", not ", destination.width(),
+          "x", destination.height());
+  // Byte ranges [first, last] of both images; std::less gives a total order on pointers.
+  const std::uint8_t* source_end = source.row(source.height() - 1) + source.width();
+  const std::uint8_t* destination_begin = destination.data();
+  const std::uint8_t* destination_end =
+      destination.row(destination.height() - 1) + destination.width();
+  const std::less<const std::uint8_t*> before;
+  require(!before(destination_begin, source_end) || !before(source.data(), destination_end),
+          "rectifier output overlaps its source");
+
+  kernels::RemapRowKernel* const row_kernel = kernels::remap_row_kernel(path_);
+  const ImageView<const std::int16_t> xy = map_.xy();
+  const ImageView<const std::uint16_t> fractions = map_.fractions();
+  for (int y = 0; y < config_.height; ++y) {
+    row_kernel(source, xy.row(y), fractions.row(y), config_.width, config_.border,
+               destination.row(y));
+  }
+}
+
+}  // namespace epipole::vision
