@@ -68,6 +68,7 @@ void remap_opencv(benchmark::State& state) {
 
 BENCHMARK_CAPTURE(remap_ours, ref, SimdPath::reference)->Name("remap/ref")->Apply(frame_sizes);
 BENCHMARK_CAPTURE(remap_ours, neon, SimdPath::neon)->Name("remap/neon")->Apply(frame_sizes);
+BENCHMARK_CAPTURE(remap_ours, avx2, SimdPath::avx2)->Name("remap/avx2")->Apply(frame_sizes);
 BENCHMARK(remap_opencv)->Name("remap/opencv")->Apply(frame_sizes);
 
 }  // namespace

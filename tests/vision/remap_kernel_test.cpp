@@ -60,6 +60,24 @@ RemapMap mixed_map(int width, int height, int source_width, int source_height, s
   return map;
 }
 
+// A map that scales the destination onto the source with sub-pixel jitter: nearly every
+// neighbourhood lies inside, so the SIMD kernels' fast paths run.
+RemapMap smooth_map(int width, int height, int source_width, int source_height,
+                    std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  RemapMap map(width, height);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const int x = u * std::max(source_width - 1, 1) / std::max(width, 1);
+      const int y = v * std::max(source_height - 1, 1) / std::max(height, 1);
+      map.xy()(2 * u, v) = static_cast<std::int16_t>(x);
+      map.xy()(2 * u + 1, v) = static_cast<std::int16_t>(y);
+      map.fractions()(u, v) = static_cast<std::uint16_t>(rng() % 1024);
+    }
+  }
+  return map;
+}
+
 struct Case {
   int source_width;
   int source_height;
@@ -71,40 +89,47 @@ struct Case {
 
 class RemapKernel : public ::testing::TestWithParam<Case> {};
 
-TEST_P(RemapKernel, NeonRowsEqualReferenceAndDefinition) {
+TEST_P(RemapKernel, SimdRowsEqualReferenceAndDefinition) {
   const Case c = GetParam();
-  test::BufferImage image(c.source_width, c.source_height, c.source_width + c.extra_stride,
-                          c.offset);
-  const int height = 9;
-  for (const test::Pattern pattern : {test::Pattern::noise, test::Pattern::saturated}) {
-    test::fill(image.view(), pattern,
-               static_cast<std::uint32_t>(c.source_width * 131 + c.source_height));
-    const GrayView source = image.cview();
-    const RemapMap map = mixed_map(c.width, height, c.source_width, c.source_height,
-                                   static_cast<std::uint32_t>(c.width + 17 * c.source_height));
-    for (const int border : {0, 1, 128, 255}) {
-      const auto b = static_cast<std::uint8_t>(border);
-      std::vector<std::uint8_t> ref(c.width + c.destination_offset + 8, 0x55);
-      std::vector<std::uint8_t> neon(c.width + c.destination_offset + 8, 0xAA);
-      for (int v = 0; v < height; ++v) {
-        const std::int16_t* xy = map.xy().row(v);
-        const std::uint16_t* fractions = map.fractions().row(v);
-        kernels::remap_row_ref(source, xy, fractions, c.width, b,
-                               ref.data() + c.destination_offset);
-        kernels::remap_row_neon(source, xy, fractions, c.width, b,
-                                neon.data() + c.destination_offset);
-        for (int u = 0; u < c.width; ++u) {
-          const std::uint8_t expected =
-              expected_pixel(source, xy[2 * u], xy[2 * u + 1], fractions[u], border);
-          ASSERT_EQ(ref[c.destination_offset + u], expected)
-              << "row " << v << " column " << u << " border " << border;
-          ASSERT_EQ(neon[c.destination_offset + u], expected)
-              << "row " << v << " column " << u << " border " << border;
+  for (const SimdPath path : available_simd_paths()) {
+    if (path == SimdPath::reference) continue;
+    kernels::RemapRowKernel* const kernel = kernels::remap_row_kernel(path);
+    test::BufferImage image(c.source_width, c.source_height, c.source_width + c.extra_stride,
+                            c.offset);
+    const int height = 9;
+    for (const test::Pattern pattern : {test::Pattern::noise, test::Pattern::saturated}) {
+      test::fill(image.view(), pattern,
+                 static_cast<std::uint32_t>(c.source_width * 131 + c.source_height));
+      const GrayView source = image.cview();
+      for (const bool smooth : {false, true}) {
+        const auto seed = static_cast<std::uint32_t>(c.width + 17 * c.source_height);
+        const RemapMap map =
+            smooth ? smooth_map(c.width, height, c.source_width, c.source_height, seed)
+                   : mixed_map(c.width, height, c.source_width, c.source_height, seed);
+        for (const int border : {0, 1, 128, 255}) {
+          const auto b = static_cast<std::uint8_t>(border);
+          std::vector<std::uint8_t> ref(c.width + c.destination_offset + 8, 0x55);
+          std::vector<std::uint8_t> simd(c.width + c.destination_offset + 8, 0xAA);
+          for (int v = 0; v < height; ++v) {
+            const std::int16_t* xy = map.xy().row(v);
+            const std::uint16_t* fractions = map.fractions().row(v);
+            kernels::remap_row_ref(source, xy, fractions, c.width, b,
+                                   ref.data() + c.destination_offset);
+            kernel(source, xy, fractions, c.width, b, simd.data() + c.destination_offset);
+            for (int u = 0; u < c.width; ++u) {
+              const std::uint8_t expected =
+                  expected_pixel(source, xy[2 * u], xy[2 * u + 1], fractions[u], border);
+              ASSERT_EQ(ref[c.destination_offset + u], expected)
+                  << "row " << v << " column " << u << " border " << border;
+              ASSERT_EQ(simd[c.destination_offset + u], expected)
+                  << to_string(path) << " row " << v << " column " << u << " border " << border;
+            }
+            // Nothing written outside the row.
+            for (std::size_t k = 0; k < c.destination_offset; ++k) ASSERT_EQ(simd[k], 0xAA);
+            for (std::size_t k = c.destination_offset + c.width; k < simd.size(); ++k)
+              ASSERT_EQ(simd[k], 0xAA);
+          }
         }
-        // Nothing written outside the row.
-        for (std::size_t k = 0; k < c.destination_offset; ++k) ASSERT_EQ(neon[k], 0xAA);
-        for (std::size_t k = c.destination_offset + c.width; k < neon.size(); ++k)
-          ASSERT_EQ(neon[k], 0xAA);
       }
     }
   }
@@ -131,7 +156,8 @@ TEST(RemapKernel, EmptySourceGivesTheBorder) {
   const std::int16_t xy[2 * 9] = {0, 0, -1, -1, 5, 5, 0, 0, 1, 1, 0, 0, 0, 0, 0, 0, 0, 0};
   const std::uint16_t fractions[9] = {0, 1, 2, 3, 1023, 33, 0, 0, 0};
   const GrayView empty;
-  for (const auto kernel : {kernels::remap_row_ref, kernels::remap_row_neon}) {
+  for (const SimdPath path : available_simd_paths()) {
+    kernels::RemapRowKernel* const kernel = kernels::remap_row_kernel(path);
     std::uint8_t out[9] = {};
     kernel(empty, xy, fractions, 9, 42, out);
     for (const std::uint8_t value : out) EXPECT_EQ(value, 42);

@@ -83,7 +83,8 @@ int to_fixed_point(float v, std::int16_t* integer) {
 }
 
 RemapRowKernel* remap_row_kernel(SimdPath path) {
-  static constexpr KernelSet<RemapRowKernel> kKernels{remap_row_ref, remap_row_neon, nullptr};
+  static constexpr KernelSet<RemapRowKernel> kKernels{remap_row_ref, remap_row_neon,
+                                                      EPIPOLE_AVX2_KERNEL(remap_row_avx2)};
   return kKernels.pick(path);
 }
 

@@ -119,10 +119,14 @@ void remap_row_ref(GrayView source, const std::int16_t* xy, const std::uint16_t*
 void remap_row_neon(GrayView source, const std::int16_t* xy, const std::uint16_t* fractions,
                     int width, std::uint8_t border, std::uint8_t* destination);
 
+// x86 builds only.
+void remap_row_avx2(GrayView source, const std::int16_t* xy, const std::uint16_t* fractions,
+                    int width, std::uint8_t border, std::uint8_t* destination);
+
 using RemapRowKernel = void(GrayView source, const std::int16_t* xy, const std::uint16_t* fractions,
                             int width, std::uint8_t border, std::uint8_t* destination);
 
-// The row kernel a Rectifier on this path runs (no AVX2 kernel yet: the NEON one on that path).
+// The row kernel a Rectifier on this path runs.
 RemapRowKernel* remap_row_kernel(SimdPath path);
 
 // One coordinate to fixed point as RemapMap::from_float does: *integer = floor(v * 32 rounded
