@@ -91,4 +91,50 @@ TEST(Cli, FeaturesJsonOnARealImage) {
   std::remove(picture.c_str());
 }
 
+TEST(Cli, HarrisFeaturesJsonOnARealImage) {
+  const std::string image = epipole::test::data_file("samples/left01.jpg").string();
+  const std::string options =
+      " --detector harris --quality 0.01 --min-distance 10 --block-size 3 "
+      "--k 0.04 --max 200 --json";
+  const Result r = run_tool("features " + image + options, false);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto json = nlohmann::json::parse(r.out);
+  EXPECT_EQ(json["detector"], "harris");
+  EXPECT_EQ(json["width"], 640);
+  EXPECT_EQ(json["height"], 480);
+  EXPECT_EQ(json["block_size"], 3);
+  EXPECT_DOUBLE_EQ(json["quality"].get<double>(), 0.01);
+  EXPECT_DOUBLE_EQ(json["min_distance"].get<double>(), 10.0);
+  EXPECT_DOUBLE_EQ(json["k"].get<double>(), 0.04);
+  const auto& keypoints = json["keypoints"];
+  ASSERT_GT(keypoints.size(), 100u);
+  ASSERT_LE(keypoints.size(), 200u);
+  // Strongest first, all above the quality threshold, inside the border, 10 pixels apart.
+  const double strongest = keypoints[0]["score"].get<double>();
+  for (std::size_t i = 0; i < keypoints.size(); ++i) {
+    const auto& k = keypoints[i];
+    EXPECT_GT(k["score"].get<double>(), 0.01 * strongest * (1 - 1e-6));
+    if (i > 0) {
+      EXPECT_LE(k["score"].get<double>(), keypoints[i - 1]["score"].get<double>());
+    }
+    EXPECT_GE(k["x"].get<int>(), 1);
+    EXPECT_LT(k["x"].get<int>(), 640 - 1);
+    EXPECT_GE(k["y"].get<int>(), 1);
+    EXPECT_LT(k["y"].get<int>(), 480 - 1);
+    for (std::size_t j = 0; j < i; ++j) {
+      const int dx = k["x"].get<int>() - keypoints[j]["x"].get<int>();
+      const int dy = k["y"].get<int>() - keypoints[j]["y"].get<int>();
+      EXPECT_GE(dx * dx + dy * dy, 100) << i << " and " << j;
+    }
+  }
+  // Both kernel paths print the same corners; a bad block size is a one-line error.
+  const Result ref = run_tool("--kernels ref features " + image + options, false);
+  ASSERT_EQ(ref.exit_code, 0);
+  EXPECT_EQ(nlohmann::json::parse(ref.out)["keypoints"], keypoints);
+  const Result even = run_tool("features " + image + " --detector harris --block-size 4");
+  EXPECT_EQ(even.exit_code, 1) << even.out;
+  EXPECT_EQ(lines(even.out), 1) << even.out;
+  EXPECT_NE(even.out.find("block_size"), std::string::npos) << even.out;
+}
+
 }  // namespace
