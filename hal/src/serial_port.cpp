@@ -1,0 +1,138 @@
+#include "epipole/hal/serial_port.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <iterator>
+
+#include "epipole/core/error.hpp"
+
+namespace epipole::hal {
+
+namespace {
+
+struct BaudCode {
+  int baud;
+  speed_t code;
+};
+
+constexpr BaudCode kBauds[] = {{9600, B9600},       {19200, B19200},     {38400, B38400},
+                               {57600, B57600},     {115200, B115200},   {230400, B230400},
+                               {460800, B460800},   {500000, B500000},   {576000, B576000},
+                               {921600, B921600},   {1000000, B1000000}, {1152000, B1152000},
+                               {1500000, B1500000}, {2000000, B2000000}, {2500000, B2500000},
+                               {3000000, B3000000}, {3500000, B3500000}, {4000000, B4000000}};
+
+const BaudCode* find_baud(int baud) {
+  const auto* it = std::find_if(std::begin(kBauds), std::end(kBauds),
+                                [baud](const BaudCode& b) { return b.baud == baud; });
+  return it == std::end(kBauds) ? nullptr : it;
+}
+
+int poll_timeout_ms(Nanoseconds timeout) {
+  if (timeout <= 0) return 0;
+  return static_cast<int>(std::min<Nanoseconds>((timeout + 999'999) / 1'000'000, 1'000'000'000));
+}
+
+}  // namespace
+
+bool is_supported_baud(int baud) {
+  return find_baud(baud) != nullptr;
+}
+
+TermiosSerialPort::TermiosSerialPort(SerialConfig config) : config_(std::move(config)) {
+  require(!config_.device.empty(), "serial port: no device given");
+  require(is_supported_baud(config_.baud), "serial port ", config_.device, ": baud rate ",
+          config_.baud, " is not supported (9600 .. 4000000, standard rates)");
+  open_device();
+}
+
+TermiosSerialPort::~TermiosSerialPort() {
+  close();
+}
+
+void TermiosSerialPort::open_device() {
+  const int fd = ::open(config_.device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+  require(fd >= 0, "serial port ", config_.device, ": cannot open: ", std::strerror(errno));
+  termios tty{};
+  if (tcgetattr(fd, &tty) != 0) {
+    const int error = errno;
+    ::close(fd);
+    throw Error(cat("serial port ", config_.device, ": not a terminal: ", std::strerror(error)));
+  }
+  cfmakeraw(&tty);
+  tty.c_cflag &= ~static_cast<tcflag_t>(CSTOPB | PARENB | CRTSCTS | CSIZE);
+  tty.c_cflag |= CS8 | CLOCAL | CREAD;
+  tty.c_cc[VMIN] = 0;
+  tty.c_cc[VTIME] = 0;
+  const speed_t speed = find_baud(config_.baud)->code;
+  if (cfsetispeed(&tty, speed) != 0 || cfsetospeed(&tty, speed) != 0 ||
+      tcsetattr(fd, TCSANOW, &tty) != 0) {
+    const int error = errno;
+    ::close(fd);
+    throw Error(cat("serial port ", config_.device, ": cannot set ", config_.baud,
+                    " baud 8N1 raw: ", std::strerror(error)));
+  }
+  fd_ = fd;
+}
+
+void TermiosSerialPort::close() {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+void TermiosSerialPort::reopen() {
+  close();
+  open_device();
+}
+
+IoResult TermiosSerialPort::read(std::span<std::byte> buffer, Nanoseconds timeout) {
+  if (fd_ < 0) return {IoStatus::closed, 0};
+  if (buffer.empty()) return {IoStatus::ok, 0};
+  pollfd p{fd_, POLLIN, 0};
+  int ready = 0;
+  do {
+    ready = ::poll(&p, 1, poll_timeout_ms(timeout));
+  } while (ready < 0 && errno == EINTR);
+  if (ready == 0) return {IoStatus::timeout, 0};
+  if (ready < 0) return {IoStatus::hung_up, 0};
+  // Data that arrived before a hang-up is still delivered first.
+  if ((p.revents & POLLIN) != 0) {
+    const ssize_t n = ::read(fd_, buffer.data(), buffer.size());
+    if (n > 0) return {IoStatus::ok, static_cast<std::size_t>(n)};
+    if (n < 0 && (errno == EAGAIN || errno == EINTR)) return {IoStatus::timeout, 0};
+    return {IoStatus::hung_up, 0};  // end of file or EIO: the other end is gone
+  }
+  return {IoStatus::hung_up, 0};  // POLLHUP / POLLERR / POLLNVAL without data
+}
+
+IoResult TermiosSerialPort::write(std::span<const std::byte> data, Nanoseconds timeout) {
+  if (fd_ < 0) return {IoStatus::closed, 0};
+  MonotonicClock clock;
+  const Nanoseconds deadline = clock.now() + std::max<Nanoseconds>(timeout, 0);
+  std::size_t written = 0;
+  while (written < data.size()) {
+    const ssize_t n = ::write(fd_, data.data() + written, data.size() - written);
+    if (n > 0) {
+      written += static_cast<std::size_t>(n);
+      continue;
+    }
+    if (n < 0 && errno != EAGAIN && errno != EINTR) return {IoStatus::hung_up, written};
+    const Nanoseconds left = deadline - clock.now();
+    if (left <= 0) return {IoStatus::timeout, written};
+    pollfd p{fd_, POLLOUT, 0};
+    const int ready = ::poll(&p, 1, poll_timeout_ms(left));
+    if (ready < 0 && errno != EINTR) return {IoStatus::hung_up, written};
+    if (ready > 0 && (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0) {
+      return {IoStatus::hung_up, written};
+    }
+  }
+  return {IoStatus::ok, written};
+}
+
+}  // namespace epipole::hal
