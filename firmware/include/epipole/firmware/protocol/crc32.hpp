@@ -1,0 +1,12 @@
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+namespace epipole::protocol {
+
+// CRC-32 as in Ethernet, zlib and PNG (reflected polynomial 0xEDB88320, initial and final
+// value 0xFFFFFFFF): crc32("123456789") = 0xCBF43926.
+std::uint32_t crc32(std::span<const std::uint8_t> bytes);
+
+}  // namespace epipole::protocol

@@ -1,0 +1,150 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <variant>
+
+namespace epipole::protocol {
+
+// Epipole serial protocol, version 1 (docs/protocol.md). Every number is little-endian on the
+// wire; sizes here are the wire sizes.
+
+inline constexpr std::uint8_t kVersion = 1;
+
+enum class MessageType : std::uint8_t {
+  // firmware -> robot
+  health = 0x01,
+  frame_summary = 0x02,
+  detections = 0x03,
+  obstacles = 0x04,
+  points = 0x05,
+  calibration_health = 0x06,
+  command_ack = 0x07,
+  // robot -> firmware
+  set_trigger_rate = 0x80,
+  set_exposure = 0x81,
+  set_stages = 0x82,
+  snapshot = 0x83,
+};
+
+inline constexpr int kStageCount = 8;
+enum class Stage : std::uint8_t {
+  capture = 0,
+  rectify = 1,
+  corners = 2,
+  disparity = 3,
+  sparse = 4,
+  detect = 5,
+  publish = 6,
+  total = 7,
+};
+
+// Once a second: rates, latencies, faults.
+struct Health {
+  std::uint32_t uptime_ms = 0;
+  std::uint32_t frames = 0;          // pairs processed since start
+  std::uint32_t dropped = 0;         // pairs dropped (unpaired, late, overrun)
+  std::uint16_t fps_centi = 0;       // frames per second x 100, over the last second
+  std::uint32_t latency_p50_us = 0;  // trigger to publish
+  std::uint32_t latency_p99_us = 0;
+  std::array<std::uint32_t, kStageCount> stage_us{};  // mean per stage over the last second
+  std::uint16_t camera_timeouts = 0;
+  std::uint16_t camera_reopens = 0;
+  std::uint16_t trigger_losses = 0;
+  std::uint16_t link_reopens = 0;
+  std::uint16_t unpaired_frames = 0;
+  std::uint16_t bad_commands = 0;
+  friend bool operator==(const Health&, const Health&) = default;
+};
+
+// One per processed pair.
+struct FrameSummary {
+  std::uint32_t frame = 0;       // trigger sequence number
+  std::uint64_t trigger_ns = 0;  // trigger edge, CLOCK_MONOTONIC
+  std::uint32_t latency_us = 0;  // trigger to this message
+  std::uint16_t corners_left = 0;
+  std::uint16_t corners_right = 0;
+  std::uint16_t valid_disparity_permille = 0;
+  std::uint8_t detections = 0;
+  std::uint16_t points = 0;
+  friend bool operator==(const FrameSummary&, const FrameSummary&) = default;
+};
+
+inline constexpr std::uint16_t kUnknownDepth = 0xFFFF;
+
+struct Detection {
+  std::uint16_t x = 0, y = 0, width = 0, height = 0;  // rectified left image, pixels
+  std::uint8_t neighbors = 0;                         // raw hits grouped into this box
+  std::uint16_t depth_mm = kUnknownDepth;
+  friend bool operator==(const Detection&, const Detection&) = default;
+};
+
+inline constexpr int kMaxDetections = 32;
+struct Detections {
+  std::uint32_t frame = 0;
+  std::uint8_t count = 0;
+  std::array<Detection, kMaxDetections> items{};
+  friend bool operator==(const Detections&, const Detections&) = default;
+};
+
+inline constexpr int kMaxSectors = 72;
+struct Obstacles {
+  std::uint32_t frame = 0;
+  std::uint16_t field_of_view_centideg = 0;  // horizontal, split evenly into `count` sectors
+  std::uint8_t count = 0;
+  std::array<std::uint16_t, kMaxSectors> nearest_mm{};  // kUnknownDepth: nothing seen
+  friend bool operator==(const Obstacles&, const Obstacles&) = default;
+};
+
+struct Point {
+  std::uint16_t u_x16 = 0, v_x16 = 0;         // rectified left image position x 16
+  std::int32_t x_mm = 0, y_mm = 0, z_mm = 0;  // left camera frame
+  friend bool operator==(const Point&, const Point&) = default;
+};
+
+inline constexpr int kMaxPoints = 48;
+struct Points {
+  std::uint32_t frame = 0;
+  std::uint8_t count = 0;
+  std::array<Point, kMaxPoints> items{};
+  friend bool operator==(const Points&, const Points&) = default;
+};
+
+struct CalibrationHealth {
+  std::uint16_t matches = 0;
+  std::uint16_t median_offset_centipx = 0;  // |vertical offset| of matches, x 100
+  std::uint16_t p90_offset_centipx = 0;
+  friend bool operator==(const CalibrationHealth&, const CalibrationHealth&) = default;
+};
+
+enum class AckStatus : std::uint8_t { ok = 0, rejected = 1, unsupported = 2 };
+struct CommandAck {
+  std::uint16_t command_sequence = 0;
+  AckStatus status = AckStatus::ok;
+  friend bool operator==(const CommandAck&, const CommandAck&) = default;
+};
+
+struct SetTriggerRate {
+  std::uint32_t rate_millihz = 0;
+  friend bool operator==(const SetTriggerRate&, const SetTriggerRate&) = default;
+};
+struct SetExposure {
+  std::uint32_t exposure_us = 0;
+  std::uint16_t gain_centidb = 0;
+  friend bool operator==(const SetExposure&, const SetExposure&) = default;
+};
+struct SetStages {
+  std::uint16_t enabled_mask = 0;  // bit per Stage (capture and publish always run)
+  friend bool operator==(const SetStages&, const SetStages&) = default;
+};
+struct Snapshot {
+  friend bool operator==(const Snapshot&, const Snapshot&) = default;
+};
+
+using Message = std::variant<Health, FrameSummary, Detections, Obstacles, Points, CalibrationHealth,
+                             CommandAck, SetTriggerRate, SetExposure, SetStages, Snapshot>;
+
+MessageType type_of(const Message& message);
+const char* name_of(MessageType type);
+
+}  // namespace epipole::protocol

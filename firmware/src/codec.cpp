@@ -1,0 +1,328 @@
+#include "epipole/firmware/protocol/codec.hpp"
+
+#include <type_traits>
+
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/protocol/bytes.hpp"
+#include "epipole/firmware/protocol/crc32.hpp"
+
+namespace epipole::protocol {
+
+namespace {
+
+// Each message's wire layout is written once, as the order of its fields; the writer and the
+// reader below both walk it.
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, Health> {
+  io(m.uptime_ms), io(m.frames), io(m.dropped), io(m.fps_centi), io(m.latency_p50_us),
+      io(m.latency_p99_us);
+  for (auto& stage : m.stage_us) io(stage);
+  io(m.camera_timeouts), io(m.camera_reopens), io(m.trigger_losses), io(m.link_reopens),
+      io(m.unpaired_frames), io(m.bad_commands);
+}
+
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, FrameSummary> {
+  io(m.frame), io(m.trigger_ns), io(m.latency_us), io(m.corners_left), io(m.corners_right),
+      io(m.valid_disparity_permille), io(m.detections), io(m.points);
+}
+
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, Detections> {
+  io(m.frame);
+  io.count(m.count, kMaxDetections);
+  for (int i = 0; i < m.count && io.ok(); ++i) {
+    auto& d = m.items[i];
+    io(d.x), io(d.y), io(d.width), io(d.height), io(d.neighbors), io(d.depth_mm);
+  }
+}
+
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, Obstacles> {
+  io(m.frame), io(m.field_of_view_centideg);
+  io.count(m.count, kMaxSectors);
+  for (int i = 0; i < m.count && io.ok(); ++i) io(m.nearest_mm[i]);
+}
+
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, Points> {
+  io(m.frame);
+  io.count(m.count, kMaxPoints);
+  for (int i = 0; i < m.count && io.ok(); ++i) {
+    auto& p = m.items[i];
+    io(p.u_x16), io(p.v_x16), io(p.x_mm), io(p.y_mm), io(p.z_mm);
+  }
+}
+
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, CalibrationHealth> {
+  io(m.matches), io(m.median_offset_centipx), io(m.p90_offset_centipx);
+}
+
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, CommandAck> {
+  io(m.command_sequence), io(m.status);
+}
+
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, SetTriggerRate> {
+  io(m.rate_millihz);
+}
+
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, SetExposure> {
+  io(m.exposure_us), io(m.gain_centidb);
+}
+
+template <class Io, class M>
+void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, SetStages> {
+  io(m.enabled_mask);
+}
+
+template <class Io, class M>
+void fields(Io&, M&) requires std::is_same_v<std::remove_const_t<M>, Snapshot> {}
+
+struct Writer {
+  ByteWriter out;
+  template <class T>
+  void operator()(const T& value) {
+    if constexpr (std::is_enum_v<T>) {
+      out.u8(static_cast<std::uint8_t>(value));
+    } else if constexpr (std::is_same_v<T, std::int32_t>) {
+      out.i32(value);
+    } else if constexpr (sizeof(T) == 1) {
+      out.u8(value);
+    } else if constexpr (sizeof(T) == 2) {
+      out.u16(value);
+    } else if constexpr (sizeof(T) == 4) {
+      out.u32(value);
+    } else {
+      out.u64(value);
+    }
+  }
+  void count(std::uint8_t n, int limit) {
+    require(n <= limit, "protocol: a message holds at most ", limit, " items, not ", int{n});
+    out.u8(n);
+  }
+  bool ok() const { return out.ok(); }
+};
+
+struct Reader {
+  ByteReader in;
+  bool valid = true;
+  template <class T>
+  void operator()(T& value) {
+    if constexpr (std::is_same_v<T, AckStatus>) {
+      const std::uint8_t raw = in.u8();
+      valid = valid && raw <= static_cast<std::uint8_t>(AckStatus::unsupported);
+      value = static_cast<AckStatus>(raw);
+    } else if constexpr (std::is_same_v<T, std::int32_t>) {
+      value = in.i32();
+    } else if constexpr (sizeof(T) == 1) {
+      value = in.u8();
+    } else if constexpr (sizeof(T) == 2) {
+      value = in.u16();
+    } else if constexpr (sizeof(T) == 4) {
+      value = in.u32();
+    } else {
+      value = in.u64();
+    }
+  }
+  void count(std::uint8_t& n, int limit) {
+    n = in.u8();
+    valid = valid && n <= limit;
+  }
+  bool ok() const { return valid && in.ok(); }
+};
+
+template <class M>
+std::optional<Message> read_as(std::span<const std::uint8_t> body) {
+  Reader reader{ByteReader(body)};
+  M message{};
+  fields(reader, message);
+  if (!reader.ok() || reader.in.remaining() != 0) return std::nullopt;
+  return Message(message);
+}
+
+bool is_known(std::uint8_t type) {
+  switch (static_cast<MessageType>(type)) {
+    case MessageType::health:
+    case MessageType::frame_summary:
+    case MessageType::detections:
+    case MessageType::obstacles:
+    case MessageType::points:
+    case MessageType::calibration_health:
+    case MessageType::command_ack:
+    case MessageType::set_trigger_rate:
+    case MessageType::set_exposure:
+    case MessageType::set_stages:
+    case MessageType::snapshot:
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+MessageType type_of(const Message& message) {
+  static constexpr MessageType kTypes[] = {
+      MessageType::health,      MessageType::frame_summary,    MessageType::detections,
+      MessageType::obstacles,   MessageType::points,           MessageType::calibration_health,
+      MessageType::command_ack, MessageType::set_trigger_rate, MessageType::set_exposure,
+      MessageType::set_stages,  MessageType::snapshot};
+  static_assert(std::size(kTypes) == std::variant_size_v<Message>);
+  return kTypes[message.index()];
+}
+
+const char* name_of(MessageType type) {
+  switch (type) {
+    case MessageType::health:
+      return "health";
+    case MessageType::frame_summary:
+      return "frame";
+    case MessageType::detections:
+      return "detections";
+    case MessageType::obstacles:
+      return "obstacles";
+    case MessageType::points:
+      return "points";
+    case MessageType::calibration_health:
+      return "calibration";
+    case MessageType::command_ack:
+      return "ack";
+    case MessageType::set_trigger_rate:
+      return "set_trigger_rate";
+    case MessageType::set_exposure:
+      return "set_exposure";
+    case MessageType::set_stages:
+      return "set_stages";
+    case MessageType::snapshot:
+      return "snapshot";
+  }
+  return "unknown";
+}
+
+std::optional<Message> decode_body(MessageType type, std::span<const std::uint8_t> body) {
+  switch (type) {
+    case MessageType::health:
+      return read_as<Health>(body);
+    case MessageType::frame_summary:
+      return read_as<FrameSummary>(body);
+    case MessageType::detections:
+      return read_as<Detections>(body);
+    case MessageType::obstacles:
+      return read_as<Obstacles>(body);
+    case MessageType::points:
+      return read_as<Points>(body);
+    case MessageType::calibration_health:
+      return read_as<CalibrationHealth>(body);
+    case MessageType::command_ack:
+      return read_as<CommandAck>(body);
+    case MessageType::set_trigger_rate:
+      return read_as<SetTriggerRate>(body);
+    case MessageType::set_exposure:
+      return read_as<SetExposure>(body);
+    case MessageType::set_stages:
+      return read_as<SetStages>(body);
+    case MessageType::snapshot:
+      return read_as<Snapshot>(body);
+  }
+  return std::nullopt;
+}
+
+std::size_t encode_frame(const Message& message, std::uint16_t sequence,
+                         std::span<std::uint8_t> out) {
+  std::array<std::uint8_t, kMaxPayloadSize> payload{};
+  Writer writer{ByteWriter(payload)};
+  writer.out.u8(kVersion);
+  writer.out.u8(static_cast<std::uint8_t>(type_of(message)));
+  writer.out.u16(sequence);
+  std::visit([&writer](const auto& m) { fields(writer, m); }, message);
+  require(writer.ok() && writer.out.size() + kCrcSize <= payload.size(),
+          "protocol: message body larger than ", kMaxBodySize, " bytes");
+  const std::size_t covered = writer.out.size();
+  writer.out.u32(crc32(std::span(payload.data(), covered)));
+  const auto encoded = cobs_encode(std::span(payload.data(), writer.out.size()), out);
+  require(encoded.has_value() && *encoded < out.size(), "protocol: frame buffer of ", out.size(),
+          " bytes is too small");
+  out[*encoded] = 0;
+  return *encoded + 1;
+}
+
+std::optional<DecodedMessage> FrameDecoder::push(std::uint8_t byte) {
+  if (byte != 0) {
+    if (size_ < encoded_.size()) {
+      encoded_[size_++] = byte;
+    } else {
+      overflowed_ = true;
+    }
+    return std::nullopt;
+  }
+  std::optional<DecodedMessage> result = finish_frame();
+  size_ = 0;
+  overflowed_ = false;
+  return result;
+}
+
+std::optional<DecodedMessage> FrameDecoder::finish_frame() {
+  if (overflowed_) {
+    ++stats_.too_long;
+    return std::nullopt;
+  }
+  if (size_ == 0) {
+    ++stats_.empty;
+    return std::nullopt;
+  }
+  const auto decoded = cobs_decode(std::span(encoded_.data(), size_), payload_);
+  if (!decoded) {
+    ++stats_.bad_cobs;
+    return std::nullopt;
+  }
+  const std::size_t n = *decoded;
+  if (n < kHeaderSize + kCrcSize) {
+    ++stats_.bad_body;
+    return std::nullopt;
+  }
+  ByteReader crc_reader(std::span(payload_.data() + n - kCrcSize, kCrcSize));
+  if (crc_reader.u32() != crc32(std::span(payload_.data(), n - kCrcSize))) {
+    ++stats_.bad_crc;
+    return std::nullopt;
+  }
+  if (payload_[0] != kVersion) {
+    ++stats_.bad_version;
+    return std::nullopt;
+  }
+  if (!is_known(payload_[1])) {
+    ++stats_.unknown_type;
+    return std::nullopt;
+  }
+  const auto type = static_cast<MessageType>(payload_[1]);
+  const auto sequence = static_cast<std::uint16_t>(payload_[2] | payload_[3] << 8);
+  std::optional<Message> message =
+      decode_body(type, std::span(payload_.data() + kHeaderSize, n - kHeaderSize - kCrcSize));
+  if (!message) {
+    ++stats_.bad_body;
+    return std::nullopt;
+  }
+  // Sequence numbers: a small step back is a replay (dropped); a large one is a sender that
+  // restarted; a step forward of more than one means frames were lost on the way.
+  if (have_sequence_) {
+    const auto step =
+        static_cast<std::int16_t>(static_cast<std::uint16_t>(sequence - last_sequence_));
+    if (step <= 0 && step > -kReplayWindow) {
+      ++stats_.replays;
+      return std::nullopt;
+    }
+    if (step <= -kReplayWindow) {
+      ++stats_.resyncs;
+    } else {
+      stats_.lost += static_cast<std::uint64_t>(step - 1);
+    }
+  }
+  have_sequence_ = true;
+  last_sequence_ = sequence;
+  ++stats_.frames;
+  return DecodedMessage{sequence, std::move(*message)};
+}
+
+}  // namespace epipole::protocol

@@ -1,0 +1,267 @@
+// The serial protocol: COBS framing, CRC, every message type, and a decoder that survives
+// garbage, truncation, bit errors and replays.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/protocol/codec.hpp"
+#include "epipole/firmware/protocol/crc32.hpp"
+
+namespace epipole::protocol {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+Bytes cobs(const Bytes& in) {
+  Bytes out(cobs_max_encoded_size(in.size()));
+  const auto n = cobs_encode(in, out);
+  EXPECT_TRUE(n.has_value());
+  out.resize(n.value_or(0));
+  return out;
+}
+
+TEST(Cobs, KnownEncodings) {
+  EXPECT_EQ(cobs({0x00}), (Bytes{0x01, 0x01}));
+  EXPECT_EQ(cobs({0x00, 0x00}), (Bytes{0x01, 0x01, 0x01}));
+  EXPECT_EQ(cobs({0x11, 0x22, 0x00, 0x33}), (Bytes{0x03, 0x11, 0x22, 0x02, 0x33}));
+  EXPECT_EQ(cobs({0x11, 0x22, 0x33, 0x44}), (Bytes{0x05, 0x11, 0x22, 0x33, 0x44}));
+  EXPECT_EQ(cobs({0x11, 0x00, 0x00, 0x00}), (Bytes{0x02, 0x11, 0x01, 0x01, 0x01}));
+  Bytes run(254);
+  for (int i = 0; i < 254; ++i) run[i] = static_cast<std::uint8_t>(i + 1);
+  Bytes expected{0xFF};
+  expected.insert(expected.end(), run.begin(), run.end());
+  expected.push_back(0x01);
+  EXPECT_EQ(cobs(run), expected);
+}
+
+TEST(Cobs, RoundTripsAnyBytesAndNeverEmitsZero) {
+  std::mt19937 rng(1);
+  for (std::size_t size = 0; size < 700; size += 1 + size / 7) {
+    Bytes in(size);
+    for (auto& b : in) b = static_cast<std::uint8_t>(rng() % 3 == 0 ? 0 : rng());
+    const Bytes encoded = cobs(in);
+    EXPECT_EQ(std::count(encoded.begin(), encoded.end(), 0), 0);
+    Bytes out(size + 1);
+    const auto n = cobs_decode(encoded, out);
+    ASSERT_TRUE(n.has_value()) << size;
+    out.resize(*n);
+    EXPECT_EQ(out, in) << size;
+  }
+}
+
+TEST(Cobs, RejectsInvalidEncodings) {
+  Bytes out(16);
+  EXPECT_FALSE(cobs_decode(Bytes{0x05, 0x11, 0x22}, out));        // code runs past the end
+  EXPECT_FALSE(cobs_decode(Bytes{0x03, 0x11, 0x00, 0x33}, out));  // a zero inside
+  EXPECT_FALSE(cobs_decode(Bytes{0x00}, out));
+  Bytes small(2);
+  EXPECT_FALSE(cobs_decode(Bytes{0x05, 0x11, 0x22, 0x33, 0x44}, small));
+  Bytes tiny(1);
+  EXPECT_FALSE(cobs_encode(Bytes{1, 2, 3}, tiny));
+}
+
+TEST(Crc32, StandardCheckValue) {
+  const std::string text = "123456789";
+  EXPECT_EQ(crc32(std::as_bytes(std::span(text)).size() == 9
+                      ? std::span(reinterpret_cast<const std::uint8_t*>(text.data()), 9)
+                      : std::span<const std::uint8_t>()),
+            0xCBF43926u);
+  EXPECT_EQ(crc32({}), 0u);
+}
+
+// One of every message, with non-trivial contents.
+std::vector<Message> sample_messages(std::uint32_t seed) {
+  std::mt19937 engine(seed);
+  const auto rng = [&engine] { return static_cast<std::uint32_t>(engine()); };
+  const auto u16 = [&rng] { return static_cast<std::uint16_t>(rng()); };
+  Health health;
+  health.uptime_ms = rng();
+  health.frames = rng();
+  health.dropped = rng() % 100;
+  health.fps_centi = u16();
+  health.latency_p50_us = rng();
+  health.latency_p99_us = rng();
+  for (auto& s : health.stage_us) s = rng();
+  health.camera_timeouts = u16();
+  health.bad_commands = u16();
+  FrameSummary summary{rng(), (std::uint64_t{rng()} << 32) | rng(), rng(), u16(), u16(), 999, 3,
+                       u16()};
+  Detections detections;
+  detections.frame = rng();
+  detections.count = kMaxDetections;
+  for (auto& d : detections.items) d = {u16(), u16(), u16(), u16(), 7, u16()};
+  Obstacles obstacles;
+  obstacles.frame = rng();
+  obstacles.field_of_view_centideg = 9000;
+  obstacles.count = kMaxSectors;
+  for (auto& n : obstacles.nearest_mm) n = u16();
+  Points points;
+  points.frame = rng();
+  points.count = 5;
+  for (int i = 0; i < 5; ++i) {
+    points.items[i] = {u16(), u16(), static_cast<std::int32_t>(rng()),
+                       -static_cast<std::int32_t>(rng() % 1000), static_cast<std::int32_t>(rng())};
+  }
+  return {health,
+          summary,
+          detections,
+          obstacles,
+          points,
+          CalibrationHealth{12, 34, 56},
+          CommandAck{4242, AckStatus::rejected},
+          SetTriggerRate{30'000},
+          SetExposure{5000, 120},
+          SetStages{0x3F},
+          Snapshot{}};
+}
+
+Bytes frame_of(const Message& message, std::uint16_t sequence) {
+  Bytes out(kMaxFrameSize);
+  out.resize(encode_frame(message, sequence, out));
+  return out;
+}
+
+std::vector<DecodedMessage> decode_all(FrameDecoder& decoder, const Bytes& stream) {
+  std::vector<DecodedMessage> out;
+  for (const std::uint8_t b : stream) {
+    if (auto m = decoder.push(b)) out.push_back(std::move(*m));
+  }
+  return out;
+}
+
+TEST(Protocol, EveryMessageRoundTrips) {
+  const auto messages = sample_messages(3);
+  Bytes stream;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    const Bytes frame = frame_of(messages[i], static_cast<std::uint16_t>(100 + i));
+    EXPECT_LE(frame.size(), kMaxFrameSize);
+    EXPECT_EQ(frame.back(), 0);
+    EXPECT_EQ(std::count(frame.begin(), frame.end() - 1, 0), 0);
+    stream.insert(stream.end(), frame.begin(), frame.end());
+  }
+  FrameDecoder decoder;
+  const auto decoded = decode_all(decoder, stream);
+  ASSERT_EQ(decoded.size(), messages.size());
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    EXPECT_EQ(decoded[i].sequence, 100 + i);
+    EXPECT_EQ(decoded[i].message, messages[i]) << name_of(type_of(messages[i]));
+  }
+  EXPECT_EQ(decoder.stats().frames, messages.size());
+  EXPECT_EQ(decoder.stats().lost, 0u);
+}
+
+TEST(Protocol, SurvivesGarbageBetweenFrames) {
+  const auto messages = sample_messages(4);
+  std::mt19937 rng(9);
+  Bytes stream;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    for (int k = 0; k < 40; ++k) stream.push_back(static_cast<std::uint8_t>(rng()));
+    stream.push_back(0);  // garbage ends somewhere; the next frame starts clean
+    const Bytes frame = frame_of(messages[i], static_cast<std::uint16_t>(i));
+    stream.insert(stream.end(), frame.begin(), frame.end());
+  }
+  FrameDecoder decoder;
+  const auto decoded = decode_all(decoder, stream);
+  ASSERT_EQ(decoded.size(), messages.size());
+  for (std::size_t i = 0; i < messages.size(); ++i) EXPECT_EQ(decoded[i].message, messages[i]);
+  const auto& s = decoder.stats();
+  EXPECT_GT(s.bad_cobs + s.bad_crc + s.empty + s.bad_body, 0u);
+}
+
+TEST(Protocol, ATruncatedFrameCostsOnlyItselfAndItsSuccessor) {
+  const auto messages = sample_messages(5);
+  const Bytes first = frame_of(messages[1], 1);
+  Bytes stream(first.begin(), first.begin() + static_cast<std::ptrdiff_t>(first.size() / 2));
+  for (std::uint16_t seq = 2; seq < 6; ++seq) {
+    const Bytes frame = frame_of(messages[seq], seq);
+    stream.insert(stream.end(), frame.begin(), frame.end());
+  }
+  FrameDecoder decoder;
+  const auto decoded = decode_all(decoder, stream);
+  // The half frame merges with frame 2 into one bad frame; 3, 4, 5 arrive.
+  ASSERT_EQ(decoded.size(), 3u);
+  EXPECT_EQ(decoded[0].sequence, 3);
+  EXPECT_EQ(decoded[0].message, messages[3]);
+}
+
+TEST(Protocol, EverySingleBitErrorIsRejected) {
+  const auto messages = sample_messages(6);
+  for (const Message& message : messages) {
+    const Bytes frame = frame_of(message, 77);
+    for (std::size_t bit = 0; bit < 8 * (frame.size() - 1); ++bit) {
+      Bytes damaged = frame;
+      damaged[bit / 8] ^= static_cast<std::uint8_t>(1u << (bit % 8));
+      FrameDecoder decoder;
+      EXPECT_TRUE(decode_all(decoder, damaged).empty())
+          << name_of(type_of(message)) << " bit " << bit;
+    }
+  }
+}
+
+TEST(Protocol, ReplaysAreDroppedAndLossesCounted) {
+  const Message m = SetStages{1};
+  FrameDecoder decoder;
+  Bytes stream;
+  for (const int seq : {10, 11, 11, 9, 14, 15, 2000, 2001}) {
+    const Bytes f = frame_of(m, static_cast<std::uint16_t>(seq));
+    stream.insert(stream.end(), f.begin(), f.end());
+  }
+  const auto decoded = decode_all(decoder, stream);
+  std::vector<std::uint16_t> sequences;
+  for (const auto& d : decoded) sequences.push_back(d.sequence);
+  // 11 again and 9 are replays; 12, 13 lost; 2000 is far ahead: 1984 lost.
+  EXPECT_EQ(sequences, (std::vector<std::uint16_t>{10, 11, 14, 15, 2000, 2001}));
+  EXPECT_EQ(decoder.stats().replays, 2u);
+  EXPECT_EQ(decoder.stats().lost, 2u + 1984u);
+
+  // A sender that restarts from 0 after 2001 is resynchronised, not taken for a replay.
+  const Bytes restart = frame_of(m, 0);
+  EXPECT_EQ(decode_all(decoder, restart).size(), 1u);
+  EXPECT_EQ(decoder.stats().resyncs, 1u);
+}
+
+TEST(Protocol, OverlongAndUnknownFramesAreCounted) {
+  FrameDecoder decoder;
+  Bytes stream(5000, 0x42);
+  stream.push_back(0);
+  const Bytes good = frame_of(Snapshot{}, 1);
+  stream.insert(stream.end(), good.begin(), good.end());
+  EXPECT_EQ(decode_all(decoder, stream).size(), 1u);
+  EXPECT_EQ(decoder.stats().too_long, 1u);
+
+  // A well-formed frame of an unknown type and one of a future version.
+  for (const auto& [version, type] : {std::pair<int, int>{1, 0x55}, std::pair<int, int>{2, 0x01}}) {
+    Bytes payload{static_cast<std::uint8_t>(version), static_cast<std::uint8_t>(type), 5, 0};
+    const std::uint32_t c = crc32(payload);
+    for (int i = 0; i < 4; ++i) payload.push_back(static_cast<std::uint8_t>(c >> (8 * i)));
+    Bytes frame = cobs(payload);
+    frame.push_back(0);
+    EXPECT_TRUE(decode_all(decoder, frame).empty());
+  }
+  EXPECT_EQ(decoder.stats().unknown_type, 1u);
+  EXPECT_EQ(decoder.stats().bad_version, 1u);
+}
+
+TEST(Protocol, BodiesWithWrongLengthsOrCountsAreRejected) {
+  EXPECT_FALSE(decode_body(MessageType::set_stages, Bytes{1}));        // short
+  EXPECT_FALSE(decode_body(MessageType::set_stages, Bytes{1, 0, 0}));  // long
+  Bytes too_many(4, 0);
+  too_many.push_back(kMaxDetections + 1);
+  EXPECT_FALSE(decode_body(MessageType::detections, too_many));
+  EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 9}));  // unknown status
+  EXPECT_TRUE(decode_body(MessageType::command_ack, Bytes{1, 0, 2}));
+}
+
+TEST(Protocol, EncodingRejectsImpossibleMessages) {
+  Detections detections;
+  detections.count = kMaxDetections + 1;
+  Bytes out(kMaxFrameSize);
+  EXPECT_THROW(encode_frame(detections, 0, out), Error);
+  Bytes small(8);
+  EXPECT_THROW(encode_frame(Health{}, 0, small), Error);
+}
+
+}  // namespace
+}  // namespace epipole::protocol
