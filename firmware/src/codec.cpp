@@ -5,87 +5,16 @@
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/protocol/bytes.hpp"
 #include "epipole/firmware/protocol/crc32.hpp"
+#include "epipole/firmware/protocol/fields.hpp"
 
 namespace epipole::protocol {
 
 namespace {
 
-// Each message's wire layout is written once, as the order of its fields; the writer and the
-// reader below both walk it.
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, Health> {
-  io(m.uptime_ms), io(m.frames), io(m.dropped), io(m.fps_centi), io(m.latency_p50_us),
-      io(m.latency_p99_us);
-  for (auto& stage : m.stage_us) io(stage);
-  io(m.camera_timeouts), io(m.camera_reopens), io(m.trigger_losses), io(m.link_reopens),
-      io(m.unpaired_frames), io(m.bad_commands);
-}
-
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, FrameSummary> {
-  io(m.frame), io(m.trigger_ns), io(m.latency_us), io(m.corners_left), io(m.corners_right),
-      io(m.valid_disparity_permille), io(m.detections), io(m.points);
-}
-
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, Detections> {
-  io(m.frame);
-  io.count(m.count, kMaxDetections);
-  for (int i = 0; i < m.count && io.ok(); ++i) {
-    auto& d = m.items[i];
-    io(d.x), io(d.y), io(d.width), io(d.height), io(d.neighbors), io(d.depth_mm);
-  }
-}
-
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, Obstacles> {
-  io(m.frame), io(m.field_of_view_centideg);
-  io.count(m.count, kMaxSectors);
-  for (int i = 0; i < m.count && io.ok(); ++i) io(m.nearest_mm[i]);
-}
-
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, Points> {
-  io(m.frame);
-  io.count(m.count, kMaxPoints);
-  for (int i = 0; i < m.count && io.ok(); ++i) {
-    auto& p = m.items[i];
-    io(p.u_x16), io(p.v_x16), io(p.x_mm), io(p.y_mm), io(p.z_mm);
-  }
-}
-
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, CalibrationHealth> {
-  io(m.matches), io(m.median_offset_centipx), io(m.p90_offset_centipx);
-}
-
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, CommandAck> {
-  io(m.command_sequence), io(m.status);
-}
-
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, SetTriggerRate> {
-  io(m.rate_millihz);
-}
-
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, SetExposure> {
-  io(m.exposure_us), io(m.gain_centidb);
-}
-
-template <class Io, class M>
-void fields(Io& io, M& m) requires std::is_same_v<std::remove_const_t<M>, SetStages> {
-  io(m.enabled_mask);
-}
-
-template <class Io, class M>
-void fields(Io&, M&) requires std::is_same_v<std::remove_const_t<M>, Snapshot> {}
-
 struct Writer {
   ByteWriter out;
   template <class T>
-  void operator()(const T& value) {
+  void operator()(const char*, const T& value) {
     if constexpr (std::is_enum_v<T>) {
       out.u8(static_cast<std::uint8_t>(value));
     } else if constexpr (std::is_same_v<T, std::int32_t>) {
@@ -100,9 +29,12 @@ struct Writer {
       out.u64(value);
     }
   }
-  void count(std::uint8_t n, int limit) {
-    require(n <= limit, "protocol: a message holds at most ", limit, " items, not ", int{n});
-    out.u8(n);
+  template <class Items, class Each>
+  void list(const char*, std::uint8_t count, int limit, const Items& items, Each each) {
+    require(count <= limit, "protocol: a message holds at most ", limit, " items, not ",
+            int{count});
+    out.u8(count);
+    for (int i = 0; i < count; ++i) each(*this, items[i]);
   }
   bool ok() const { return out.ok(); }
 };
@@ -111,7 +43,7 @@ struct Reader {
   ByteReader in;
   bool valid = true;
   template <class T>
-  void operator()(T& value) {
+  void operator()(const char*, T& value) {
     if constexpr (std::is_same_v<T, AckStatus>) {
       const std::uint8_t raw = in.u8();
       valid = valid && raw <= static_cast<std::uint8_t>(AckStatus::unsupported);
@@ -128,9 +60,11 @@ struct Reader {
       value = in.u64();
     }
   }
-  void count(std::uint8_t& n, int limit) {
-    n = in.u8();
-    valid = valid && n <= limit;
+  template <class Items, class Each>
+  void list(const char*, std::uint8_t& count, int limit, Items& items, Each each) {
+    count = in.u8();
+    valid = valid && count <= limit;
+    for (int i = 0; i < count && ok(); ++i) each(*this, items[i]);
   }
   bool ok() const { return valid && in.ok(); }
 };

@@ -6,10 +6,11 @@ namespace epipole::tools {
 
 // Options every subcommand understands.
 struct GlobalOptions {
-  std::string kernels = "auto";  // auto | ref | neon
+  std::string kernels = "auto";  // auto | ref | neon | avx2
 };
 
 // Each subcommand lives in its own file and registers itself on the app.
 void add_features_command(CLI::App& app, const GlobalOptions& global);
+void add_link_command(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace epipole::tools

@@ -14,11 +14,13 @@ int main(int argc, char** argv) {
   app.fallthrough();
 
   tools::GlobalOptions global;
-  app.add_option("--kernels", global.kernels, "Kernel path: auto, ref (scalar) or neon")
-      ->check(CLI::IsMember({"auto", "ref", "reference", "neon"}))
+  app.add_option("--kernels", global.kernels,
+                 "Kernel path: auto, ref (scalar), neon (SIMDe on x86) or avx2 (x86)")
+      ->check(CLI::IsMember({"auto", "ref", "reference", "neon", "avx2"}))
       ->capture_default_str();
 
   tools::add_features_command(app, global);
+  tools::add_link_command(app, global);
 
   try {
     app.parse(argc, argv);

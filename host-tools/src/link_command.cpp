@@ -1,0 +1,252 @@
+// epipole link PORT: decodes Epipole's serial stream for people, and sends commands.
+#include <sys/stat.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "commands.hpp"
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/protocol/codec.hpp"
+#include "epipole/firmware/protocol/fields.hpp"
+#include "epipole/hal/serial_port.hpp"
+
+namespace epipole::tools {
+
+namespace {
+
+using namespace epipole::protocol;
+
+struct LinkOptions {
+  std::string port;
+  int baud = 115200;
+  bool json = false;
+  int count = 0;         // stop after this many messages (0: no limit)
+  double seconds = 0.0;  // stop after this long (0: until the stream ends)
+  std::vector<std::string> send;
+};
+
+// A protocol field visitor that builds a JSON object.
+struct JsonFields {
+  nlohmann::json* object;
+  template <class T>
+  void operator()(const char* name, const T& value) {
+    if constexpr (std::is_enum_v<T>) {
+      (*object)[name] = static_cast<int>(value);
+    } else {
+      (*object)[name] = value;
+    }
+  }
+  template <class Items, class Each>
+  void list(const char* name, std::uint8_t count, int, const Items& items, Each each) {
+    nlohmann::json array = nlohmann::json::array();
+    for (int i = 0; i < count; ++i) {
+      nlohmann::json item = nlohmann::json::object();
+      JsonFields item_fields{&item};
+      each(item_fields, items[i]);
+      // A one-field item (a sector's distance) is just its value.
+      array.push_back(item.size() == 1 ? item.begin().value() : item);
+    }
+    (*object)[name] = std::move(array);
+  }
+};
+
+nlohmann::json to_json(const DecodedMessage& decoded) {
+  nlohmann::json out = {{"seq", decoded.sequence}, {"type", name_of(type_of(decoded.message))}};
+  std::visit(
+      [&out](const auto& m) {
+        JsonFields json_fields{&out};
+        fields(json_fields, m);
+      },
+      decoded.message);
+  return out;
+}
+
+std::string to_text(const DecodedMessage& decoded) {
+  const nlohmann::json json = to_json(decoded);
+  std::string line = cat("#", decoded.sequence, " ", name_of(type_of(decoded.message)));
+  for (const auto& [key, value] : json.items()) {
+    if (key == "seq" || key == "type") continue;
+    line += cat(" ", key, "=", value.dump());
+  }
+  return line;
+}
+
+nlohmann::json stats_json(const DecoderStats& s) {
+  return {{"type", "decoder"},
+          {"frames", s.frames},
+          {"bad_cobs", s.bad_cobs},
+          {"too_long", s.too_long},
+          {"bad_crc", s.bad_crc},
+          {"bad_version", s.bad_version},
+          {"unknown_type", s.unknown_type},
+          {"bad_body", s.bad_body},
+          {"replays", s.replays},
+          {"lost", s.lost},
+          {"resyncs", s.resyncs}};
+}
+
+// "trigger-rate=30", "exposure=5000" or "exposure=5000:6.5" (µs, dB), "stages=0x3f",
+// "snapshot".
+Message parse_command(const std::string& text) {
+  const auto equals = text.find('=');
+  const std::string name = text.substr(0, equals);
+  const std::string value = equals == std::string::npos ? "" : text.substr(equals + 1);
+  const auto number = [&text](const std::string& s) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(s, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    require(used == s.size() && !s.empty() && std::isfinite(v) && v >= 0, "command '", text, "': '",
+            s, "' is not a number >= 0");
+    return v;
+  };
+  if (name == "snapshot" && value.empty()) return Snapshot{};
+  if (name == "trigger-rate") {
+    const double hz = number(value);
+    require(hz <= 1000, "command '", text, "': trigger rate above 1000 Hz");
+    return SetTriggerRate{static_cast<std::uint32_t>(std::lround(hz * 1000))};
+  }
+  if (name == "exposure") {
+    const auto colon = value.find(':');
+    const double exposure = number(value.substr(0, colon));
+    const double gain = colon == std::string::npos ? 0.0 : number(value.substr(colon + 1));
+    require(exposure <= 1e7 && gain <= 600, "command '", text, "': exposure or gain out of range");
+    return SetExposure{static_cast<std::uint32_t>(std::lround(exposure)),
+                       static_cast<std::uint16_t>(std::lround(gain * 100))};
+  }
+  if (name == "stages") {
+    std::size_t used = 0;
+    unsigned long mask = 0;
+    try {
+      mask = std::stoul(value, &used, 0);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    require(used == value.size() && !value.empty() && mask <= 0xFFFF, "command '", text,
+            "': the stage mask must be a number from 0 to 0xffff");
+    return SetStages{static_cast<std::uint16_t>(mask)};
+  }
+  throw Error(cat("unknown command '", text,
+                  "' (expected trigger-rate=HZ, exposure=US[:DB], stages=MASK or snapshot)"));
+}
+
+class Printer {
+ public:
+  Printer(const LinkOptions& options) : options_(options) {}
+  // Feeds bytes; false once enough messages were printed.
+  bool feed(std::span<const std::uint8_t> bytes) {
+    for (const std::uint8_t b : bytes) {
+      if (auto decoded = decoder_.push(b)) {
+        std::cout << (options_.json ? to_json(*decoded).dump() : to_text(*decoded)) << "\n";
+        if (options_.count > 0 && ++printed_ >= options_.count) return false;
+      }
+    }
+    std::cout.flush();
+    return true;
+  }
+  void finish() const {
+    const nlohmann::json stats = stats_json(decoder_.stats());
+    if (options_.json) {
+      std::cout << stats.dump() << "\n";
+    } else {
+      std::cerr << "epipole link: " << stats.dump() << "\n";
+    }
+  }
+
+ private:
+  const LinkOptions& options_;
+  FrameDecoder decoder_;
+  int printed_ = 0;
+};
+
+bool is_terminal(const std::string& path) {
+  struct stat info {};
+  return ::stat(path.c_str(), &info) == 0 && S_ISCHR(info.st_mode);
+}
+
+void run_link(const LinkOptions& options) {
+  std::vector<Message> commands;
+  for (const std::string& text : options.send) commands.push_back(parse_command(text));
+  Printer printer(options);
+
+  if (!is_terminal(options.port)) {
+    require(commands.empty(), options.port, ": commands can only be sent to a serial device");
+    std::ifstream in(options.port, std::ios::binary);
+    require(in.good(), options.port, ": cannot open");
+    std::array<char, 4096> buffer{};
+    while (in.read(buffer.data(), buffer.size()) || in.gcount() > 0) {
+      const auto n = static_cast<std::size_t>(in.gcount());
+      if (!printer.feed(std::span(reinterpret_cast<const std::uint8_t*>(buffer.data()), n))) break;
+    }
+    printer.finish();
+    return;
+  }
+
+  hal::TermiosSerialPort port({options.port, options.baud});
+  std::array<std::uint8_t, kMaxFrameSize> frame{};
+  std::uint16_t sequence = 0;
+  for (const Message& command : commands) {
+    const std::size_t size = encode_frame(command, sequence++, frame);
+    const hal::IoResult sent =
+        port.write(std::as_bytes(std::span(frame.data(), size)), 1'000'000'000);
+    require(sent.status == hal::IoStatus::ok, options.port, ": could not send '",
+            name_of(type_of(command)), "'");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  std::array<std::byte, 4096> buffer{};
+  for (;;) {
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (options.seconds > 0 && elapsed >= options.seconds) break;
+    const hal::IoResult r = port.read(buffer, 100'000'000);
+    if (r.status == hal::IoStatus::hung_up) {
+      std::cerr << "epipole link: " << options.port << " hung up\n";
+      break;
+    }
+    if (r.status != hal::IoStatus::ok) continue;
+    if (!printer.feed(std::span(reinterpret_cast<const std::uint8_t*>(buffer.data()), r.bytes))) {
+      break;
+    }
+  }
+  printer.finish();
+}
+
+}  // namespace
+
+void add_link_command(CLI::App& app, const GlobalOptions&) {
+  auto options = std::make_shared<LinkOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "link",
+      "Decode Epipole's serial stream (a serial device or a recorded file) and send commands");
+  cmd->add_option("port", options->port,
+                  "Serial device (e.g. /dev/ttyUSB0) or a recorded stream file")
+      ->required();
+  cmd->add_option("--baud,-b", options->baud, "Baud rate of a serial device")
+      ->check([](const std::string& v) {
+        try {
+          return hal::is_supported_baud(std::stoi(v)) ? std::string() : "unsupported baud rate";
+        } catch (const std::exception&) {
+          return std::string("not a number");
+        }
+      })
+      ->capture_default_str();
+  cmd->add_flag("--json", options->json, "One JSON object per message, then the decoder's counts");
+  cmd->add_option("--count,-n", options->count, "Stop after N messages")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--seconds,-s", options->seconds, "Stop after this long (serial devices)")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--send", options->send,
+                  "Send a command first: trigger-rate=HZ, exposure=US[:DB], stages=MASK, snapshot");
+  cmd->callback([options] { run_link(*options); });
+}
+
+}  // namespace epipole::tools

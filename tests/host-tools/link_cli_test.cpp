@@ -1,0 +1,156 @@
+// epipole link as a user runs it: on a recorded stream file and on a kernel pseudo-terminal.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <pty.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "epipole/firmware/protocol/codec.hpp"
+
+namespace epipole::protocol {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+struct Result {
+  int exit_code;
+  std::string out;
+};
+
+Result finish(FILE* pipe) {
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) out += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+FILE* start_tool(const std::string& arguments) {
+  const std::string command = std::string(EPIPOLE_TOOL) + " " + arguments + " 2>&1";
+  return popen(command.c_str(), "r");
+}
+
+std::vector<nlohmann::json> json_lines(const std::string& text) {
+  std::vector<nlohmann::json> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(nlohmann::json::parse(line));
+  return lines;
+}
+
+void append_frame(Bytes& stream, const Message& message, std::uint16_t sequence) {
+  Bytes frame(kMaxFrameSize);
+  frame.resize(encode_frame(message, sequence, frame));
+  stream.insert(stream.end(), frame.begin(), frame.end());
+}
+
+TEST(LinkCli, DecodesARecordedStreamAndCountsTheGarbage) {
+  Health health;
+  health.frames = 1234;
+  health.stage_us[static_cast<int>(Stage::disparity)] = 8000;
+  Detections detections;
+  detections.frame = 7;
+  detections.count = 2;
+  detections.items[0] = {10, 20, 30, 40, 5, 1500};
+  detections.items[1] = {100, 120, 50, 50, 3, kUnknownDepth};
+  Bytes stream = {0x13, 0x37, 0x00};  // garbage first
+  append_frame(stream, health, 1);
+  Bytes damaged;
+  append_frame(damaged, FrameSummary{}, 2);
+  damaged[3] ^= 0x10;
+  stream.insert(stream.end(), damaged.begin(), damaged.end());
+  append_frame(stream, detections, 3);
+  const std::string path = ::testing::TempDir() + "epipole-link-stream.bin";
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(stream.data()),
+             static_cast<std::streamsize>(stream.size()));
+
+  const Result r = finish(start_tool("link " + path + " --json"));
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto lines = json_lines(r.out);
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  EXPECT_EQ(lines[0]["type"], "health");
+  EXPECT_EQ(lines[0]["frames"], 1234);
+  EXPECT_EQ(lines[0]["disparity_us"], 8000);
+  EXPECT_EQ(lines[1]["type"], "detections");
+  EXPECT_EQ(lines[1]["seq"], 3);
+  ASSERT_EQ(lines[1]["boxes"].size(), 2u);
+  EXPECT_EQ(lines[1]["boxes"][0]["depth_mm"], 1500);
+  EXPECT_EQ(lines[2]["type"], "decoder");
+  EXPECT_EQ(lines[2]["frames"], 2);
+  EXPECT_EQ(lines[2]["lost"], 1);  // the damaged frame's sequence number
+  EXPECT_GE(lines[2]["bad_cobs"].get<int>() + lines[2]["bad_crc"].get<int>(), 2);
+
+  const Result text = finish(start_tool("link " + path + " --count 1"));
+  EXPECT_EQ(text.exit_code, 0);
+  EXPECT_NE(text.out.find("#1 health"), std::string::npos) << text.out;
+  EXPECT_EQ(text.out.find("detections"), std::string::npos) << text.out;
+  std::remove(path.c_str());
+}
+
+TEST(LinkCli, SendsCommandsAndReadsTheAnswerOnASerialDevice) {
+  int master = -1;
+  int slave = -1;
+  std::array<char, 128> name{};
+  ASSERT_EQ(openpty(&master, &slave, name.data(), nullptr, nullptr), 0);
+  // The slave stays open here too: a pty master with no slave open reads as hung up.
+  FILE* tool = start_tool(std::string("link ") + name.data() +
+                          " --send snapshot --send stages=0x3 --send exposure=5000:6.5"
+                          " --seconds 2 --count 1 --json");
+  ASSERT_NE(tool, nullptr);
+
+  FrameDecoder decoder;
+  std::vector<Message> received;
+  for (int tries = 0; tries < 300 && received.size() < 3; ++tries) {
+    pollfd p{master, POLLIN, 0};
+    if (::poll(&p, 1, 10) <= 0) continue;
+    std::array<std::uint8_t, 256> buffer{};
+    const ssize_t n = ::read(master, buffer.data(), buffer.size());
+    for (ssize_t i = 0; i < n; ++i) {
+      if (auto m = decoder.push(buffer[static_cast<std::size_t>(i)]))
+        received.push_back(m->message);
+    }
+  }
+  ASSERT_EQ(received.size(), 3u);
+  EXPECT_EQ(received[0], Message(Snapshot{}));
+  EXPECT_EQ(received[1], Message(SetStages{3}));
+  EXPECT_EQ(received[2], Message(SetExposure{5000, 650}));
+
+  Bytes answer;
+  append_frame(answer, CommandAck{0, AckStatus::ok}, 40);
+  ASSERT_EQ(::write(master, answer.data(), answer.size()), static_cast<ssize_t>(answer.size()));
+  const Result r = finish(tool);
+  ::close(master);
+  ::close(slave);
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  const auto lines = json_lines(r.out);
+  ASSERT_GE(lines.size(), 1u) << r.out;
+  EXPECT_EQ(lines[0]["type"], "ack");
+  EXPECT_EQ(lines[0]["seq"], 40);
+}
+
+TEST(LinkCli, BadArgumentsAreOneLineErrors) {
+  const std::string file = ::testing::TempDir() + "epipole-link-empty.bin";
+  std::ofstream(file).put('x');
+  for (const std::string& arguments : std::vector<std::string>{
+           "link", "link /no/such/file", "link " + file + " --send bogus",
+           "link " + file + " --send trigger-rate=fast", "link " + file + " --send snapshot",
+           "link " + file + " --baud 12345", "link " + file + " --send stages=0x1ffff"}) {
+    const Result r = finish(start_tool(arguments));
+    EXPECT_NE(r.exit_code, 0) << arguments;
+    EXPECT_FALSE(r.out.empty()) << arguments;
+    EXPECT_LE(std::count(r.out.begin(), r.out.end(), '\n'), 2) << arguments << ": " << r.out;
+  }
+  std::remove(file.c_str());
+}
+
+}  // namespace
+}  // namespace epipole::protocol
