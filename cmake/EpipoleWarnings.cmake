@@ -7,8 +7,10 @@ add_library(epipole_warnings INTERFACE)
 target_compile_options(epipole_warnings INTERFACE
   -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion
   -Wnon-virtual-dtor -Wold-style-cast -Woverloaded-virtual -Wcast-align
-  -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough -Wduplicated-cond
-  -Wlogical-op -Wmisleading-indentation -Wundef)
+  -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough -Wmisleading-indentation -Wundef)
+if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+  target_compile_options(epipole_warnings INTERFACE -Wduplicated-cond -Wlogical-op)
+endif()
 if(EPIPOLE_WERROR)
   target_compile_options(epipole_warnings INTERFACE -Werror)
 endif()

@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Every test: installs what is missing, fetches the data sets, builds the host, host-asan,
-# aarch64 and armhf presets and runs all their tests (the cross-built ones under qemu-user).
+# aarch64 and armhf presets and runs all their tests (the cross-built ones under qemu-user),
+# then builds the libFuzzer targets (fuzz preset) and runs each from its seed corpus.
 # This is the README's test command and what CI runs.
 #
 #   EPIPOLE_PRESETS="host aarch64"   run a subset of the presets
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-presets=${EPIPOLE_PRESETS:-"host host-asan aarch64 armhf"}
+presets=${EPIPOLE_PRESETS:-"host host-asan aarch64 armhf fuzz"}
 start=$SECONDS
 
 ./scripts/setup.sh

@@ -11,6 +11,8 @@ packages=(
   libcli11-dev nlohmann-json3-dev
   # tests, benchmarks and host-only references (never linked into the firmware)
   googletest libgtest-dev libgmock-dev libbenchmark-dev libopencv-dev
+  # clang with its sanitizer and libFuzzer runtimes (the fuzz preset)
+  clang libclang-rt-14-dev
   # cross compilers and the user-mode emulator that runs cross-built tests
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user
   # data fetching (apt-get download + dpkg-deb)
