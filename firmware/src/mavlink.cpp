@@ -1,0 +1,143 @@
+#include "epipole/firmware/protocol/mavlink.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/protocol/bytes.hpp"
+
+namespace epipole::mavlink {
+
+namespace {
+
+std::optional<std::uint8_t> crc_extra_of(std::uint32_t message_id) {
+  if (message_id == kHeartbeatId) return kHeartbeatCrcExtra;
+  if (message_id == kObstacleDistanceId) return kObstacleDistanceCrcExtra;
+  return std::nullopt;
+}
+
+std::uint32_t float_bits(float v) {
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &v, sizeof bits);
+  return bits;
+}
+
+// Wraps a payload (fields in MAVLink wire order) into a frame: MAVLink 2 drops the payload's
+// trailing zero bytes (keeping at least one).
+std::size_t finish_frame(std::span<const std::uint8_t> payload, std::uint32_t message_id,
+                         const Identity& identity, std::uint8_t sequence,
+                         std::span<std::uint8_t> out) {
+  require(out.size() >= kMaxFrameSize, "mavlink: frame buffer too small");
+  std::size_t length = payload.size();
+  while (length > 1 && payload[length - 1] == 0) --length;
+  out[0] = kStx;
+  out[1] = static_cast<std::uint8_t>(length);
+  out[2] = 0;  // incompatibility flags: no signing
+  out[3] = 0;  // compatibility flags
+  out[4] = sequence;
+  out[5] = identity.system_id;
+  out[6] = identity.component_id;
+  out[7] = static_cast<std::uint8_t>(message_id);
+  out[8] = static_cast<std::uint8_t>(message_id >> 8);
+  out[9] = static_cast<std::uint8_t>(message_id >> 16);
+  std::memcpy(out.data() + kHeaderSize, payload.data(), length);
+  std::uint16_t crc = crc16_x25(out.subspan(1, kHeaderSize - 1 + length));
+  const std::uint8_t extra = *crc_extra_of(message_id);
+  crc = crc16_x25(std::span(&extra, 1), crc);
+  out[kHeaderSize + length] = static_cast<std::uint8_t>(crc);
+  out[kHeaderSize + length + 1] = static_cast<std::uint8_t>(crc >> 8);
+  return kHeaderSize + length + kChecksumSize;
+}
+
+}  // namespace
+
+std::uint16_t crc16_x25(std::span<const std::uint8_t> bytes, std::uint16_t crc) {
+  for (const std::uint8_t b : bytes) {
+    std::uint8_t t = static_cast<std::uint8_t>(b ^ (crc & 0xFF));
+    t = static_cast<std::uint8_t>(t ^ (t << 4));
+    crc = static_cast<std::uint16_t>((crc >> 8) ^ (t << 8) ^ (t << 3) ^ (t >> 4));
+  }
+  return crc;
+}
+
+std::size_t encode_heartbeat(const Identity& identity, std::uint8_t sequence,
+                             std::span<std::uint8_t> out) {
+  std::array<std::uint8_t, 9> payload{};
+  protocol::ByteWriter w(payload);
+  w.u32(0);                         // custom_mode
+  w.u8(kMavTypeOnboardController);  // type
+  w.u8(kMavAutopilotInvalid);       // autopilot: not a flight controller
+  w.u8(0);                          // base_mode
+  w.u8(kMavStateActive);            // system_status
+  w.u8(3);                          // mavlink_version
+  return finish_frame(std::span(payload.data(), w.size()), kHeartbeatId, identity, sequence, out);
+}
+
+std::size_t encode_obstacle_distance(const ObstacleDistance& m, const Identity& identity,
+                                     std::uint8_t sequence, std::span<std::uint8_t> out) {
+  std::array<std::uint8_t, 167> payload{};
+  protocol::ByteWriter w(payload);
+  // Base fields sorted by type size, as MAVLink orders them on the wire; then the extensions
+  // in their declared order.
+  w.u64(m.time_usec);
+  for (const std::uint16_t d : m.distances_cm) w.u16(d);
+  w.u16(m.min_distance_cm);
+  w.u16(m.max_distance_cm);
+  w.u8(m.sensor_type);
+  w.u8(static_cast<std::uint8_t>(std::clamp(std::lround(m.increment_deg), 0L, 255L)));
+  w.u32(float_bits(m.increment_deg));
+  w.u32(float_bits(m.angle_offset_deg));
+  w.u8(m.frame);
+  return finish_frame(std::span(payload.data(), w.size()), kObstacleDistanceId, identity, sequence,
+                      out);
+}
+
+ObstacleDistance to_obstacle_distance(const protocol::Obstacles& sectors, std::uint64_t time_usec,
+                                      std::uint16_t min_distance_cm,
+                                      std::uint16_t max_distance_cm) {
+  require(sectors.count >= 1 && sectors.count <= 72, "mavlink: ", int{sectors.count},
+          " obstacle sectors (1 to 72 fit OBSTACLE_DISTANCE)");
+  require(sectors.field_of_view_centideg > 0, "mavlink: obstacle field of view is 0");
+  ObstacleDistance out;
+  out.time_usec = time_usec;
+  out.min_distance_cm = min_distance_cm;
+  out.max_distance_cm = max_distance_cm;
+  const float fov = static_cast<float>(sectors.field_of_view_centideg) / 100.0f;
+  out.increment_deg = fov / static_cast<float>(sectors.count);
+  out.angle_offset_deg = -fov / 2 + out.increment_deg / 2;
+  out.distances_cm.fill(kUnknownDistance);
+  for (int i = 0; i < sectors.count; ++i) {
+    const std::uint16_t mm = sectors.nearest_mm[i];
+    if (mm == protocol::kUnknownDepth) continue;
+    const long cm = (static_cast<long>(mm) + 5) / 10;
+    out.distances_cm[i] = static_cast<std::uint16_t>(
+        cm > max_distance_cm ? max_distance_cm + 1 : std::max<long>(cm, min_distance_cm));
+  }
+  return out;
+}
+
+std::optional<Frame> parse_frame(std::span<const std::uint8_t> bytes) {
+  if (bytes.size() < kHeaderSize + kChecksumSize || bytes[0] != kStx || bytes[2] != 0) {
+    return std::nullopt;  // incompatibility flags other than 0 (signing) are not supported
+  }
+  const std::uint8_t length = bytes[1];
+  if (bytes.size() < kHeaderSize + length + kChecksumSize) return std::nullopt;
+  Frame frame;
+  frame.length = length;
+  frame.sequence = bytes[4];
+  frame.system_id = bytes[5];
+  frame.component_id = bytes[6];
+  frame.message_id = bytes[7] | bytes[8] << 8 | static_cast<std::uint32_t>(bytes[9]) << 16;
+  const auto extra = crc_extra_of(frame.message_id);
+  if (!extra) return std::nullopt;
+  std::uint16_t crc = crc16_x25(bytes.subspan(1, kHeaderSize - 1 + length));
+  crc = crc16_x25(std::span(&*extra, 1), crc);
+  const auto received = static_cast<std::uint16_t>(bytes[kHeaderSize + length] |
+                                                   bytes[kHeaderSize + length + 1] << 8);
+  if (crc != received) return std::nullopt;
+  std::memcpy(frame.payload.data(), bytes.data() + kHeaderSize, length);
+  return frame;
+}
+
+}  // namespace epipole::mavlink
