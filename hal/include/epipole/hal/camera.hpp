@@ -1,0 +1,83 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "epipole/core/image.hpp"
+#include "epipole/hal/clock.hpp"
+
+namespace epipole::hal {
+
+// Pixel formats a camera backend may be asked for. Every backend delivers an 8-bit gray view.
+enum class PixelFormat { grey, y10, y16, yuyv, nv12, yu12 };
+
+const char* to_string(PixelFormat format);
+// "grey", "y10", "y16", "yuyv", "nv12", "yu12" (case-insensitive); nullopt for anything else.
+std::optional<PixelFormat> parse_pixel_format(std::string_view name);
+
+// The clock a frame timestamp was taken on.
+enum class ClockId { monotonic, virtual_clock, other };
+
+enum class TriggerMode { free_running, external };
+
+struct CameraConfig {
+  std::string device;  // /dev/video0, a libcamera id, or "left"/"right" on the simulated board
+  int width = 640;
+  int height = 480;
+  PixelFormat format = PixelFormat::grey;
+  double fps = 30.0;         // free-running rate
+  Nanoseconds exposure = 0;  // 0: automatic
+  double gain = 0.0;         // 0: automatic
+  TriggerMode trigger = TriggerMode::free_running;
+  int buffer_count = 4;  // the fixed ring of frame buffers
+};
+
+// Throws Error naming the device and the setting when a configuration cannot be valid.
+void validate(const CameraConfig& config);
+
+// A frame lent by a camera: a zero-copy gray view into one of its buffers, valid until it is
+// released (or the camera is stopped or reopened).
+struct Frame {
+  GrayView gray;
+  std::uint32_t sequence = 0;  // the trigger sequence (free running: the frame counter)
+  Nanoseconds timestamp = 0;
+  ClockId clock = ClockId::monotonic;
+  int buffer = -1;               // the camera's buffer index; -1: no frame
+  std::uint32_t generation = 0;  // the camera's stream generation (bumped by reopen)
+  bool valid() const { return buffer >= 0; }
+};
+
+enum class AcquireStatus {
+  ok,           // a frame
+  timeout,      // no frame before the timeout
+  device_lost,  // the device is gone (or stalled past recovery): reopen()
+};
+
+struct AcquireResult {
+  AcquireStatus status = AcquireStatus::timeout;
+  Frame frame;
+};
+
+const char* to_string(AcquireStatus status);
+
+// A camera. acquire() and release() never allocate and never throw once the camera streams;
+// configuration and opening errors throw Error naming the device and the setting.
+class CameraSource {
+ public:
+  virtual ~CameraSource() = default;
+  virtual const std::string& name() const = 0;
+  virtual const CameraConfig& config() const = 0;
+  virtual void start() = 0;
+  virtual void stop() = 0;
+  virtual bool streaming() const = 0;
+  virtual AcquireResult acquire(Nanoseconds timeout) = 0;
+  // Gives a frame's buffer back. Frames of an earlier generation (before a reopen) are ignored.
+  virtual void release(const Frame& frame) = 0;
+  // Closes and opens the device again and restarts streaming if it was streaming; throws Error
+  // naming the device when it cannot be opened.
+  virtual void reopen() = 0;
+};
+
+}  // namespace epipole::hal

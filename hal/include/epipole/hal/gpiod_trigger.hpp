@@ -1,0 +1,47 @@
+#pragma once
+
+#include <string>
+
+#include "epipole/hal/clock.hpp"
+#include "epipole/hal/trigger.hpp"
+
+struct gpiod_chip;
+struct gpiod_line;
+
+namespace epipole::hal {
+
+class BackendRegistry;
+
+// The trigger line through libgpiod's 1.x API (Debian bookworm: 1.6), the line looked up by
+// name (in config.chip when given, else on every chip). A master drives the line: wait_edge()
+// sleeps on the monotonic clock to the next period, raises the line for pulse_width and reports
+// the edge. A slave requests rising-edge events and reports each with the kernel's timestamp.
+// libgpiod 2.x has a different API; it would be another class behind the same TriggerLine.
+// Built only when the libgpiod 1.x headers and library are found (epipole_hal_gpiod).
+class GpiodTrigger final : public TriggerLine {
+ public:
+  explicit GpiodTrigger(TriggerConfig config);
+  ~GpiodTrigger() override;
+  GpiodTrigger(const GpiodTrigger&) = delete;
+  GpiodTrigger& operator=(const GpiodTrigger&) = delete;
+
+  const TriggerConfig& config() const override { return config_; }
+  void start() override;
+  void stop() override;
+  EdgeResult wait_edge(Nanoseconds timeout) override;
+
+ private:
+  TriggerConfig config_;
+  gpiod_chip* chip_ = nullptr;  // when opened by name
+  gpiod_line* line_ = nullptr;
+  bool requested_ = false;
+  MonotonicClock clock_;
+  Nanoseconds period_ = 0;
+  Nanoseconds start_ = 0;
+  std::uint32_t next_ = 0;
+};
+
+// Adds "gpiod" to a registry: the backend when it was built, else the reason it was not.
+void register_gpiod(BackendRegistry& registry);
+
+}  // namespace epipole::hal

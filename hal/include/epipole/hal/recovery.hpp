@@ -1,0 +1,103 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "epipole/hal/camera.hpp"
+#include "epipole/hal/clock.hpp"
+#include "epipole/hal/serial_port.hpp"
+
+namespace epipole::hal {
+
+struct BackoffConfig {
+  Nanoseconds initial = 100'000'000;  // the first retry after this
+  Nanoseconds max = 5'000'000'000;    // the delay doubles up to this
+};
+
+// Exponential back-off on a Clock (a VirtualClock in tests).
+class Backoff {
+ public:
+  explicit Backoff(BackoffConfig config = {});
+  // The time of the next attempt, after a failure at `now`.
+  void failed(Nanoseconds now);
+  void succeeded();
+  bool due(Nanoseconds now) const { return now >= next_attempt_; }
+  Nanoseconds next_attempt() const { return next_attempt_; }
+  Nanoseconds current_delay() const { return delay_; }
+
+ private:
+  BackoffConfig config_;
+  Nanoseconds delay_;
+  Nanoseconds next_attempt_ = 0;
+};
+
+// Counters for the health message.
+struct RecoveryCounters {
+  std::uint64_t timeouts = 0;  // acquire (or read) timed out
+  std::uint64_t losses = 0;    // the device went away (or too many timeouts in a row)
+  std::uint64_t reopen_attempts = 0;
+  std::uint64_t reopen_failures = 0;
+  std::uint64_t reopens = 0;  // successful
+};
+
+struct RecoveryConfig {
+  BackoffConfig backoff;
+  // This many timeouts in a row count as a lost device (0: timeouts never do).
+  int timeouts_before_reopen = 3;
+};
+
+// A camera that reopens its device with exponential back-off when it is lost or keeps timing
+// out, without restarting anything else. While it is recovering, acquire() waits for the next
+// attempt (at most the timeout) and reports device_lost; once reopened, frames flow again.
+class RecoveringCamera final : public CameraSource {
+ public:
+  RecoveringCamera(CameraSource& camera, Clock& clock, RecoveryConfig config = {});
+  const std::string& name() const override { return camera_.name(); }
+  const CameraConfig& config() const override { return camera_.config(); }
+  void start() override { camera_.start(); }
+  void stop() override { camera_.stop(); }
+  bool streaming() const override { return camera_.streaming(); }
+  AcquireResult acquire(Nanoseconds timeout) override;
+  void release(const Frame& frame) override { camera_.release(frame); }
+  void reopen() override;
+
+  const RecoveryCounters& counters() const { return counters_; }
+  bool recovering() const { return lost_; }
+  const std::string& last_error() const { return last_error_; }
+
+ private:
+  bool try_reopen();
+
+  CameraSource& camera_;
+  Clock& clock_;
+  RecoveryConfig config_;
+  Backoff backoff_;
+  RecoveryCounters counters_;
+  int timeouts_in_a_row_ = 0;
+  bool lost_ = false;
+  std::string last_error_;
+};
+
+// A serial port that reopens itself after a hang-up, with back-off. read()/write() report
+// hung_up (or closed while waiting for the next attempt) and never throw.
+class RecoveringSerialPort final : public SerialPort {
+ public:
+  RecoveringSerialPort(SerialPort& port, Clock& clock, BackoffConfig config = {});
+  IoResult read(std::span<std::byte> buffer, Nanoseconds timeout) override;
+  IoResult write(std::span<const std::byte> data, Nanoseconds timeout) override;
+  bool is_open() const override { return port_.is_open(); }
+  void reopen() override { port_.reopen(); }
+  void close() override { port_.close(); }
+  const RecoveryCounters& counters() const { return counters_; }
+
+ private:
+  bool ensure_open();
+  void note(IoStatus status);
+
+  SerialPort& port_;
+  Clock& clock_;
+  Backoff backoff_;
+  RecoveryCounters counters_;
+};
+
+}  // namespace epipole::hal

@@ -1,0 +1,170 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "epipole/core/image.hpp"
+#include "epipole/hal/camera.hpp"
+#include "epipole/hal/clock.hpp"
+#include "epipole/hal/trigger.hpp"
+
+namespace epipole::hal {
+
+class SimCamera;
+
+// The simulated board's trigger master: edges every 1/rate_hz on a VirtualClock, from the
+// time of start(). Edges are generated lazily, as the clock passes them: wait_edge() sleeps
+// (jumps) to the next one, and a camera's acquire() asks for all edges up to its deadline. Every
+// edge reaches every connected camera exactly once.
+class SimTrigger final : public TriggerLine {
+ public:
+  SimTrigger(TriggerConfig config, VirtualClock& clock);
+  const TriggerConfig& config() const override { return config_; }
+  void start() override;
+  void stop() override;
+  EdgeResult wait_edge(Nanoseconds timeout) override;
+
+  // Connects a camera (at most 4); it is told of every edge from then on.
+  void connect(SimCamera& camera);
+  // Emits every edge with timestamp <= until to the connected cameras.
+  void emit_until(Nanoseconds until);
+  Nanoseconds period() const { return period_; }
+  bool running() const { return running_; }
+
+ private:
+  TriggerConfig config_;
+  VirtualClock& clock_;
+  Nanoseconds period_;
+  Nanoseconds start_ = 0;
+  bool running_ = false;
+  std::uint32_t next_emit_ = 0;    // the next edge to give the cameras
+  std::uint32_t next_report_ = 0;  // the next edge wait_edge() reports
+  SimCamera* cameras_[4] = {};
+  int camera_count_ = 0;
+};
+
+// A fault injected into one simulated camera, keyed by trigger sequence.
+enum class SimFaultKind {
+  drop,            // the frames of `count` triggers from `sequence` never arrive
+  delay,           // the frame arrives `duration` late (and with it those queued behind it)
+  stall,           // nothing arrives for `duration` from trigger `sequence`: frames then are lost
+  disconnect,      // from trigger `sequence`: device_lost until reopen(); `count` reopens fail
+  corrupt_pixels,  // the frame's pixels are garbage
+  wrong_sequence,  // the frame reports sequence `value` instead of its own
+  skew,            // the frame's timestamp is off by `duration` (may be negative)
+};
+
+struct SimFault {
+  SimFaultKind kind = SimFaultKind::drop;
+  std::uint32_t sequence = 0;
+  std::uint32_t count = 1;
+  Nanoseconds duration = 0;
+  std::uint32_t value = 0;
+};
+
+// Random faults, decided per trigger sequence from a seed (deterministic, independent per
+// camera when the seeds differ). Probabilities per frame.
+struct SimFaultRates {
+  double drop = 0.0;
+  double corrupt_pixels = 0.0;
+  double wrong_sequence = 0.0;  // reports a neighbour's sequence (duplicate or skip)
+  double delay = 0.0;           // by up to max_delay
+  Nanoseconds max_delay = 0;
+  std::uint64_t seed = 1;
+};
+
+struct SimCameraTiming {
+  Nanoseconds exposure_delay = 5'000'000;  // frame timestamp = edge + this + jitter
+  Nanoseconds jitter = 0;                  // uniform in [-jitter, +jitter]
+  Nanoseconds readout = 2'000'000;         // the frame is delivered at timestamp + readout
+  std::uint64_t seed = 7;
+};
+
+// A simulated camera on the virtual clock, replaying in-memory images (frame n shows image
+// n % count). Each trigger edge makes it deliver one frame whose sequence is the trigger
+// sequence. All memory is taken at construction: the frame buffers (config.buffer_count
+// images) and the queue of pending triggers; acquire() and release() never allocate. In
+// free-running mode without a connected trigger it triggers itself at config.fps.
+class SimCamera final : public CameraSource {
+ public:
+  SimCamera(CameraConfig config, std::shared_ptr<const std::vector<GrayImage>> images,
+            VirtualClock& clock, SimCameraTiming timing = {});
+
+  const std::string& name() const override { return name_; }
+  const CameraConfig& config() const override { return config_; }
+  void start() override;
+  void stop() override;
+  bool streaming() const override { return streaming_; }
+  AcquireResult acquire(Nanoseconds timeout) override;
+  void release(const Frame& frame) override;
+  void reopen() override;
+
+  void inject(const SimFault& fault);
+  void set_fault_rates(const SimFaultRates& rates) { rates_ = rates; }
+  // The trigger a held frame really belongs to (ground truth for tests).
+  std::uint32_t true_sequence(const Frame& frame) const;
+  // Frames lost because the pending queue was full (the consumer was too slow).
+  std::uint64_t overruns() const { return overruns_; }
+  std::uint64_t delivered() const { return delivered_; }
+
+  // Called by SimTrigger for every edge.
+  void on_trigger(const TriggerEdge& edge);
+
+ private:
+  friend class SimTrigger;
+  struct Pending {
+    std::uint32_t true_sequence = 0;
+    std::uint32_t reported_sequence = 0;
+    Nanoseconds timestamp = 0;
+    Nanoseconds ready = 0;
+    bool corrupt = false;
+    bool disconnect = false;
+  };
+  const SimFault* find_fault(SimFaultKind kind, std::uint32_t sequence) const;
+  void pull_edges(Nanoseconds until);
+
+  CameraConfig config_;
+  std::string name_;
+  std::shared_ptr<const std::vector<GrayImage>> images_;
+  VirtualClock& clock_;
+  SimCameraTiming timing_;
+  SimTrigger* trigger_ = nullptr;
+  SimTrigger own_trigger_;  // free running without a board trigger
+  std::vector<SimFault> faults_;
+  SimFaultRates rates_;
+
+  std::vector<GrayImage> buffers_;
+  std::vector<std::uint8_t> held_;
+  std::vector<std::uint32_t> buffer_truth_;
+  std::vector<Pending> queue_;  // a ring of fixed capacity
+  std::size_t queue_head_ = 0;
+  std::size_t queue_size_ = 0;
+
+  bool streaming_ = false;
+  bool disconnected_ = false;
+  std::uint32_t failing_reopens_ = 0;
+  Nanoseconds stalled_until_ = 0;
+  std::uint32_t generation_ = 0;
+  std::uint64_t overruns_ = 0;
+  std::uint64_t delivered_ = 0;
+};
+
+// The simulated board: a virtual clock, the trigger master and the images of the left and
+// right cameras. The registry's "sim" backends create cameras ("left", "right") on it.
+struct SimBoard {
+  SimBoard(double rate_hz, std::vector<GrayImage> left_images, std::vector<GrayImage> right_images,
+           SimCameraTiming camera_timing = {});
+  VirtualClock clock;
+  SimTrigger trigger;
+  std::shared_ptr<const std::vector<GrayImage>> left;
+  std::shared_ptr<const std::vector<GrayImage>> right;
+  SimCameraTiming timing;
+};
+
+// The right view of a scene whose left view is `left`, at a constant disparity (pixels):
+// right(x, y) = left(x + disparity, y), the border column repeated.
+GrayImage synthesize_right(GrayView left, int disparity);
+
+}  // namespace epipole::hal

@@ -1,0 +1,106 @@
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "epipole/hal/camera.hpp"
+#include "epipole/hal/clock.hpp"
+
+namespace epipole::hal {
+
+enum class Side { left, right };
+
+struct StereoPair {
+  Frame left;
+  Frame right;
+};
+
+// Everything the pairer did with the frames given to it. Per side:
+// pushed = paired + unpaired + mismatched + out_of_order + (frames still waiting).
+struct PairingCounters {
+  std::uint64_t pairs = 0;
+  std::uint64_t pushed_left = 0, pushed_right = 0;
+  std::uint64_t unpaired_left = 0, unpaired_right = 0;      // the other side never had that trigger
+  std::uint64_t mismatched_left = 0, mismatched_right = 0;  // same sequence, |dt| > tolerance
+  std::uint64_t out_of_order_left = 0, out_of_order_right = 0;  // sequence not increasing
+};
+
+struct PairingConfig {
+  Nanoseconds tolerance = 2'000'000;  // |t_left - t_right| allowed for one trigger
+  // The trigger period, when known: the tolerance must be below half of it, so that frames of
+  // neighbouring triggers can never pass the timestamp check. 0: not checked.
+  Nanoseconds trigger_period = 0;
+};
+
+// Pairs left and right frames by trigger sequence. A left and a right frame become a pair only
+// when their sequences are equal AND their timestamps lie within the tolerance; a frame whose
+// sequence does not increase on its side is refused; a frame for which the other side has
+// moved past its sequence is dropped. Dropped frames go back to their camera at once and are
+// counted. Fixed memory; never allocates.
+class StereoPairer {
+ public:
+  StereoPairer(CameraSource& left, CameraSource& right, PairingConfig config);
+
+  // Hands a frame of one side to the pairer (which owns it from now on). Returns true when
+  // a pair became ready.
+  bool push(Side side, const Frame& frame);
+  bool has_pair() const { return ready_; }
+  // Takes the ready pair; the caller releases both frames (release()).
+  StereoPair take();
+  void release(const StereoPair& pair);
+  // Drops what waits on one side (e.g. its camera was reopened); counted as unpaired.
+  void reset(Side side);
+  std::size_t waiting(Side side) const { return queue(side).size; }
+  const PairingCounters& counters() const { return counters_; }
+  const PairingConfig& config() const { return config_; }
+
+ private:
+  static constexpr std::size_t kCapacity = 4;
+  struct Queue {
+    std::array<Frame, kCapacity> frames{};
+    std::size_t head = 0, size = 0;
+    bool has_last = false;
+    std::uint32_t last = 0;
+    const Frame& front() const { return frames[head]; }
+  };
+  Queue& queue(Side side) { return side == Side::left ? left_q_ : right_q_; }
+  const Queue& queue(Side side) const { return side == Side::left ? left_q_ : right_q_; }
+  CameraSource& camera(Side side) { return side == Side::left ? left_ : right_; }
+  void drop_front(Side side, std::uint64_t& counter);
+  void match();
+
+  CameraSource& left_;
+  CameraSource& right_;
+  PairingConfig config_;
+  Queue left_q_, right_q_;
+  StereoPair pair_{};
+  bool ready_ = false;
+  PairingCounters counters_{};
+};
+
+enum class PairStatus { ok, timeout, device_lost };
+
+struct PairResult {
+  PairStatus status = PairStatus::timeout;
+  StereoPair pair{};
+  Side lost_side = Side::left;  // with device_lost
+};
+
+// Acquires from two cameras and pairs their frames: next() returns the next pair, or timeout
+// when none came before the timeout, or device_lost naming the side that is gone.
+class StereoGrabber {
+ public:
+  StereoGrabber(CameraSource& left, CameraSource& right, Clock& clock, PairingConfig config);
+  PairResult next(Nanoseconds timeout);
+  void release(const StereoPair& pair) { pairer_.release(pair); }
+  StereoPairer& pairer() { return pairer_; }
+
+ private:
+  CameraSource& left_;
+  CameraSource& right_;
+  Clock& clock_;
+  StereoPairer pairer_;
+};
+
+}  // namespace epipole::hal

@@ -1,0 +1,82 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "epipole/core/image.hpp"
+#include "epipole/hal/camera.hpp"
+
+namespace epipole::hal {
+
+// --- The device-independent logic of the V4L2 backend (tested without a device) ---
+
+// The V4L2 fourcc of a pixel format (V4L2_PIX_FMT_GREY, _Y10, _Y16, _YUYV, _NV12, _YUV420).
+std::uint32_t fourcc_of(PixelFormat format);
+std::optional<PixelFormat> pixel_format_of_fourcc(std::uint32_t fourcc);
+// Whether the gray plane is the buffer itself (GREY, NV12, YU12: the luma plane comes first).
+bool is_zero_copy(PixelFormat format);
+// The format to ask for: the requested one when the device offers it, else the best offered
+// one (zero-copy formats first: grey, nv12, yu12, then y16, y10, yuyv); nullopt when the device
+// offers none of them.
+std::optional<PixelFormat> choose_format(PixelFormat requested,
+                                         std::span<const std::uint32_t> offered_fourccs);
+// The clock a buffer's timestamp is on, from its V4L2_BUF_FLAG_TIMESTAMP_* flags.
+ClockId timestamp_clock(std::uint32_t buffer_flags);
+
+// The gray view of one captured plane: for zero-copy formats a view into `data` itself; Y10
+// and Y16 (little-endian 16-bit samples, 10 or 16 significant bits) are scaled to 8 bits and
+// YUYV's luma is taken, into `scratch` (width x height, sized once at start). Throws Error when
+// `bytes` is too small for the geometry (a truncated buffer).
+GrayView gray_view(PixelFormat format, const std::uint8_t* data, std::size_t bytes, int width,
+                   int height, std::size_t bytes_per_line, MutableGrayView scratch);
+
+// --- The backend ---
+
+// A V4L2 capture device (linux/videodev2.h only): single- or multi-planar, mmap streaming,
+// DQBUF with a poll timeout. Opening and format errors throw Error naming the device and the
+// setting; acquire()/release() never throw or allocate.
+class V4l2Camera final : public CameraSource {
+ public:
+  explicit V4l2Camera(CameraConfig config);
+  ~V4l2Camera() override;
+  V4l2Camera(const V4l2Camera&) = delete;
+  V4l2Camera& operator=(const V4l2Camera&) = delete;
+
+  const std::string& name() const override { return name_; }
+  const CameraConfig& config() const override { return config_; }
+  void start() override;
+  void stop() override;
+  bool streaming() const override { return streaming_; }
+  AcquireResult acquire(Nanoseconds timeout) override;
+  void release(const Frame& frame) override;
+  void reopen() override;
+
+  PixelFormat negotiated_format() const { return format_; }
+  bool multiplanar() const { return multiplanar_; }
+
+ private:
+  struct Buffer {
+    void* data = nullptr;
+    std::size_t length = 0;
+  };
+  void open_device();
+  void negotiate();
+  void close_device();
+  [[noreturn]] void fail(const char* what, int error) const;
+
+  CameraConfig config_;
+  std::string name_;
+  int fd_ = -1;
+  bool multiplanar_ = false;
+  bool streaming_ = false;
+  PixelFormat format_ = PixelFormat::grey;
+  std::size_t bytes_per_line_ = 0;
+  std::vector<Buffer> buffers_;
+  std::vector<GrayImage> scratch_;
+  std::uint32_t generation_ = 0;
+};
+
+}  // namespace epipole::hal

@@ -1,0 +1,113 @@
+#include "epipole/hal/gpiod_trigger.hpp"
+
+#include <gpiod.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <memory>
+
+#include "epipole/core/error.hpp"
+#include "epipole/hal/registry.hpp"
+
+namespace epipole::hal {
+
+namespace {
+constexpr const char* kConsumer = "epipole-trigger";
+constexpr Nanoseconds kPerSecond = 1'000'000'000;
+}  // namespace
+
+GpiodTrigger::GpiodTrigger(TriggerConfig config) : config_(std::move(config)) {
+  validate(config_);
+  period_ = static_cast<Nanoseconds>(1e9 / config_.rate_hz + 0.5);
+  if (config_.chip.empty()) {
+    line_ = gpiod_line_find(config_.line.c_str());
+    if (line_ == nullptr) {
+      throw Error(cat("trigger ", config_.line, ": no GPIO line of that name on any chip",
+                      errno != 0 && errno != ENOENT ? cat(" (", std::strerror(errno), ")") : ""));
+    }
+  } else {
+    chip_ = gpiod_chip_open_lookup(config_.chip.c_str());
+    if (chip_ == nullptr) {
+      throw Error(cat("trigger ", config_.line, ": cannot open GPIO chip ", config_.chip, ": ",
+                      std::strerror(errno)));
+    }
+    line_ = gpiod_chip_find_line(chip_, config_.line.c_str());
+    if (line_ == nullptr) {
+      gpiod_chip_close(chip_);
+      chip_ = nullptr;
+      throw Error(cat("trigger ", config_.line, ": no GPIO line of that name on ", config_.chip));
+    }
+  }
+}
+
+GpiodTrigger::~GpiodTrigger() {
+  stop();
+  if (chip_ != nullptr) {
+    gpiod_chip_close(chip_);
+  } else if (line_ != nullptr) {
+    gpiod_line_close_chip(line_);
+  }
+}
+
+void GpiodTrigger::start() {
+  if (requested_) return;
+  const int r = config_.role == TriggerRole::master
+                    ? gpiod_line_request_output(line_, kConsumer, 0)
+                    : gpiod_line_request_rising_edge_events(line_, kConsumer);
+  if (r != 0) {
+    throw Error(cat("trigger ", config_.line, ": cannot request the line as ",
+                    config_.role == TriggerRole::master ? "output" : "rising-edge input", ": ",
+                    std::strerror(errno)));
+  }
+  requested_ = true;
+  start_ = clock_.now();
+  next_ = 0;
+}
+
+void GpiodTrigger::stop() {
+  if (!requested_) return;
+  gpiod_line_release(line_);
+  requested_ = false;
+}
+
+EdgeResult GpiodTrigger::wait_edge(Nanoseconds timeout) {
+  if (!requested_) return {EdgeStatus::lost, {}};
+  timeout = std::max<Nanoseconds>(timeout, 0);
+  if (config_.role == TriggerRole::master) {
+    const Nanoseconds now = clock_.now();
+    Nanoseconds edge = start_ + static_cast<Nanoseconds>(next_) * period_;
+    if (edge < now) {  // late: skip the missed periods instead of firing a burst
+      next_ += static_cast<std::uint32_t>((now - edge + period_ - 1) / period_);
+      edge = start_ + static_cast<Nanoseconds>(next_) * period_;
+    }
+    if (edge > now + timeout) {
+      clock_.sleep_until(now + timeout);
+      return {EdgeStatus::timeout, {}};
+    }
+    clock_.sleep_until(edge);
+    if (gpiod_line_set_value(line_, 1) != 0) return {EdgeStatus::lost, {}};
+    const Nanoseconds fired = clock_.now();
+    clock_.sleep_until(fired + config_.pulse_width);
+    if (gpiod_line_set_value(line_, 0) != 0) return {EdgeStatus::lost, {}};
+    return {EdgeStatus::ok, TriggerEdge{next_++, fired}};
+  }
+  const timespec ts{static_cast<time_t>(timeout / kPerSecond),
+                    static_cast<long>(timeout % kPerSecond)};
+  const int r = gpiod_line_event_wait(line_, &ts);
+  if (r == 0) return {EdgeStatus::timeout, {}};
+  gpiod_line_event event{};
+  if (r < 0 || gpiod_line_event_read(line_, &event) != 0) return {EdgeStatus::lost, {}};
+  const Nanoseconds stamp = static_cast<Nanoseconds>(event.ts.tv_sec) * kPerSecond +
+                            static_cast<Nanoseconds>(event.ts.tv_nsec);
+  return {EdgeStatus::ok, TriggerEdge{next_++, stamp}};
+}
+
+void register_gpiod(BackendRegistry& registry) {
+  registry.add_trigger("gpiod", [](const TriggerConfig& config, const BackendContext&) {
+    return std::unique_ptr<TriggerLine>(std::make_unique<GpiodTrigger>(config));
+  });
+}
+
+}  // namespace epipole::hal

@@ -1,0 +1,132 @@
+#include "epipole/hal/recovery.hpp"
+
+#include <algorithm>
+
+#include "epipole/core/error.hpp"
+
+namespace epipole::hal {
+
+Backoff::Backoff(BackoffConfig config) : config_(config), delay_(config.initial) {
+  require(config_.initial > 0 && config_.max >= config_.initial, "back-off: initial delay ",
+          config_.initial, " ns and maximum ", config_.max, " ns are impossible");
+}
+
+void Backoff::failed(Nanoseconds now) {
+  next_attempt_ = now + delay_;
+  delay_ = std::min(delay_ * 2, config_.max);
+}
+
+void Backoff::succeeded() {
+  delay_ = config_.initial;
+  next_attempt_ = 0;
+}
+
+// ----------------------------------------------------------------------------------------------
+
+RecoveringCamera::RecoveringCamera(CameraSource& camera, Clock& clock, RecoveryConfig config)
+    : camera_(camera), clock_(clock), config_(config), backoff_(config.backoff) {
+  require(config_.timeouts_before_reopen >= 0, "camera ", camera_.name(),
+          ": timeouts before reopen must not be negative");
+  last_error_.reserve(256);
+}
+
+bool RecoveringCamera::try_reopen() {
+  ++counters_.reopen_attempts;
+  try {
+    camera_.reopen();
+    if (!camera_.streaming()) camera_.start();
+  } catch (const Error& e) {
+    ++counters_.reopen_failures;
+    last_error_ = e.what();  // may allocate, but only on the failure path
+    backoff_.failed(clock_.now());
+    return false;
+  }
+  ++counters_.reopens;
+  backoff_.succeeded();
+  lost_ = false;
+  timeouts_in_a_row_ = 0;
+  return true;
+}
+
+void RecoveringCamera::reopen() {
+  lost_ = true;
+  if (!try_reopen()) throw Error(last_error_);
+}
+
+AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {
+  const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
+  if (lost_) {
+    if (!backoff_.due(clock_.now())) {
+      clock_.sleep_until(std::min(deadline, backoff_.next_attempt()));
+      if (!backoff_.due(clock_.now())) return {AcquireStatus::device_lost, {}};
+    }
+    if (!try_reopen()) return {AcquireStatus::device_lost, {}};
+  }
+  const AcquireResult r = camera_.acquire(std::max<Nanoseconds>(deadline - clock_.now(), 0));
+  switch (r.status) {
+    case AcquireStatus::ok:
+      timeouts_in_a_row_ = 0;
+      return r;
+    case AcquireStatus::timeout:
+      ++counters_.timeouts;
+      if (config_.timeouts_before_reopen == 0 ||
+          ++timeouts_in_a_row_ < config_.timeouts_before_reopen) {
+        return r;
+      }
+      break;
+    case AcquireStatus::device_lost:
+      break;
+  }
+  ++counters_.losses;
+  lost_ = true;
+  timeouts_in_a_row_ = 0;
+  backoff_.succeeded();  // the first attempt is immediate, then the delays grow
+  try_reopen();
+  return {AcquireStatus::device_lost, {}};
+}
+
+// ----------------------------------------------------------------------------------------------
+
+RecoveringSerialPort::RecoveringSerialPort(SerialPort& port, Clock& clock, BackoffConfig config)
+    : port_(port), clock_(clock), backoff_(config) {}
+
+bool RecoveringSerialPort::ensure_open() {
+  if (port_.is_open()) return true;
+  if (!backoff_.due(clock_.now())) return false;
+  ++counters_.reopen_attempts;
+  try {
+    port_.reopen();
+  } catch (const Error&) {
+    ++counters_.reopen_failures;
+    backoff_.failed(clock_.now());
+    return false;
+  }
+  ++counters_.reopens;
+  backoff_.succeeded();
+  return true;
+}
+
+void RecoveringSerialPort::note(IoStatus status) {
+  if (status == IoStatus::timeout) ++counters_.timeouts;
+  if (status == IoStatus::hung_up) {
+    ++counters_.losses;
+    port_.close();
+    backoff_.succeeded();
+  }
+}
+
+IoResult RecoveringSerialPort::read(std::span<std::byte> buffer, Nanoseconds timeout) {
+  if (!ensure_open()) return {IoStatus::closed, 0};
+  const IoResult r = port_.read(buffer, timeout);
+  note(r.status);
+  return r;
+}
+
+IoResult RecoveringSerialPort::write(std::span<const std::byte> data, Nanoseconds timeout) {
+  if (!ensure_open()) return {IoStatus::closed, 0};
+  const IoResult r = port_.write(data, timeout);
+  note(r.status);
+  return r;
+}
+
+}  // namespace epipole::hal

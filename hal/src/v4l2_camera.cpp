@@ -1,0 +1,381 @@
+#include "epipole/hal/v4l2_camera.hpp"
+
+#include <fcntl.h>
+#include <linux/videodev2.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+#include "epipole/core/error.hpp"
+
+namespace epipole::hal {
+
+namespace {
+
+struct FormatCode {
+  PixelFormat format;
+  std::uint32_t fourcc;
+};
+constexpr FormatCode kCodes[] = {
+    {PixelFormat::grey, V4L2_PIX_FMT_GREY}, {PixelFormat::y10, V4L2_PIX_FMT_Y10},
+    {PixelFormat::y16, V4L2_PIX_FMT_Y16},   {PixelFormat::yuyv, V4L2_PIX_FMT_YUYV},
+    {PixelFormat::nv12, V4L2_PIX_FMT_NV12}, {PixelFormat::yu12, V4L2_PIX_FMT_YUV420}};
+// Zero-copy formats first, then those that need a conversion.
+constexpr PixelFormat kPreference[] = {PixelFormat::grey, PixelFormat::nv12, PixelFormat::yu12,
+                                       PixelFormat::y16,  PixelFormat::y10,  PixelFormat::yuyv};
+
+int xioctl(int fd, unsigned long request, void* arg) {
+  int r = 0;
+  do {
+    r = ::ioctl(fd, request, arg);
+  } while (r < 0 && errno == EINTR);
+  return r;
+}
+
+std::size_t bytes_per_pixel(PixelFormat format) {
+  return format == PixelFormat::y10 || format == PixelFormat::y16 || format == PixelFormat::yuyv
+             ? 2
+             : 1;
+}
+
+std::string fourcc_name(std::uint32_t fourcc) {
+  std::string s(4, ' ');
+  for (int i = 0; i < 4; ++i) {
+    const auto c = static_cast<char>((fourcc >> (8 * i)) & 0xff);
+    s[static_cast<std::size_t>(i)] = c >= 32 && c < 127 ? c : '?';
+  }
+  return s;
+}
+
+}  // namespace
+
+std::uint32_t fourcc_of(PixelFormat format) {
+  for (const FormatCode& c : kCodes) {
+    if (c.format == format) return c.fourcc;
+  }
+  return 0;
+}
+
+std::optional<PixelFormat> pixel_format_of_fourcc(std::uint32_t fourcc) {
+  for (const FormatCode& c : kCodes) {
+    if (c.fourcc == fourcc) return c.format;
+  }
+  return std::nullopt;
+}
+
+bool is_zero_copy(PixelFormat format) {
+  return format == PixelFormat::grey || format == PixelFormat::nv12 || format == PixelFormat::yu12;
+}
+
+std::optional<PixelFormat> choose_format(PixelFormat requested,
+                                         std::span<const std::uint32_t> offered_fourccs) {
+  auto offered = [&](PixelFormat f) {
+    return std::find(offered_fourccs.begin(), offered_fourccs.end(), fourcc_of(f)) !=
+           offered_fourccs.end();
+  };
+  if (offered(requested)) return requested;
+  for (const PixelFormat f : kPreference) {
+    if (offered(f)) return f;
+  }
+  return std::nullopt;
+}
+
+ClockId timestamp_clock(std::uint32_t buffer_flags) {
+  return (buffer_flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC
+             ? ClockId::monotonic
+             : ClockId::other;
+}
+
+GrayView gray_view(PixelFormat format, const std::uint8_t* data, std::size_t bytes, int width,
+                   int height, std::size_t bytes_per_line, MutableGrayView scratch) {
+  require(width > 0 && height > 0 && data != nullptr, "V4L2 buffer: empty");
+  const std::size_t row_bytes = static_cast<std::size_t>(width) * bytes_per_pixel(format);
+  require(bytes_per_line >= row_bytes, "V4L2 buffer: bytes per line ", bytes_per_line, " < the ",
+          row_bytes, " of a ", width, "-pixel ", to_string(format), " row");
+  const std::size_t need = bytes_per_line * static_cast<std::size_t>(height - 1) + row_bytes;
+  require(bytes >= need, "V4L2 buffer: ", bytes, " bytes, ", to_string(format), " ", width, "x",
+          height, " needs ", need);
+  if (is_zero_copy(format)) {
+    return {data, width, height, static_cast<std::ptrdiff_t>(bytes_per_line)};
+  }
+  require(scratch.width() == width && scratch.height() == height,
+          "V4L2 buffer: the conversion buffer is ", scratch.width(), "x", scratch.height(),
+          ", not ", width, "x", height);
+  for (int y = 0; y < height; ++y) {
+    const std::uint8_t* in = data + static_cast<std::size_t>(y) * bytes_per_line;
+    std::uint8_t* out = scratch.row(y);
+    if (format == PixelFormat::yuyv) {
+      for (int x = 0; x < width; ++x) out[x] = in[2 * x];
+    } else {
+      const int shift = format == PixelFormat::y10 ? 2 : 8;
+      const unsigned mask = format == PixelFormat::y10 ? 0x3ffu : 0xffffu;
+      for (int x = 0; x < width; ++x) {
+        const unsigned sample = (in[2 * x] | (unsigned{in[2 * x + 1]} << 8)) & mask;
+        out[x] = static_cast<std::uint8_t>(sample >> shift);
+      }
+    }
+  }
+  return scratch;
+}
+
+// ----------------------------------------------------------------------------------------------
+
+V4l2Camera::V4l2Camera(CameraConfig config) : config_(std::move(config)) {
+  validate(config_);
+  name_ = "v4l2:" + config_.device;
+  open_device();
+  try {
+    negotiate();
+  } catch (...) {
+    close_device();
+    throw;
+  }
+}
+
+V4l2Camera::~V4l2Camera() {
+  close_device();
+}
+
+void V4l2Camera::fail(const char* what, int error) const {
+  throw Error(cat("camera ", config_.device, ": ", what, ": ", std::strerror(error)));
+}
+
+void V4l2Camera::open_device() {
+  fd_ = ::open(config_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fd_ < 0) fail("cannot open", errno);
+  v4l2_capability cap{};
+  if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) {
+    const int error = errno;
+    close_device();
+    throw Error(cat("camera ", config_.device,
+                    ": not a V4L2 device (VIDIOC_QUERYCAP: ", std::strerror(error), ")"));
+  }
+  const std::uint32_t caps =
+      (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
+  if ((caps & V4L2_CAP_VIDEO_CAPTURE) != 0) {
+    multiplanar_ = false;
+  } else if ((caps & V4L2_CAP_VIDEO_CAPTURE_MPLANE) != 0) {
+    multiplanar_ = true;
+  } else {
+    close_device();
+    throw Error(cat("camera ", config_.device, ": not a video capture device"));
+  }
+  if ((caps & V4L2_CAP_STREAMING) == 0) {
+    close_device();
+    throw Error(cat("camera ", config_.device, ": does not support streaming I/O"));
+  }
+}
+
+void V4l2Camera::negotiate() {
+  const auto type = static_cast<std::uint32_t>(multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE
+                                                            : V4L2_BUF_TYPE_VIDEO_CAPTURE);
+  std::vector<std::uint32_t> offered;
+  for (std::uint32_t i = 0; i < 256; ++i) {
+    v4l2_fmtdesc desc{};
+    desc.index = i;
+    desc.type = type;
+    if (xioctl(fd_, VIDIOC_ENUM_FMT, &desc) != 0) break;
+    offered.push_back(desc.pixelformat);
+  }
+  const std::optional<PixelFormat> chosen = choose_format(config_.format, offered);
+  if (!chosen) {
+    std::string list;
+    for (const std::uint32_t f : offered) list += (list.empty() ? "" : ", ") + fourcc_name(f);
+    throw Error(cat("camera ", config_.device, ": pixel format ", to_string(config_.format),
+                    ": the device offers none of grey, y10, y16, yuyv, nv12, yu12 (it offers: ",
+                    list.empty() ? "nothing" : list, ")"));
+  }
+  format_ = *chosen;
+  v4l2_format fmt{};
+  fmt.type = type;
+  const auto width = static_cast<std::uint32_t>(config_.width);
+  const auto height = static_cast<std::uint32_t>(config_.height);
+  if (multiplanar_) {
+    fmt.fmt.pix_mp.width = width;
+    fmt.fmt.pix_mp.height = height;
+    fmt.fmt.pix_mp.pixelformat = fourcc_of(format_);
+    fmt.fmt.pix_mp.field = V4L2_FIELD_NONE;
+  } else {
+    fmt.fmt.pix.width = width;
+    fmt.fmt.pix.height = height;
+    fmt.fmt.pix.pixelformat = fourcc_of(format_);
+    fmt.fmt.pix.field = V4L2_FIELD_NONE;
+  }
+  if (xioctl(fd_, VIDIOC_S_FMT, &fmt) != 0) fail("VIDIOC_S_FMT", errno);
+  const std::uint32_t got_w = multiplanar_ ? fmt.fmt.pix_mp.width : fmt.fmt.pix.width;
+  const std::uint32_t got_h = multiplanar_ ? fmt.fmt.pix_mp.height : fmt.fmt.pix.height;
+  const std::uint32_t got_f = multiplanar_ ? fmt.fmt.pix_mp.pixelformat : fmt.fmt.pix.pixelformat;
+  require(got_w == width && got_h == height, "camera ", config_.device, ": size ", config_.width,
+          "x", config_.height, " is not supported (the driver offers ", got_w, "x", got_h, " in ",
+          to_string(format_), ")");
+  require(got_f == fourcc_of(format_), "camera ", config_.device, ": pixel format ",
+          to_string(format_), " was refused (the driver chose ", fourcc_name(got_f), ")");
+  bytes_per_line_ =
+      multiplanar_ ? fmt.fmt.pix_mp.plane_fmt[0].bytesperline : fmt.fmt.pix.bytesperline;
+  if (bytes_per_line_ == 0) bytes_per_line_ = width * bytes_per_pixel(format_);
+
+  v4l2_streamparm parm{};
+  parm.type = type;
+  parm.parm.capture.timeperframe.numerator = 1000;
+  parm.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(config_.fps * 1000.0);
+  (void)xioctl(fd_, VIDIOC_S_PARM, &parm);  // not every driver has a frame-rate control
+
+  if (config_.exposure > 0) {
+    v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE,
+                   static_cast<std::int32_t>(config_.exposure / 100'000)};  // 100 us units
+    if (xioctl(fd_, VIDIOC_S_CTRL, &c) != 0) fail("cannot set exposure", errno);
+  }
+  if (config_.gain > 0.0) {
+    v4l2_control c{V4L2_CID_GAIN, static_cast<std::int32_t>(config_.gain)};
+    if (xioctl(fd_, VIDIOC_S_CTRL, &c) != 0) fail("cannot set gain", errno);
+  }
+}
+
+void V4l2Camera::start() {
+  if (streaming_) return;
+  require(fd_ >= 0, "camera ", config_.device, ": not open");
+  const auto type = static_cast<std::uint32_t>(multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE
+                                                            : V4L2_BUF_TYPE_VIDEO_CAPTURE);
+  v4l2_requestbuffers req{};
+  req.count = static_cast<std::uint32_t>(config_.buffer_count);
+  req.type = type;
+  req.memory = V4L2_MEMORY_MMAP;
+  if (xioctl(fd_, VIDIOC_REQBUFS, &req) != 0) fail("VIDIOC_REQBUFS (mmap)", errno);
+  require(req.count >= 2, "camera ", config_.device, ": buffer count: the driver gave ", req.count,
+          " buffers");
+  buffers_.assign(req.count, Buffer{});
+  for (std::uint32_t i = 0; i < req.count; ++i) {
+    v4l2_buffer buf{};
+    v4l2_plane planes[VIDEO_MAX_PLANES]{};
+    buf.type = type;
+    buf.memory = V4L2_MEMORY_MMAP;
+    buf.index = i;
+    if (multiplanar_) {
+      buf.m.planes = planes;
+      buf.length = VIDEO_MAX_PLANES;
+    }
+    if (xioctl(fd_, VIDIOC_QUERYBUF, &buf) != 0) fail("VIDIOC_QUERYBUF", errno);
+    const std::size_t length = multiplanar_ ? planes[0].length : buf.length;
+    const auto offset = static_cast<off_t>(multiplanar_ ? planes[0].m.mem_offset : buf.m.offset);
+    void* p = ::mmap(nullptr, length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, offset);
+    if (p == MAP_FAILED) fail("mmap", errno);
+    buffers_[i] = {p, length};
+    if (xioctl(fd_, VIDIOC_QBUF, &buf) != 0) fail("VIDIOC_QBUF", errno);
+  }
+  scratch_.clear();
+  if (!is_zero_copy(format_)) {
+    for (std::uint32_t i = 0; i < req.count; ++i)
+      scratch_.emplace_back(config_.width, config_.height);
+  }
+  int t = static_cast<int>(type);
+  if (xioctl(fd_, VIDIOC_STREAMON, &t) != 0) fail("VIDIOC_STREAMON", errno);
+  streaming_ = true;
+}
+
+void V4l2Camera::stop() {
+  if (fd_ >= 0 && streaming_) {
+    int t = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    (void)xioctl(fd_, VIDIOC_STREAMOFF, &t);
+  }
+  for (const Buffer& b : buffers_) {
+    if (b.data != nullptr) ::munmap(b.data, b.length);
+  }
+  buffers_.clear();
+  if (fd_ >= 0 && streaming_) {
+    v4l2_requestbuffers req{};
+    req.type = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    req.memory = V4L2_MEMORY_MMAP;
+    (void)xioctl(fd_, VIDIOC_REQBUFS, &req);
+  }
+  streaming_ = false;
+  ++generation_;
+}
+
+void V4l2Camera::close_device() {
+  stop();
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+void V4l2Camera::reopen() {
+  const bool was_streaming = streaming_;
+  close_device();
+  open_device();
+  try {
+    negotiate();
+  } catch (...) {
+    close_device();
+    throw;
+  }
+  if (was_streaming) start();
+}
+
+AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
+  if (fd_ < 0 || !streaming_) return {AcquireStatus::device_lost, {}};
+  pollfd p{fd_, POLLIN, 0};
+  const int ms =
+      timeout <= 0
+          ? 0
+          : static_cast<int>(std::min<Nanoseconds>((timeout + 999'999) / 1'000'000, 1'000'000'000));
+  int ready = 0;
+  do {
+    ready = ::poll(&p, 1, ms);
+  } while (ready < 0 && errno == EINTR);
+  if (ready == 0) return {AcquireStatus::timeout, {}};
+  if (ready < 0 || (p.revents & (POLLERR | POLLHUP | POLLNVAL)) != 0) {
+    return {AcquireStatus::device_lost, {}};
+  }
+  v4l2_buffer buf{};
+  v4l2_plane planes[VIDEO_MAX_PLANES]{};
+  buf.type = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  buf.memory = V4L2_MEMORY_MMAP;
+  if (multiplanar_) {
+    buf.m.planes = planes;
+    buf.length = VIDEO_MAX_PLANES;
+  }
+  if (xioctl(fd_, VIDIOC_DQBUF, &buf) != 0) {
+    return {errno == EAGAIN ? AcquireStatus::timeout : AcquireStatus::device_lost, {}};
+  }
+  const std::size_t used = multiplanar_ ? planes[0].bytesused : buf.bytesused;
+  const Buffer& mapped = buffers_[buf.index];
+  const std::size_t bytes = std::min(used == 0 ? mapped.length : used, mapped.length);
+  const std::size_t need = bytes_per_line_ * static_cast<std::size_t>(config_.height - 1) +
+                           static_cast<std::size_t>(config_.width) * bytes_per_pixel(format_);
+  if ((buf.flags & V4L2_BUF_FLAG_ERROR) != 0 || bytes < need) {
+    (void)xioctl(fd_, VIDIOC_QBUF, &buf);  // a damaged frame: give it back, report nothing
+    return {AcquireStatus::timeout, {}};
+  }
+  MutableGrayView scratch;
+  if (!scratch_.empty()) scratch = scratch_[buf.index].view();
+  Frame frame;
+  frame.gray = gray_view(format_, static_cast<const std::uint8_t*>(mapped.data), bytes,
+                         config_.width, config_.height, bytes_per_line_, scratch);
+  frame.sequence = buf.sequence;
+  frame.timestamp = static_cast<Nanoseconds>(buf.timestamp.tv_sec) * 1'000'000'000 +
+                    static_cast<Nanoseconds>(buf.timestamp.tv_usec) * 1'000;
+  frame.clock = timestamp_clock(buf.flags);
+  frame.buffer = static_cast<int>(buf.index);
+  frame.generation = generation_;
+  return {AcquireStatus::ok, frame};
+}
+
+void V4l2Camera::release(const Frame& frame) {
+  if (!frame.valid() || frame.generation != generation_ || fd_ < 0) return;
+  v4l2_buffer buf{};
+  v4l2_plane planes[VIDEO_MAX_PLANES]{};
+  buf.type = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  buf.memory = V4L2_MEMORY_MMAP;
+  buf.index = static_cast<std::uint32_t>(frame.buffer);
+  if (multiplanar_) {
+    buf.m.planes = planes;
+    buf.length = VIDEO_MAX_PLANES;
+  }
+  (void)xioctl(fd_, VIDIOC_QBUF, &buf);
+}
+
+}  // namespace epipole::hal

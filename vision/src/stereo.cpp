@@ -1,0 +1,458 @@
+#include "epipole/vision/stereo.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+
+#include "epipole/core/error.hpp"
+#include "kernel_set.hpp"
+#include "stereo_census.hpp"
+
+namespace epipole::vision {
+
+namespace kernels {
+
+StereoKernels stereo_kernels_neon();
+StereoKernels stereo_kernels_avx2();
+
+void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint16_t* lo,
+                  std::uint16_t* hi) {
+  std::uint32_t bits = 0;
+  for (int b = 0; b < kCensusBits; ++b) {
+    const CensusOffset o = kCensusOffsets[b];
+    const int xa = std::clamp(x + o.dx, 0, width - 1);
+    const int xc = std::clamp(x - o.dx, 0, width - 1);
+    if (rows[kCensusRadiusY + o.dy][xa] > rows[kCensusRadiusY - o.dy][xc]) bits |= 1u << b;
+  }
+  lo[x] = static_cast<std::uint16_t>(bits & 0xFFFFu);
+  hi[x] = static_cast<std::uint16_t>(bits >> 16);
+}
+
+int subpixel(int d, int disparities, int below, int at, int above) {
+  if (d <= 0 || d >= disparities - 1) return d * kDisparityScale;
+  const int denom = std::max(below + above - 2 * at, 1);
+  return d * kDisparityScale + ((below - above) * kDisparityScale + denom) / (2 * denom);
+}
+
+std::uint32_t uniqueness_ratio(int uniqueness) {
+  return static_cast<std::uint32_t>(65536 * 100 / (100 - uniqueness));
+}
+
+int uniqueness_limit(int min_cost, std::uint32_t ratio) {
+  return static_cast<int>((static_cast<std::uint64_t>(min_cost) * ratio) >> 16);
+}
+
+void census_row_ref(const std::uint8_t* const* rows, int width, std::uint16_t* lo,
+                    std::uint16_t* hi) {
+  for (int x = 0; x < width; ++x) census_pixel(rows, width, x, lo, hi);
+}
+
+void cost_row_ref(const std::uint16_t* left_lo, const std::uint16_t* left_hi,
+                  const std::uint16_t* right_lo, const std::uint16_t* right_hi, int width,
+                  int disparities, std::uint16_t* cost) {
+  for (int x = 0; x < width; ++x) {
+    for (int d = 0; d < disparities; ++d) {
+      const int k = width - 1 - x + d;
+      const int bits = std::popcount(static_cast<unsigned>(left_lo[x] ^ right_lo[k])) +
+                       std::popcount(static_cast<unsigned>(left_hi[x] ^ right_hi[k]));
+      cost[static_cast<std::ptrdiff_t>(x) * disparities + d] = static_cast<std::uint16_t>(bits);
+    }
+  }
+}
+
+namespace {
+// One path step: c + min(p[d], p[d-1] + P1, p[d+1] + P1, min_prev + P2) - min_prev.
+int sgm_step(int c, const std::uint16_t* p, int d, int p1, int p2, int min_prev) {
+  const int best = std::min({static_cast<int>(p[d]), p[d - 1] + p1, p[d + 1] + p1, min_prev + p2});
+  return c + best - min_prev;
+}
+}  // namespace
+
+void sgm_row_ref(const SgmRow& r) {
+  const int D = r.disparities;
+  const std::ptrdiff_t stride = D + 16;
+  std::uint16_t* h[2] = {r.scratch + 8, r.scratch + stride + 8};
+  for (std::uint16_t* e : h) {
+    e[-1] = kSgmPad;
+    e[D] = kSgmPad;
+  }
+  constexpr int kDx[3] = {0, -1, 1};
+  for (int d = 0; d < D; ++d) h[0][d] = 0;
+  int h_min = 0;
+  for (int x = 0; x < r.width; ++x) {
+    const std::uint16_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
+    std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
+    int next_h_min = 0xFFFF;
+    for (int d = 0; d < D; ++d) {
+      const int v = sgm_step(c[d], h[0], d, r.p1, r.p2, h_min);
+      h[1][d] = static_cast<std::uint16_t>(v);
+      next_h_min = std::min(next_h_min, v);
+      s[d] = static_cast<std::uint16_t>(v);
+    }
+    for (int k = 0; k < 3; ++k) {
+      const std::uint16_t* p = r.prev[k] + (x + kDx[k] + 1) * stride + 8;
+      const int min_prev = r.prev_min[k][x + kDx[k] + 1];
+      std::uint16_t* q = r.cur[k] + (x + 1) * stride + 8;
+      int m = 0xFFFF;
+      for (int d = 0; d < D; ++d) {
+        const int v = sgm_step(c[d], p, d, r.p1, r.p2, min_prev);
+        q[d] = static_cast<std::uint16_t>(v);
+        m = std::min(m, v);
+        s[d] = static_cast<std::uint16_t>(s[d] + v);
+      }
+      r.cur_min[k][x + 1] = static_cast<std::uint16_t>(m);
+    }
+    h_min = next_h_min;
+    std::swap(h[0], h[1]);
+  }
+  for (int d = 0; d < D; ++d) h[0][d] = 0;
+  h_min = 0;
+  for (int x = r.width - 1; x >= 0; --x) {
+    const std::uint16_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
+    std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
+    int next_h_min = 0xFFFF;
+    for (int d = 0; d < D; ++d) {
+      const int v = sgm_step(c[d], h[0], d, r.p1, r.p2, h_min);
+      h[1][d] = static_cast<std::uint16_t>(v);
+      next_h_min = std::min(next_h_min, v);
+      s[d] = static_cast<std::uint16_t>(s[d] + v);
+    }
+    h_min = next_h_min;
+    std::swap(h[0], h[1]);
+  }
+}
+
+void wta_row_ref(std::uint16_t* sums, int width, int D, int uniqueness, std::int16_t* disparity,
+                 std::int16_t* best_out, std::uint16_t* right_min, std::uint16_t* right_disp) {
+  for (int x = 0; x < width; ++x) {
+    const std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
+    int best = 0;
+    for (int d = 0; d < D; ++d) {
+      if (s[d] < s[best]) best = d;
+      const int k = width - 1 - x + d;
+      if (s[d] < right_min[k]) {
+        right_min[k] = s[d];
+        right_disp[k] = static_cast<std::uint16_t>(d);
+      }
+    }
+    const int min_cost = s[best];
+    const int limit = uniqueness_limit(min_cost, uniqueness_ratio(uniqueness));
+    bool unique = true;
+    for (int d = 0; d < D; ++d) {
+      if (std::abs(d - best) > 1 && s[d] < limit) unique = false;
+    }
+    if (!unique || best > x) {
+      disparity[x] = kInvalidDisparity;
+      best_out[x] = -1;
+    } else {
+      const int below = best > 0 ? s[best - 1] : 0;
+      const int above = best < D - 1 ? s[best + 1] : 0;
+      disparity[x] = static_cast<std::int16_t>(subpixel(best, D, below, min_cost, above));
+      best_out[x] = static_cast<std::int16_t>(best);
+    }
+  }
+}
+
+void box_columns_ref(std::uint16_t* sums, const std::uint16_t* add, const std::uint16_t* sub,
+                     int n) {
+  for (int i = 0; i < n; ++i) {
+    int v = sums[i];
+    if (add != nullptr) v += add[i];
+    if (sub != nullptr) v -= sub[i];
+    sums[i] = static_cast<std::uint16_t>(v);
+  }
+}
+
+void box_row_ref(const std::uint16_t* columns, int width, int D, int radius, std::uint16_t* sums) {
+  for (int x = 0; x < width; ++x) {
+    for (int d = 0; d < D; ++d) {
+      int v = 0;
+      for (int i = std::max(0, x - radius); i <= std::min(width - 1, x + radius); ++i) {
+        v += columns[static_cast<std::ptrdiff_t>(i) * D + d];
+      }
+      sums[static_cast<std::ptrdiff_t>(x) * D + d] = static_cast<std::uint16_t>(v);
+    }
+  }
+}
+
+StereoKernels stereo_kernels(SimdPath path) {
+  switch (path) {
+    case SimdPath::reference:
+      break;
+    case SimdPath::neon:
+      return stereo_kernels_neon();
+    case SimdPath::avx2: {
+      StereoKernels (*avx2)() = EPIPOLE_AVX2_KERNEL(stereo_kernels_avx2);
+      return avx2 != nullptr ? avx2() : stereo_kernels_neon();
+    }
+  }
+  return {census_row_ref, cost_row_ref, sgm_row_ref, wta_row_ref, box_columns_ref, box_row_ref};
+}
+
+}  // namespace kernels
+
+namespace {
+constexpr int kWarmupRows = 24;  // SGM: rows aggregated above a stripe before it is output
+std::size_t bytes_of(const auto& v) {
+  return v.size() * sizeof(v[0]);
+}
+}  // namespace
+
+struct StereoMatcher::Worker {
+  std::vector<std::uint16_t> left_lo, left_hi, right_lo, right_hi, rev_lo, rev_hi;
+  std::vector<std::uint16_t> cost;         // SGM: one row; BM: a ring of block_size + 1 rows
+  std::vector<std::uint16_t> paths[2][3];  // SGM: previous/current row of the 3 downward paths
+  std::vector<std::uint16_t> mins[2][3];
+  std::vector<std::uint16_t> scratch;  // SGM: the horizontal paths
+  std::vector<std::uint16_t> columns;  // BM: vertical box sums
+  std::vector<std::uint16_t> sums;
+  std::vector<std::uint16_t> right_min, right_disp;
+  std::vector<std::int16_t> best;
+
+  std::size_t bytes() const {
+    std::size_t n = bytes_of(left_lo) * 4 + bytes_of(rev_lo) * 2 + bytes_of(cost) +
+                    bytes_of(scratch) + bytes_of(columns) + bytes_of(sums) +
+                    bytes_of(right_min) * 2 + bytes_of(best);
+    for (int i = 0; i < 2; ++i) {
+      for (int k = 0; k < 3; ++k) n += bytes_of(paths[i][k]) + bytes_of(mins[i][k]);
+    }
+    return n;
+  }
+};
+
+StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path)
+    : config_(config), path_(path), pool_(config.threads) {
+  const int W = config.width;
+  const int H = config.height;
+  const int D = config.max_disparity;
+  require(D >= 16 && D <= 256 && D % 16 == 0, "maximum disparity ", D,
+          " must be a multiple of 16 in 16..256");
+  require(W >= 16 && H >= 8 && W <= 65535 && H <= 65535, "image size ", W, "x", H,
+          " is outside 16x8..65535x65535 for stereo matching");
+  require(D < W, "disparity range ", D, " is not smaller than the image width ", W);
+  require(config.p1 >= 1 && config.p1 <= 1000 && config.p2 >= config.p1 && config.p2 <= 4000,
+          "SGM penalties P1 ", config.p1, ", P2 ", config.p2,
+          " must satisfy 1 <= P1 <= P2 <= 4000");
+  require(config.block_size >= 3 && config.block_size <= 21 && config.block_size % 2 == 1,
+          "block size ", config.block_size, " must be odd, in 3..21");
+  require(config.uniqueness >= 0 && config.uniqueness <= 99, "uniqueness ratio ", config.uniqueness,
+          " must be in 0..99 percent");
+  require(config.speckle_size >= 0 && config.speckle_range >= 0,
+          "speckle size and range must not be negative");
+  require(simd_path_available(path), "kernel path ", to_string(path),
+          " is not available on this CPU");
+
+  const std::size_t wd = static_cast<std::size_t>(W) * static_cast<std::size_t>(D);
+  const std::size_t stride = static_cast<std::size_t>(D) + 16;
+  const std::size_t uw = static_cast<std::size_t>(W);
+  for (int t = 0; t < pool_.threads(); ++t) {
+    auto w = std::make_unique<Worker>();
+    for (auto* v : {&w->left_lo, &w->left_hi, &w->right_lo, &w->right_hi}) v->assign(uw, 0);
+    w->rev_lo.assign(uw + static_cast<std::size_t>(D), 0);
+    w->rev_hi.assign(uw + static_cast<std::size_t>(D), 0);
+    w->sums.assign(wd, 0);
+    w->right_min.assign(uw + static_cast<std::size_t>(D), kernels::kNoCost);
+    w->right_disp.assign(uw + static_cast<std::size_t>(D), 0xFFFF);
+    w->best.assign(uw, -1);
+    if (config.method == StereoMethod::sgm) {
+      w->cost.assign(wd, 0);
+      w->scratch.assign(2 * stride, 0);
+      for (auto& row : w->paths) {
+        for (auto& p : row) {
+          p.assign((uw + 2) * stride, 0);
+          for (int x = 0; x < W; ++x) {
+            p[(static_cast<std::size_t>(x) + 1) * stride + 7] = kernels::kSgmPad;
+            p[(static_cast<std::size_t>(x) + 1) * stride + 8 + static_cast<std::size_t>(D)] =
+                kernels::kSgmPad;
+          }
+        }
+      }
+      for (auto& row : w->mins) {
+        for (auto& m : row) m.assign(uw + 2, 0);
+      }
+    } else {
+      w->cost.assign(wd * static_cast<std::size_t>(config.block_size + 1), 0);
+      w->columns.assign(wd, 0);
+    }
+    workers_.push_back(std::move(w));
+  }
+  const std::size_t padded = (uw + 2) * (static_cast<std::size_t>(H) + 2);
+  padded_.assign(padded, kInvalidDisparity);
+  disparity_ = ImageView<std::int16_t>(padded_.data() + W + 3, W, H, W + 2);
+  if (config.speckle_size > 0) {
+    visited_.assign(padded, 0);
+    region_.assign(uw * static_cast<std::size_t>(H), 0);
+  }
+}
+
+StereoMatcher::~StereoMatcher() = default;
+
+std::size_t StereoMatcher::working_set_bytes() const {
+  std::size_t n = bytes_of(padded_) + bytes_of(visited_) + bytes_of(region_);
+  for (const auto& w : workers_) n += w->bytes();
+  return n;
+}
+
+ImageView<const std::int16_t> StereoMatcher::compute(GrayView left, GrayView right) {
+  require(same_size(left, right), "left image ", left.width(), "x", left.height(),
+          " and right image ", right.width(), "x", right.height(), " differ in size");
+  require(left.width() == config_.width && left.height() == config_.height, "images are ",
+          left.width(), "x", left.height(), " but the matcher is configured for ", config_.width,
+          "x", config_.height);
+  const int stripes = pool_.threads();
+  pool_.run(stripes, [&](int stripe, int worker) { run_stripe(stripe, worker, left, right); });
+  if (config_.speckle_size > 0) remove_speckles();
+  return disparity_;
+}
+
+void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView right) {
+  Worker& w = *workers_[static_cast<std::size_t>(worker)];
+  const kernels::StereoKernels k = kernels::stereo_kernels(path_);
+  const int W = config_.width;
+  const int H = config_.height;
+  const int D = config_.max_disparity;
+  const std::ptrdiff_t wd = static_cast<std::ptrdiff_t>(W) * D;
+  const int stripes = pool_.threads();
+  const int y0 = stripe * H / stripes;
+  const int y1 = (stripe + 1) * H / stripes;
+
+  // The census cost of row y into `cost`; disparities beyond the left border cost the most.
+  const auto cost_row = [&](int y, std::uint16_t* cost) {
+    const std::uint8_t* rows[7];
+    for (const GrayView* image : {&left, &right}) {
+      for (int i = 0; i < 7; ++i) {
+        rows[i] = image->row(std::clamp(y - kernels::kCensusRadiusY + i, 0, H - 1));
+      }
+      if (image == &left) {
+        k.census(rows, W, w.left_lo.data(), w.left_hi.data());
+      } else {
+        k.census(rows, W, w.right_lo.data(), w.right_hi.data());
+      }
+    }
+    for (int x = 0; x < W; ++x) {
+      w.rev_lo[static_cast<std::size_t>(W - 1 - x)] = w.right_lo[static_cast<std::size_t>(x)];
+      w.rev_hi[static_cast<std::size_t>(W - 1 - x)] = w.right_hi[static_cast<std::size_t>(x)];
+    }
+    k.cost(w.left_lo.data(), w.left_hi.data(), w.rev_lo.data(), w.rev_hi.data(), W, D, cost);
+    for (int x = 0; x < D - 1; ++x) {
+      std::fill(cost + static_cast<std::ptrdiff_t>(x) * D + x + 1,
+                cost + static_cast<std::ptrdiff_t>(x + 1) * D,
+                static_cast<std::uint16_t>(kernels::kMaxCensusCost));
+    }
+  };
+
+  // Winner take all and the left-right check of row y from w.sums.
+  const auto output_row = [&](int y) {
+    std::fill(w.right_min.begin(), w.right_min.end(), kernels::kNoCost);
+    std::fill(w.right_disp.begin(), w.right_disp.end(), 0xFFFF);
+    std::int16_t* out = disparity_.row(y);
+    k.wta(w.sums.data(), W, D, config_.uniqueness, out, w.best.data(), w.right_min.data(),
+          w.right_disp.data());
+    if (config_.lr_max_diff < 0) return;
+    for (int x = 0; x < W; ++x) {
+      const int b = w.best[static_cast<std::size_t>(x)];
+      if (b < 0) continue;
+      const int r = w.right_disp[static_cast<std::size_t>(W - 1 - (x - b))];
+      if (std::abs(r - b) > config_.lr_max_diff) out[x] = kInvalidDisparity;
+    }
+  };
+
+  if (config_.method == StereoMethod::sgm) {
+    const std::size_t stride = static_cast<std::size_t>(D) + 16;
+    int prev = 0;
+    for (int dir = 0; dir < 3; ++dir) {
+      auto& p = w.paths[prev][dir];
+      for (int x = 0; x < W; ++x) {
+        std::fill_n(
+            p.begin() + static_cast<std::ptrdiff_t>((static_cast<std::size_t>(x) + 1) * stride + 8),
+            D, std::uint16_t{0});
+      }
+      std::fill(w.mins[prev][dir].begin(), w.mins[prev][dir].end(), std::uint16_t{0});
+    }
+    for (int y = std::max(0, y0 - kWarmupRows); y < y1; ++y) {
+      cost_row(y, w.cost.data());
+      kernels::SgmRow row{};
+      row.cost = w.cost.data();
+      row.width = W;
+      row.disparities = D;
+      row.p1 = config_.p1;
+      row.p2 = config_.p2;
+      for (int dir = 0; dir < 3; ++dir) {
+        row.prev[dir] = w.paths[prev][dir].data();
+        row.cur[dir] = w.paths[1 - prev][dir].data();
+        row.prev_min[dir] = w.mins[prev][dir].data();
+        row.cur_min[dir] = w.mins[1 - prev][dir].data();
+      }
+      row.scratch = w.scratch.data();
+      row.sums = w.sums.data();
+      k.sgm(row);
+      prev = 1 - prev;
+      if (y >= y0) output_row(y);
+    }
+    return;
+  }
+
+  // Block matching: a ring of cost rows y - r - 1 .. y + r and their vertical sums.
+  const int r = config_.block_size / 2;
+  const int ring = config_.block_size + 1;
+  const auto ring_row = [&](int y) { return w.cost.data() + (y % ring) * wd; };
+  std::fill(w.columns.begin(), w.columns.end(), std::uint16_t{0});
+  const int first = std::max(0, y0 - r);
+  for (int y = first; y < std::min(H, y0 + r); ++y) {
+    cost_row(y, ring_row(y));
+    k.box_columns(w.columns.data(), ring_row(y), nullptr, static_cast<int>(wd));
+  }
+  for (int y = y0; y < y1; ++y) {
+    const std::uint16_t* add = nullptr;
+    const std::uint16_t* sub = nullptr;
+    if (y + r < H) {
+      cost_row(y + r, ring_row(y + r));
+      add = ring_row(y + r);
+    }
+    if (y - r - 1 >= first) sub = ring_row(y - r - 1);
+    k.box_columns(w.columns.data(), add, sub, static_cast<int>(wd));
+    k.box_row(w.columns.data(), W, D, r, w.sums.data());
+    output_row(y);
+  }
+}
+
+void StereoMatcher::remove_speckles() {
+  // Regions grow 4-connected between valid neighbours at most speckle_range pixels apart. The
+  // disparity buffer has a border of one invalid pixel all round, so neighbours need no bounds
+  // checks; region_ holds the buffer indices of the current region.
+  const std::ptrdiff_t stride = config_.width + 2;
+  std::int16_t* const disp = padded_.data();
+  const int range = config_.speckle_range * kDisparityScale;
+  std::fill(visited_.begin(), visited_.end(), std::uint8_t{0});
+  const std::ptrdiff_t steps[4] = {-1, 1, -stride, stride};
+  for (int y = 0; y < config_.height; ++y) {
+    const std::ptrdiff_t row = (y + 1) * stride + 1;
+    for (std::ptrdiff_t start = row; start < row + config_.width; ++start) {
+      if (visited_[static_cast<std::size_t>(start)] != 0 || disp[start] == kInvalidDisparity) {
+        continue;
+      }
+      visited_[static_cast<std::size_t>(start)] = 1;
+      region_[0] = static_cast<std::uint32_t>(start);
+      std::size_t count = 1;
+      for (std::size_t i = 0; i < count; ++i) {
+        const std::ptrdiff_t p = region_[i];
+        const int v = disp[p];
+        for (const std::ptrdiff_t step : steps) {
+          const std::ptrdiff_t q = p + step;
+          const int u = disp[q];
+          if (visited_[static_cast<std::size_t>(q)] != 0 || u == kInvalidDisparity ||
+              std::abs(u - v) > range) {
+            continue;
+          }
+          visited_[static_cast<std::size_t>(q)] = 1;
+          region_[count++] = static_cast<std::uint32_t>(q);
+        }
+      }
+      if (count < static_cast<std::size_t>(config_.speckle_size)) {
+        for (std::size_t i = 0; i < count; ++i) disp[region_[i]] = kInvalidDisparity;
+      }
+    }
+  }
+}
+
+}  // namespace epipole::vision
