@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
 # The main job: installs what is missing, fetches the data sets, builds the host tool and runs
-# Epipole's stages on real stereo images, writing pictures and JSON a person can look at.
+# Epipole's stages on real stereo images, writing pictures and JSON a person can look at:
+#   - the chessboard rig (13 pairs): stereo calibration -> rig.yaml, report.json, preview.png;
+#     then left01/right01 rectified with it, as the firmware would (rectified-pair.png);
+#   - corners (FAST and Harris) on the rectified left view;
+#   - Middlebury Aloe: dense disparity, quality (SGM) and fast (BM), 16-bit PNG + colour picture.
 #
 #   scripts/run-demo.sh [OUT_DIR]      (default: out/demo)
 set -euo pipefail
@@ -8,6 +12,7 @@ cd "$(dirname "$0")/.."
 
 out=${1:-out/demo}
 data=${EPIPOLE_DATA_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/epipole/data}
+samples="$data/samples"
 
 ./scripts/setup.sh
 ./scripts/fetch-data.sh
@@ -17,13 +22,29 @@ tool=build/host/host-tools/epipole
 
 mkdir -p "$out"
 echo "demo: $("$tool" --version)"
-# The chessboard stereo rig (640x480) and Middlebury Aloe (1282x1110), left and right views.
-for image in left01 right01 aloeL aloeR; do
-  input="$data/samples/$image.jpg"
-  summary=$("$tool" features "$input" --detector fast --threshold 20 --max 100000 \
-    --draw "$out/$image-fast.png")
-  "$tool" features "$input" --detector fast --threshold 20 --max 100000 --json >"$out/$image-fast.json"
-  echo "demo: $image: $summary"
+
+echo "demo: calibrating the chessboard rig"
+"$tool" calibrate --left "$samples/left[0-9][0-9].jpg" --right "$samples/right[0-9][0-9].jpg" \
+  --board chessboard:9x6 --square 0.025 -o "$out/rig.yaml" --report "$out/calibration-report.json" \
+  --preview "$out/calibration-preview.png"
+
+echo "demo: rectifying left01/right01 with it"
+"$tool" rectify "$samples/left01.jpg" "$samples/right01.jpg" --calib "$out/rig.yaml" \
+  --out-left "$out/left01-rectified.png" --out-right "$out/right01-rectified.png" \
+  --preview "$out/rectified-pair.png"
+
+for detector in fast harris; do
+  echo "demo: $detector corners: $("$tool" features "$out/left01-rectified.png" --detector "$detector" \
+    --max 100000 --draw "$out/left01-$detector.png")"
+  "$tool" features "$out/left01-rectified.png" --detector "$detector" --max 100000 --json \
+    >"$out/left01-$detector.json"
 done
+
+for method in sgm bm; do
+  echo "demo: Aloe disparity ($method): $("$tool" disparity "$samples/aloeL.jpg" "$samples/aloeR.jpg" \
+    --max-disparity 256 --method "$method" --out "$out/aloe-disparity-$method.png" \
+    --color "$out/aloe-disparity-$method-color.png")"
+done
+
 echo "demo: pictures and JSON in $out/"
 ls "$out"

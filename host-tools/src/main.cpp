@@ -20,6 +20,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
 
   tools::add_features_command(app, global);
+  tools::add_disparity_command(app, global);
+  tools::add_calibrate_command(app, global);
+  tools::add_rectify_command(app, global);
   tools::add_link_command(app, global);
 
   try {

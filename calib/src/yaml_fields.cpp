@@ -1,0 +1,161 @@
+#include "yaml_fields.hpp"
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <system_error>
+
+namespace epipole::calib::detail {
+
+namespace {
+
+bool non_finite_spelling(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (!s.empty() && (s[0] == '+' || s[0] == '-')) s.erase(0, 1);
+  return s == ".nan" || s == ".inf" || s == "nan" || s == "inf" || s == "infinity";
+}
+
+std::string kind(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Sequence:
+      return "a sequence";
+    case YAML::NodeType::Map:
+      return "a map";
+    case YAML::NodeType::Scalar:
+      return "'" + node.Scalar() + "'";
+    default:
+      return "nothing";
+  }
+}
+
+}  // namespace
+
+double finite_number(const std::string& scalar, const std::string& key, const std::string& file) {
+  const std::string where = file + ": " + key + ": ";
+  if (non_finite_spelling(scalar)) {
+    throw Error(cat(where, "'", scalar, "' is not a finite number"));
+  }
+  // std::from_chars: locale-independent, the whole scalar must be the number. A leading '+'
+  // is allowed as YAML allows it.
+  const char* first = scalar.data();
+  const char* last = scalar.data() + scalar.size();
+  if (first != last && *first == '+') ++first;
+  double value = 0;
+  const auto [end, error] = std::from_chars(first, last, value);
+  if (error == std::errc::result_out_of_range) {
+    throw Error(cat(where, "'", scalar, "' is out of the range of a double"));
+  }
+  if (error != std::errc() || end != last || first == last) {
+    throw Error(cat(where, "'", scalar, "' is not a number"));
+  }
+  if (!std::isfinite(value)) throw Error(cat(where, "'", scalar, "' is not a finite number"));
+  return value;
+}
+
+void YamlFields::fail(const std::string& key, const std::string& message) const {
+  throw Error(cat(file_, ": ", key, ": ", message));
+}
+
+YAML::Node YamlFields::parse(const std::string& text) const {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw Error(cat(file_, ": line ", e.mark.line + 1, ", column ", e.mark.column + 1,
+                    ": malformed YAML (", e.msg, ")"));
+  }
+}
+
+void YamlFields::require_map(const YAML::Node& node, const std::string& path) const {
+  if (!node.IsMap()) {
+    if (path.empty()) throw Error(cat(file_, ": expected a YAML map of keys, found ", kind(node)));
+    fail(path, "expected a map of keys, found " + kind(node));
+  }
+}
+
+YAML::Node YamlFields::optional_child(const YAML::Node& map, const std::string& path,
+                                      const char* key) const {
+  require_map(map, path);
+  const YAML::Node node = map[key];
+  if (!node.IsDefined() || node.IsNull()) return YAML::Node(YAML::NodeType::Undefined);
+  return node;
+}
+
+YAML::Node YamlFields::child(const YAML::Node& map, const std::string& path,
+                             const char* key) const {
+  require_map(map, path);
+  const YAML::Node node = map[key];
+  if (!node.IsDefined()) throw Error(cat(file_, ": missing key '", join(path, key), "'"));
+  if (node.IsNull()) fail(join(path, key), "has no value");
+  return node;
+}
+
+void YamlFields::only_keys(const YAML::Node& map, const std::string& path,
+                           std::initializer_list<const char*> known) const {
+  require_map(map, path);
+  for (const auto& entry : map) {
+    const std::string name = entry.first.IsScalar() ? entry.first.Scalar() : std::string("?");
+    bool found = false;
+    for (const char* k : known) found = found || name == k;
+    if (!found) {
+      throw Error(cat(file_, ": unknown key '", join(path, name), "'"));
+    }
+  }
+}
+
+double YamlFields::number(const YAML::Node& node, const std::string& key) const {
+  if (!node.IsScalar()) fail(key, "expected a number, found " + kind(node));
+  return finite_number(node.Scalar(), key, file_);
+}
+
+int YamlFields::integer(const YAML::Node& node, const std::string& key) const {
+  if (!node.IsScalar()) fail(key, "expected an integer, found " + kind(node));
+  const std::string& s = node.Scalar();
+  long long value = 0;
+  const auto [end, error] = std::from_chars(s.data(), s.data() + s.size(), value);
+  if (error != std::errc() || end != s.data() + s.size() || s.empty()) {
+    fail(key, "'" + s + "' is not an integer");
+  }
+  if (value < std::numeric_limits<int>::min() || value > std::numeric_limits<int>::max()) {
+    fail(key, "'" + s + "' is out of range");
+  }
+  return static_cast<int>(value);
+}
+
+std::string YamlFields::text(const YAML::Node& node, const std::string& key) const {
+  if (!node.IsScalar()) fail(key, "expected a string, found " + kind(node));
+  return node.Scalar();
+}
+
+std::vector<double> YamlFields::numbers(const YAML::Node& node, const std::string& key) const {
+  if (!node.IsSequence()) fail(key, "expected a sequence of numbers, found " + kind(node));
+  std::vector<double> values;
+  values.reserve(node.size());
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    values.push_back(number(node[i], cat(key, "[", i, "]")));
+  }
+  return values;
+}
+
+Eigen::MatrixXd YamlFields::matrix(const YAML::Node& node, const std::string& key, int rows,
+                                   int cols) const {
+  const std::string shape = cat(rows, "x", cols, " matrix (", rows, " rows of ", cols, " numbers)");
+  if (!node.IsSequence()) fail(key, "expected a " + shape + ", found " + kind(node));
+  if (node.size() != static_cast<std::size_t>(rows)) {
+    fail(key, cat("expected a ", shape, ", found ", node.size(), " rows"));
+  }
+  Eigen::MatrixXd m(rows, cols);
+  for (int r = 0; r < rows; ++r) {
+    const YAML::Node row = node[static_cast<std::size_t>(r)];
+    if (!row.IsSequence() || row.size() != static_cast<std::size_t>(cols)) {
+      fail(key, cat("expected a ", shape, ", row ", r + 1, " is ",
+                    row.IsSequence() ? cat(row.size(), " numbers") : kind(row)));
+    }
+    for (int c = 0; c < cols; ++c) {
+      m(r, c) = number(row[static_cast<std::size_t>(c)], cat(key, "[", r, "][", c, "]"));
+    }
+  }
+  return m;
+}
+
+}  // namespace epipole::calib::detail

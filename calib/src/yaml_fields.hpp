@@ -1,0 +1,57 @@
+#pragma once
+
+// Reading typed values out of a yaml-cpp tree with errors that name the file and the key.
+// Internal to calib (yaml-cpp is a private dependency).
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+#include <initializer_list>
+#include <string>
+#include <vector>
+
+#include "epipole/core/error.hpp"
+
+namespace epipole::calib::detail {
+
+class YamlFields {
+ public:
+  explicit YamlFields(std::string file) : file_(std::move(file)) {}
+
+  const std::string& file() const { return file_; }
+
+  // Throws Error("FILE: KEY: message").
+  [[noreturn]] void fail(const std::string& key, const std::string& message) const;
+
+  // Parses a whole document; malformed YAML is an Error naming the file, line and column.
+  YAML::Node parse(const std::string& text) const;
+
+  // `key` of the map at `path` ("" for the top level); missing or null is an Error.
+  YAML::Node child(const YAML::Node& map, const std::string& path, const char* key) const;
+  // The same, but absent (or null) gives an undefined node.
+  YAML::Node optional_child(const YAML::Node& map, const std::string& path, const char* key) const;
+  // Error for the first key of the map that is not in `known`.
+  void only_keys(const YAML::Node& map, const std::string& path,
+                 std::initializer_list<const char*> known) const;
+  void require_map(const YAML::Node& node, const std::string& path) const;
+
+  double number(const YAML::Node& node, const std::string& key) const;  // finite
+  int integer(const YAML::Node& node, const std::string& key) const;
+  std::string text(const YAML::Node& node, const std::string& key) const;
+  // A flat sequence of finite numbers.
+  std::vector<double> numbers(const YAML::Node& node, const std::string& key) const;
+  // A sequence of `rows` sequences of `cols` finite numbers.
+  Eigen::MatrixXd matrix(const YAML::Node& node, const std::string& key, int rows, int cols) const;
+
+  static std::string join(const std::string& path, const std::string& key) {
+    return path.empty() ? key : path + "." + key;
+  }
+
+ private:
+  std::string file_;
+};
+
+// The scalar as a finite double, or Error naming the key (`what` says what it is).
+double finite_number(const std::string& scalar, const std::string& key, const std::string& file);
+
+}  // namespace epipole::calib::detail

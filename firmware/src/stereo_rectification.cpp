@@ -1,0 +1,30 @@
+#include "epipole/firmware/stereo_rectification.hpp"
+
+namespace epipole::firmware {
+
+vision::RemapMap to_remap_map(const calib::FixedPointMap& map) {
+  return vision::RemapMap(ImageView<const std::int16_t>(map.xy.view()),
+                          ImageView<const std::uint16_t>(map.fractions.view()));
+}
+
+namespace {
+
+vision::Rectifier make_rectifier(const calib::StereoCalibration& calibration, calib::Side side,
+                                 SimdPath path, std::uint8_t border) {
+  vision::RectifierConfig config;
+  config.source_width = config.width = calibration.width;
+  config.source_height = config.height = calibration.height;
+  config.border = border;
+  return vision::Rectifier(config, to_remap_map(calib::build_fixed_point_map(calibration, side)),
+                           path);
+}
+
+}  // namespace
+
+StereoRectifiers make_stereo_rectifiers(const calib::StereoCalibration& calibration, SimdPath path,
+                                        std::uint8_t border) {
+  return {make_rectifier(calibration, calib::Side::left, path, border),
+          make_rectifier(calibration, calib::Side::right, path, border)};
+}
+
+}  // namespace epipole::firmware

@@ -1,0 +1,149 @@
+// epipole disparity as a user runs it: the 16-bit PNG and colour picture on Aloe, JSON, and
+// one-line errors for bad input.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "epipole/core/image_io.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+struct Result {
+  int exit_code;
+  std::string out;
+};
+
+Result run_tool(const std::string& arguments, bool merge_stderr = true) {
+  const std::string command =
+      std::string(EPIPOLE_TOOL) + " " + arguments + (merge_stderr ? " 2>&1" : " 2>/dev/null");
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) throw std::runtime_error("popen failed");
+  std::string out;
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) out += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+int lines(const std::string& text) {
+  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+}
+
+std::string aloe(const char* name) {
+  return epipole::test::data_file(name).string();
+}
+
+TEST(DisparityCli, WritesDisparityPngAndColourPicture) {
+  const std::string out = ::testing::TempDir() + "epipole-disparity.png";
+  const std::string colour = ::testing::TempDir() + "epipole-disparity-colour.png";
+  for (const char* method : {"sgm", "bm"}) {
+    const Result r = run_tool("disparity " + aloe("samples/aloeL.jpg") + " " +
+                                  aloe("samples/aloeR.jpg") + " --max-disparity 224 --method " +
+                                  method + " --out " + out + " --color " + colour + " --json",
+                              false);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const auto json = nlohmann::json::parse(r.out);
+    EXPECT_EQ(json["width"], 1282);
+    EXPECT_EQ(json["height"], 1110);
+    EXPECT_EQ(json["method"], method);
+    EXPECT_GT(json["density"].get<double>(), 0.5);
+    const auto png = epipole::load_gray16(out);
+    ASSERT_EQ(png.width(), 1282);
+    ASSERT_EQ(png.height(), 1110);
+    // Aloe's disparities are 43..211 px: most valid pixels are in that range, x16.
+    long valid = 0, in_range = 0;
+    for (int y = 0; y < png.height(); ++y) {
+      for (int x = 0; x < png.width(); ++x) {
+        const int v = png(x, y);
+        if (v == 0) continue;
+        ++valid;
+        in_range += v >= 40 * 16 && v <= 215 * 16 ? 1 : 0;
+      }
+    }
+    EXPECT_GT(in_range, valid * 9 / 10) << method;
+    const auto picture = epipole::load_gray(colour);
+    EXPECT_EQ(picture.width(), 1282);
+    EXPECT_GT(picture.height(), 1110) << "the legend is below the picture";
+  }
+}
+
+TEST(DisparityCli, TextSummary) {
+  const std::string out = ::testing::TempDir() + "epipole-disparity-text.png";
+  const Result r = run_tool("disparity " + aloe("samples/aloeL.jpg") + " " +
+                            aloe("samples/aloeR.jpg") + " -d 256 --method bm --out " + out);
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_NE(r.out.find("% valid"), std::string::npos) << r.out;
+}
+
+TEST(DisparityCli, BadInputIsAOneLineError) {
+  const std::string left = aloe("samples/aloeL.jpg");
+  const std::string right = aloe("samples/aloeR.jpg");
+  const std::string other = aloe("samples/left01.jpg");
+  const std::string out = ::testing::TempDir() + "epipole-disparity-bad.png";
+  const struct {
+    std::string arguments;
+    std::string message;
+  } cases[] = {
+      {"disparity " + left + " " + other + " --out " + out, "must have one size"},
+      {"disparity " + left + " " + right + " -d 40 --out " + out, "multiple of 16"},
+      {"disparity " + left + " " + right + " -d 512 --out " + out, "multiple of 16"},
+      {"disparity " + left + " " + right + " --method xyz --out " + out, "method"},
+      {"disparity " + left + " /no/such/file.png --out " + out, "file.png"},
+      {"disparity " + left + " " + right, "--out"},
+  };
+  for (const auto& c : cases) {
+    const Result r = run_tool(c.arguments);
+    EXPECT_NE(r.exit_code, 0) << c.arguments;
+    EXPECT_GE(lines(r.out), 1) << c.arguments;
+    EXPECT_NE(r.out.find(c.message), std::string::npos) << c.arguments << "\n" << r.out;
+  }
+}
+
+TEST(DisparityCli, RangeWiderThanTheImage) {
+  // A 64-pixel-wide crop cannot hold 64 disparities.
+  const std::string out = ::testing::TempDir() + "epipole-disparity-narrow.png";
+  const std::string narrow = ::testing::TempDir() + "epipole-narrow.pgm";
+  epipole::GrayImage image(64, 48);
+  for (int y = 0; y < 48; ++y) {
+    for (int x = 0; x < 64; ++x) image(x, y) = static_cast<std::uint8_t>(x * 4 + y);
+  }
+  epipole::save_image(narrow, epipole::GrayView(image.view()));
+  const Result r = run_tool("disparity " + narrow + " " + narrow + " -d 64 --out " + out);
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_NE(r.out.find("not smaller than the image width 64"), std::string::npos) << r.out;
+}
+
+TEST(DisparityCli, RectifiesWithACalibration) {
+  const std::string samples = epipole::test::data_file("samples/left01.jpg").parent_path().string();
+  const std::string rig = ::testing::TempDir() + "epipole-disparity-rig.yaml";
+  const Result calibrated =
+      run_tool("calibrate --left '" + samples + "/left[0-9]*.jpg' --right '" + samples +
+               "/right[0-9]*.jpg' --board chessboard:9x6 " + "--square 0.025 -o " + rig);
+  ASSERT_EQ(calibrated.exit_code, 0) << calibrated.out;
+  const std::string out = ::testing::TempDir() + "epipole-disparity-rectified.png";
+  const Result r = run_tool("disparity " + samples + "/left01.jpg " + samples +
+                                "/right01.jpg --calib " + rig + " -d 64 --out " + out + " --json",
+                            false);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto json = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(json["rectified"].get<bool>());
+  EXPECT_EQ(json["width"], 640);
+  EXPECT_GT(json["density"].get<double>(), 0.1);
+  const Result wrong_size =
+      run_tool("disparity " + aloe("samples/aloeL.jpg") + " " + aloe("samples/aloeR.jpg") +
+               " --calib " + rig + " --out " + out);
+  EXPECT_EQ(wrong_size.exit_code, 1) << wrong_size.out;
+  EXPECT_EQ(lines(wrong_size.out), 1) << wrong_size.out;
+  EXPECT_NE(wrong_size.out.find("is a calibration for 640x480"), std::string::npos)
+      << wrong_size.out;
+}
+
+}  // namespace
