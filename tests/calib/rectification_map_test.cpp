@@ -2,11 +2,13 @@
 // inverts rectify_point (tests/reference/calibration_opencv_test.cpp compares with OpenCV).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
 
 #include "epipole/calib/rectification_map.hpp"
+#include "epipole/core/fixed_point.hpp"
 #include "epipole/vision/remap.hpp"
 #include "sample_calibration.hpp"
 
@@ -47,7 +49,9 @@ TEST(RectificationMap, IdentityCalibrationGivesTheIdentityMap) {
   }
 }
 
-TEST(RectificationMap, RoundingIsRemapMapsForSpecialValues) {
+// The shared rounding (core/fixed_point.hpp) against an independent statement of it: the
+// nearest integer of v * 32 in the default rounding mode (ties to even), saturated to int32.
+TEST(RectificationMap, FixedPointRoundingForSpecialValues) {
   std::vector<float> values = {0.0f,
                                -0.0f,
                                1.0f / 64,
@@ -77,11 +81,18 @@ TEST(RectificationMap, RoundingIsRemapMapsForSpecialValues) {
   for (int i = 0; i < 100000; ++i) values.push_back(any(rng));
   for (int k = -4096; k <= 4096; ++k) values.push_back(static_cast<float>(k) / 64);  // ties
   for (const float v : values) {
-    std::int16_t ours = 0;
-    std::int16_t theirs = 0;
-    const int fraction = to_fixed_point(v, &ours);
-    ASSERT_EQ(fraction, vision::kernels::to_fixed_point(v, &theirs)) << v;
-    ASSERT_EQ(ours, theirs) << v;
+    std::int16_t integer = 0;
+    const int fraction = to_fixed_point(v, &integer);
+    const double scaled = static_cast<double>(v) * 32;
+    std::int64_t fixed = std::numeric_limits<std::int32_t>::min();
+    if (!std::isnan(v)) {
+      fixed = static_cast<std::int64_t>(
+          std::clamp<double>(std::nearbyint(scaled), std::numeric_limits<std::int32_t>::min(),
+                             std::numeric_limits<std::int32_t>::max()));
+    }
+    const std::int64_t whole = (fixed - (fixed & 31)) / 32;  // floor division
+    ASSERT_EQ(fraction, fixed & 31) << v;
+    ASSERT_EQ(integer, std::clamp<std::int64_t>(whole, -32768, 32767)) << v;
   }
 }
 

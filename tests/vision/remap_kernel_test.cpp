@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/fixed_point.hpp"
 #include "epipole/vision/remap.hpp"
 #include "random_image.hpp"
 
@@ -263,7 +264,7 @@ TEST(RemapMap, FloatToFixedRoundsToNearestThirtySecond) {
            {nan, -32768, 0},
        }) {
     std::int16_t integer = 123;
-    const int fraction = kernels::to_fixed_point(e.value, &integer);
+    const int fraction = to_fixed_point(e.value, &integer);
     EXPECT_EQ(integer, e.integer) << e.value;
     EXPECT_EQ(fraction, e.fraction) << e.value;
   }
@@ -282,8 +283,8 @@ TEST(RemapMap, FromFloatMapsBuildsBothPlanes) {
   for (int v = 0; v < 3; ++v)
     for (int u = 0; u < 5; ++u) {
       std::int16_t x = 0, y = 0;
-      const int fx = kernels::to_fixed_point(map_x(u, v), &x);
-      const int fy = kernels::to_fixed_point(map_y(u, v), &y);
+      const int fx = to_fixed_point(map_x(u, v), &x);
+      const int fy = to_fixed_point(map_y(u, v), &y);
       EXPECT_EQ(map.xy()(2 * u, v), x);
       EXPECT_EQ(map.xy()(2 * u + 1, v), y);
       EXPECT_EQ(map.fractions()(u, v), fy * 32 + fx);

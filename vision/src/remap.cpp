@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/fixed_point.hpp"
 #include "kernel_set.hpp"
 
 namespace epipole::vision {
@@ -55,31 +56,6 @@ void remap_row_ref(GrayView source, const std::int16_t* xy, const std::uint16_t*
                 pixel_or_border(source, x + 1, y + 1, border), fraction);
     }
   }
-}
-
-int to_fixed_point(float v, std::int16_t* integer) {
-  // v * 32 rounded to the nearest integer, ties to even, saturated to int32; NaN -> INT32_MIN.
-  constexpr auto kMin = std::numeric_limits<std::int32_t>::min();
-  constexpr auto kMax = std::numeric_limits<std::int32_t>::max();
-  std::int32_t fixed = kMin;
-  if (!std::isnan(v)) {
-    const double scaled = static_cast<double>(v) * RemapMap::kFractionSteps;  // exact
-    if (scaled >= static_cast<double>(kMax)) {
-      fixed = kMax;
-    } else if (scaled <= static_cast<double>(kMin)) {
-      fixed = kMin;
-    } else {
-      const double below = std::floor(scaled);
-      auto rounded = static_cast<std::int64_t>(below);
-      const double rest = scaled - below;
-      if (rest > 0.5 || (rest == 0.5 && (rounded & 1) != 0)) ++rounded;
-      fixed = static_cast<std::int32_t>(std::clamp<std::int64_t>(rounded, kMin, kMax));
-    }
-  }
-  const std::int32_t whole = fixed >> RemapMap::kFractionBits;  // floor: arithmetic shift
-  *integer = static_cast<std::int16_t>(std::clamp<std::int32_t>(
-      whole, std::numeric_limits<std::int16_t>::min(), std::numeric_limits<std::int16_t>::max()));
-  return static_cast<int>(fixed & (RemapMap::kFractionSteps - 1));
 }
 
 RemapRowKernel* remap_row_kernel(SimdPath path) {
@@ -144,8 +120,8 @@ void RemapMap::assign_float(ImageView<const float> map_x, ImageView<const float>
     const float* xs = map_x.row(v);
     const float* ys = map_y.row(v);
     for (int u = 0; u < width(); ++u) {
-      const int fx = kernels::to_fixed_point(xs[u], &xy[2 * u]);
-      const int fy = kernels::to_fixed_point(ys[u], &xy[2 * u + 1]);
+      const int fx = to_fixed_point(xs[u], &xy[2 * u]);
+      const int fy = to_fixed_point(ys[u], &xy[2 * u + 1]);
       fractions[u] = static_cast<std::uint16_t>(fy * kFractionSteps + fx);
     }
   }

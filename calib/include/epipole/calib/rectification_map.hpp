@@ -46,17 +46,13 @@ void build_float_map(const CameraCalibration& camera, ImageView<float> map_x,
                      ImageView<float> map_y);
 
 // The fixed-point map of one camera, width x height (the calibration's image size): each
-// coordinate of build_float_map() converted by to_fixed_point(). The result is therefore
-// identical, bit for bit, to vision::RemapMap::from_float() of the float maps; it is within one
-// fixed-point step (1/32 pixel) of cv::initUndistortRectifyMap(..., CV_16SC2, ...), which
-// rounds the double coordinates directly (tests/reference/calibration_opencv_test.cpp).
-// Start-up code: allocates the map, about 6 * width * height bytes.
+// coordinate of build_float_map() converted by epipole::to_fixed_point() (core/fixed_point.hpp).
+// The result is therefore identical, bit for bit, to vision::RemapMap::from_float() of the float
+// maps; it is within one fixed-point step (1/32 pixel) of cv::initUndistortRectifyMap(...,
+// CV_16SC2, ...), which rounds the double coordinates directly
+// (tests/reference/calibration_opencv_test.cpp). Start-up code: allocates the map, about 6 * width
+// * height bytes.
 FixedPointMap build_fixed_point_map(const CameraCalibration& camera, int width, int height);
 FixedPointMap build_fixed_point_map(const StereoCalibration& calibration, Side side);
-
-// One coordinate to fixed point, the rule of vision::kernels::to_fixed_point: v * 32 rounded
-// to the nearest integer, ties to even (cvRound), saturated to int32 (NaN: INT32_MIN); the low
-// 5 bits are returned (the fraction), the rest, saturated to int16, goes to *integer.
-int to_fixed_point(float v, std::int16_t* integer);
 
 }  // namespace epipole::calib

@@ -129,9 +129,5 @@ using RemapRowKernel = void(GrayView source, const std::int16_t* xy, const std::
 // The row kernel a Rectifier on this path runs.
 RemapRowKernel* remap_row_kernel(SimdPath path);
 
-// One coordinate to fixed point as RemapMap::from_float does: *integer = floor(v * 32 rounded
-// / 32) saturated to int16, returns the fraction in [0, 31].
-int to_fixed_point(float v, std::int16_t* integer);
-
 }  // namespace kernels
 }  // namespace epipole::vision
