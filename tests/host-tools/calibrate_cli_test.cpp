@@ -12,32 +12,16 @@
 #include <string>
 
 #include "epipole/core/image_io.hpp"
+#include "run_tool.hpp"
 #include "test_data.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int exit_code;
-  std::string out;
-};
-
-Result run_tool(const std::string& arguments, bool merge_stderr = true) {
-  const std::string command =
-      std::string(EPIPOLE_TOOL) + " " + arguments + (merge_stderr ? " 2>&1" : " 2>/dev/null");
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) throw std::runtime_error("popen failed");
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) out += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-int lines(const std::string& text) {
-  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-}
+using Result = epipole::test::ToolResult;
+using epipole::test::line_count;
+using epipole::test::run_tool;
 
 std::string quoted(const fs::path& p) {
   return "'" + p.string() + "'";
@@ -84,7 +68,7 @@ const Calibration& calibration() {
 TEST(CalibrateCli, CalibratesTheThirteenPairs) {
   const Calibration& c = calibration();
   ASSERT_EQ(c.result.exit_code, 0) << c.result.out;
-  EXPECT_EQ(lines(c.result.out), 1) << c.result.out;
+  EXPECT_EQ(line_count(c.result.out), 1) << c.result.out;
   EXPECT_NE(c.result.out.find("calibrated 13 of 13 pairs"), std::string::npos) << c.result.out;
 
   const auto report = nlohmann::json::parse(read(c.report));
@@ -152,7 +136,7 @@ TEST(CalibrateCli, RectifiesAPairWithTheProducedFile) {
         quoted(samples() / "right01.jpg") + " --calib " + quoted(c.rig) + " --out-left " +
         quoted(left) + " --out-right " + quoted(right) + " --preview " + quoted(pair));
     ASSERT_EQ(r.exit_code, 0) << r.out;
-    EXPECT_EQ(lines(r.out), 1) << r.out;
+    EXPECT_EQ(line_count(r.out), 1) << r.out;
   }
   const epipole::GrayImage l = epipole::load_gray(left);
   const epipole::GrayImage rr = epipole::load_gray(right);
@@ -205,7 +189,7 @@ void expect_one_line_error(const std::string& arguments, const std::string& name
   SCOPED_TRACE(arguments);
   const Result r = run_tool(arguments);
   EXPECT_EQ(r.exit_code, 1) << r.out;
-  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_EQ(line_count(r.out), 1) << r.out;
   EXPECT_NE(r.out.find(names), std::string::npos) << r.out;
 }
 

@@ -7,30 +7,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "run_tool.hpp"
 #include "test_data.hpp"
 
 namespace {
 
-struct Result {
-  int exit_code;
-  std::string out;  // stdout and stderr
-};
-
-Result run_tool(const std::string& arguments, bool merge_stderr = true) {
-  const std::string command =
-      std::string(EPIPOLE_TOOL) + " " + arguments + (merge_stderr ? " 2>&1" : " 2>/dev/null");
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) throw std::runtime_error("popen failed");
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) out += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-int lines(const std::string& text) {
-  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-}
+using Result = epipole::test::ToolResult;
+using epipole::test::line_count;
+using epipole::test::run_tool;
 
 TEST(Cli, HelpAndVersion) {
   const Result help = run_tool("--help");
@@ -49,7 +33,7 @@ TEST(Cli, BadArgumentsFailWithOneLine) {
                                 "features --threshold 300 x.png", "--kernels avx features x.png"}) {
     const Result r = run_tool(arguments);
     EXPECT_NE(r.exit_code, 0) << arguments;
-    EXPECT_GE(lines(r.out), 1) << arguments;
+    EXPECT_GE(line_count(r.out), 1) << arguments;
   }
 }
 
@@ -60,7 +44,7 @@ TEST(Cli, CorruptImageIsAOneLineError) {
   std::fclose(f);
   const Result r = run_tool("features " + path);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_EQ(line_count(r.out), 1) << r.out;
   EXPECT_NE(r.out.find(path), std::string::npos) << r.out;
   std::remove(path.c_str());
 }
@@ -133,7 +117,7 @@ TEST(Cli, HarrisFeaturesJsonOnARealImage) {
   EXPECT_EQ(nlohmann::json::parse(ref.out)["keypoints"], keypoints);
   const Result even = run_tool("features " + image + " --detector harris --block-size 4");
   EXPECT_EQ(even.exit_code, 1) << even.out;
-  EXPECT_EQ(lines(even.out), 1) << even.out;
+  EXPECT_EQ(line_count(even.out), 1) << even.out;
   EXPECT_NE(even.out.find("block_size"), std::string::npos) << even.out;
 }
 

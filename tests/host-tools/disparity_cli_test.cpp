@@ -10,30 +10,14 @@
 #include <string>
 
 #include "epipole/core/image_io.hpp"
+#include "run_tool.hpp"
 #include "test_data.hpp"
 
 namespace {
 
-struct Result {
-  int exit_code;
-  std::string out;
-};
-
-Result run_tool(const std::string& arguments, bool merge_stderr = true) {
-  const std::string command =
-      std::string(EPIPOLE_TOOL) + " " + arguments + (merge_stderr ? " 2>&1" : " 2>/dev/null");
-  FILE* pipe = popen(command.c_str(), "r");
-  if (pipe == nullptr) throw std::runtime_error("popen failed");
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) out += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-int lines(const std::string& text) {
-  return static_cast<int>(std::count(text.begin(), text.end(), '\n'));
-}
+using Result = epipole::test::ToolResult;
+using epipole::test::line_count;
+using epipole::test::run_tool;
 
 std::string aloe(const char* name) {
   return epipole::test::data_file(name).string();
@@ -78,7 +62,7 @@ TEST(DisparityCli, TextSummary) {
   const Result r = run_tool("disparity " + aloe("samples/aloeL.jpg") + " " +
                             aloe("samples/aloeR.jpg") + " -d 256 --method bm --out " + out);
   EXPECT_EQ(r.exit_code, 0) << r.out;
-  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_EQ(line_count(r.out), 1) << r.out;
   EXPECT_NE(r.out.find("% valid"), std::string::npos) << r.out;
 }
 
@@ -101,7 +85,7 @@ TEST(DisparityCli, BadInputIsAOneLineError) {
   for (const auto& c : cases) {
     const Result r = run_tool(c.arguments);
     EXPECT_NE(r.exit_code, 0) << c.arguments;
-    EXPECT_GE(lines(r.out), 1) << c.arguments;
+    EXPECT_GE(line_count(r.out), 1) << c.arguments;
     EXPECT_NE(r.out.find(c.message), std::string::npos) << c.arguments << "\n" << r.out;
   }
 }
@@ -117,7 +101,7 @@ TEST(DisparityCli, RangeWiderThanTheImage) {
   epipole::save_image(narrow, epipole::GrayView(image.view()));
   const Result r = run_tool("disparity " + narrow + " " + narrow + " -d 64 --out " + out);
   EXPECT_EQ(r.exit_code, 1) << r.out;
-  EXPECT_EQ(lines(r.out), 1) << r.out;
+  EXPECT_EQ(line_count(r.out), 1) << r.out;
   EXPECT_NE(r.out.find("not smaller than the image width 64"), std::string::npos) << r.out;
 }
 
@@ -141,7 +125,7 @@ TEST(DisparityCli, RectifiesWithACalibration) {
       run_tool("disparity " + aloe("samples/aloeL.jpg") + " " + aloe("samples/aloeR.jpg") +
                " --calib " + rig + " --out " + out);
   EXPECT_EQ(wrong_size.exit_code, 1) << wrong_size.out;
-  EXPECT_EQ(lines(wrong_size.out), 1) << wrong_size.out;
+  EXPECT_EQ(line_count(wrong_size.out), 1) << wrong_size.out;
   EXPECT_NE(wrong_size.out.find("is a calibration for 640x480"), std::string::npos)
       << wrong_size.out;
 }

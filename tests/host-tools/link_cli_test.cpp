@@ -15,28 +15,17 @@
 #include <vector>
 
 #include "epipole/firmware/protocol/codec.hpp"
+#include "run_tool.hpp"
 
 namespace epipole::protocol {
 namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 
-struct Result {
-  int exit_code;
-  std::string out;
-};
-
+using Result = epipole::test::ToolResult;
+using epipole::test::start_tool;
 Result finish(FILE* pipe) {
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) out += buffer.data();
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-FILE* start_tool(const std::string& arguments) {
-  const std::string command = std::string(EPIPOLE_TOOL) + " " + arguments + " 2>&1";
-  return popen(command.c_str(), "r");
+  return epipole::test::finish_tool(pipe);
 }
 
 std::vector<nlohmann::json> json_lines(const std::string& text) {
