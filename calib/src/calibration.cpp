@@ -129,15 +129,6 @@ CameraCalibration read_camera(const detail::YamlFields& f, const YAML::Node& cam
   return c;
 }
 
-std::string read_file(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  require(in.good(), file.string(), ": cannot open the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  require(!in.bad(), file.string(), ": read error");
-  return text.str();
-}
-
 }  // namespace
 
 Eigen::Matrix3d CameraCalibration::camera_matrix() const {
@@ -256,7 +247,7 @@ StereoCalibration parse_calibration(const std::string& yaml, const std::string& 
 }
 
 StereoCalibration load_calibration(const std::filesystem::path& file) {
-  return parse_calibration(read_file(file), file.string());
+  return parse_calibration(detail::read_file(file), file.string());
 }
 
 std::string format_calibration(const StereoCalibration& c) {

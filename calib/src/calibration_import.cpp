@@ -18,15 +18,6 @@ namespace epipole::calib {
 
 namespace {
 
-std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  require(in.good(), file.string(), ": cannot open the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  require(!in.bad(), file.string(), ": read error");
-  return text.str();
-}
-
 // A matrix as FileStorage stores it, with where it came from.
 struct StoredMatrix {
   int rows = 0;
@@ -79,7 +70,7 @@ std::vector<double> split_numbers(const std::string& text, const std::string& ke
 class StorageFile {
  public:
   explicit StorageFile(const std::filesystem::path& path) : file_(path.string()), yaml_(file_) {
-    std::string text = read_text(path);
+    std::string text = detail::read_file(path);
     const std::size_t first = text.find_first_not_of(" \t\r\n");
     xml_ = first != std::string::npos && text[first] == '<';
     if (xml_) {
@@ -327,7 +318,7 @@ Eigen::MatrixXd ros_matrix(const detail::YamlFields& f, const YAML::Node& root, 
 
 RosCamera read_ros(const std::filesystem::path& path) {
   const detail::YamlFields f(path.string());
-  const YAML::Node root = f.parse(read_text(path));
+  const YAML::Node root = f.parse(detail::read_file(path));
   f.require_map(root, "");
   RosCamera c;
   c.width = f.integer(f.child(root, "", "image_width"), "image_width");

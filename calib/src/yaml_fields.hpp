@@ -6,6 +6,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Core>
+#include <filesystem>
 #include <initializer_list>
 #include <string>
 #include <vector>
@@ -13,6 +14,9 @@
 #include "epipole/core/error.hpp"
 
 namespace epipole::calib::detail {
+
+// The whole file as text; a file that cannot be opened or read is an Error naming it.
+std::string read_file(const std::filesystem::path& file);
 
 class YamlFields {
  public:
