@@ -13,7 +13,7 @@
 #include <system_error>
 
 #include "epipole/core/error.hpp"
-#include "yaml_fields.hpp"
+#include "yaml_matrix.hpp"
 
 namespace epipole::calib {
 
@@ -94,14 +94,13 @@ void emit_camera(YAML::Emitter& out, const char* side, const CameraCalibration& 
   out << YAML::EndMap;
 }
 
-CameraCalibration read_camera(const detail::YamlFields& f, const YAML::Node& cameras,
-                              const char* side) {
+CameraCalibration read_camera(const yaml::Fields& f, const YAML::Node& cameras, const char* side) {
   const std::string path = std::string("cameras.") + side;
   const YAML::Node node = f.child(cameras, "cameras", side);
   f.only_keys(node, path, {"id", "K", "distortion"});
   CameraCalibration c;
   c.id = f.text(f.child(node, path, "id"), path + ".id");
-  const Eigen::MatrixXd k = f.matrix(f.child(node, path, "K"), path + ".K", 3, 3);
+  const Eigen::MatrixXd k = detail::matrix(f, f.child(node, path, "K"), path + ".K", 3, 3);
   const double fx = k(0, 0);
   const bool pinhole = std::abs(k(0, 1)) <= 1e-9 * std::abs(fx) && k(1, 0) == 0 && k(2, 0) == 0 &&
                        k(2, 1) == 0 && k(2, 2) == 1;
@@ -165,7 +164,7 @@ void validate(const StereoCalibration& c) {
 }
 
 StereoCalibration parse_calibration(const std::string& yaml, const std::string& file_name) {
-  const detail::YamlFields f(file_name);
+  const yaml::Fields f(file_name);
   const YAML::Node root = f.parse(yaml);
   if (!root.IsMap()) {
     throw Error(cat(file_name,
@@ -203,7 +202,7 @@ StereoCalibration parse_calibration(const std::string& yaml, const std::string& 
 
   const YAML::Node extrinsics = f.child(root, "", "extrinsics");
   f.only_keys(extrinsics, "extrinsics", {"R", "T"});
-  c.R = f.matrix(f.child(extrinsics, "extrinsics", "R"), "extrinsics.R", 3, 3);
+  c.R = detail::matrix(f, f.child(extrinsics, "extrinsics", "R"), "extrinsics.R", 3, 3);
   const std::vector<double> t = f.numbers(f.child(extrinsics, "extrinsics", "T"), "extrinsics.T");
   if (t.size() != 3) f.fail("extrinsics.T", cat("expected 3 numbers, found ", t.size()));
   c.T = {t[0], t[1], t[2]};
@@ -211,11 +210,11 @@ StereoCalibration parse_calibration(const std::string& yaml, const std::string& 
   const std::string rp = "rectification";
   const YAML::Node rect = f.child(root, "", "rectification");
   f.only_keys(rect, rp, {"R1", "R2", "P1", "P2", "Q"});
-  c.left.rectification = f.matrix(f.child(rect, rp, "R1"), rp + ".R1", 3, 3);
-  c.right.rectification = f.matrix(f.child(rect, rp, "R2"), rp + ".R2", 3, 3);
-  c.left.projection = f.matrix(f.child(rect, rp, "P1"), rp + ".P1", 3, 4);
-  c.right.projection = f.matrix(f.child(rect, rp, "P2"), rp + ".P2", 3, 4);
-  c.Q = f.matrix(f.child(rect, rp, "Q"), rp + ".Q", 4, 4);
+  c.left.rectification = detail::matrix(f, f.child(rect, rp, "R1"), rp + ".R1", 3, 3);
+  c.right.rectification = detail::matrix(f, f.child(rect, rp, "R2"), rp + ".R2", 3, 3);
+  c.left.projection = detail::matrix(f, f.child(rect, rp, "P1"), rp + ".P1", 3, 4);
+  c.right.projection = detail::matrix(f, f.child(rect, rp, "P2"), rp + ".P2", 3, 4);
+  c.Q = detail::matrix(f, f.child(rect, rp, "Q"), rp + ".Q", 4, 4);
 
   if (const YAML::Node quality = f.optional_child(root, "", "quality")) {
     f.only_keys(quality, "quality", {"rms", "views"});
@@ -247,7 +246,7 @@ StereoCalibration parse_calibration(const std::string& yaml, const std::string& 
 }
 
 StereoCalibration load_calibration(const std::filesystem::path& file) {
-  return parse_calibration(detail::read_file(file), file.string());
+  return parse_calibration(yaml::read_file(file), file.string());
 }
 
 std::string format_calibration(const StereoCalibration& c) {

@@ -12,7 +12,7 @@
 #include "epipole/calib/calibration.hpp"
 #include "epipole/core/error.hpp"
 #include "xml_reader.hpp"
-#include "yaml_fields.hpp"
+#include "yaml_matrix.hpp"
 
 namespace epipole::calib {
 
@@ -59,7 +59,7 @@ std::vector<double> split_numbers(const std::string& text, const std::string& ke
     std::size_t end = i;
     while (end < text.size() && !std::isspace(static_cast<unsigned char>(text[end]))) ++end;
     if (end > i) {
-      values.push_back(detail::finite_number(text.substr(i, end - i), key, file));
+      values.push_back(yaml::finite_number(text.substr(i, end - i), key, file));
     }
     i = end;
   }
@@ -70,7 +70,7 @@ std::vector<double> split_numbers(const std::string& text, const std::string& ke
 class StorageFile {
  public:
   explicit StorageFile(const std::filesystem::path& path) : file_(path.string()), yaml_(file_) {
-    std::string text = detail::read_file(path);
+    std::string text = yaml::read_file(path);
     const std::size_t first = text.find_first_not_of(" \t\r\n");
     xml_ = first != std::string::npos && text[first] == '<';
     if (xml_) {
@@ -160,7 +160,7 @@ class StorageFile {
   }
 
   std::string file_;
-  detail::YamlFields yaml_;
+  yaml::Fields yaml_;
   bool xml_ = false;
   YAML::Node root_;
   detail::XmlElement xml_root_;
@@ -297,8 +297,8 @@ struct RosCamera {
   Eigen::Matrix<double, 3, 4> P;
 };
 
-Eigen::MatrixXd ros_matrix(const detail::YamlFields& f, const YAML::Node& root, const char* key,
-                           int rows, int cols) {
+Eigen::MatrixXd ros_matrix(const yaml::Fields& f, const YAML::Node& root, const char* key, int rows,
+                           int cols) {
   const YAML::Node node = f.child(root, "", key);
   const int r = f.integer(f.child(node, key, "rows"), std::string(key) + ".rows");
   const int c = f.integer(f.child(node, key, "cols"), std::string(key) + ".cols");
@@ -317,8 +317,8 @@ Eigen::MatrixXd ros_matrix(const detail::YamlFields& f, const YAML::Node& root, 
 }
 
 RosCamera read_ros(const std::filesystem::path& path) {
-  const detail::YamlFields f(path.string());
-  const YAML::Node root = f.parse(detail::read_file(path));
+  const yaml::Fields f(path.string());
+  const YAML::Node root = f.parse(yaml::read_file(path));
   f.require_map(root, "");
   RosCamera c;
   c.width = f.integer(f.child(root, "", "image_width"), "image_width");

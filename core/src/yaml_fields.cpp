@@ -1,4 +1,4 @@
-#include "yaml_fields.hpp"
+#include "epipole/core/yaml_fields.hpp"
 
 #include <cctype>
 #include <charconv>
@@ -8,7 +8,7 @@
 #include <sstream>
 #include <system_error>
 
-namespace epipole::calib::detail {
+namespace epipole::yaml {
 
 std::string read_file(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -64,11 +64,11 @@ double finite_number(const std::string& scalar, const std::string& key, const st
   return value;
 }
 
-void YamlFields::fail(const std::string& key, const std::string& message) const {
+void Fields::fail(const std::string& key, const std::string& message) const {
   throw Error(cat(file_, ": ", key, ": ", message));
 }
 
-YAML::Node YamlFields::parse(const std::string& text) const {
+YAML::Node Fields::parse(const std::string& text) const {
   try {
     return YAML::Load(text);
   } catch (const YAML::Exception& e) {
@@ -77,23 +77,22 @@ YAML::Node YamlFields::parse(const std::string& text) const {
   }
 }
 
-void YamlFields::require_map(const YAML::Node& node, const std::string& path) const {
+void Fields::require_map(const YAML::Node& node, const std::string& path) const {
   if (!node.IsMap()) {
     if (path.empty()) throw Error(cat(file_, ": expected a YAML map of keys, found ", kind(node)));
     fail(path, "expected a map of keys, found " + kind(node));
   }
 }
 
-YAML::Node YamlFields::optional_child(const YAML::Node& map, const std::string& path,
-                                      const char* key) const {
+YAML::Node Fields::optional_child(const YAML::Node& map, const std::string& path,
+                                  const char* key) const {
   require_map(map, path);
   const YAML::Node node = map[key];
   if (!node.IsDefined() || node.IsNull()) return YAML::Node(YAML::NodeType::Undefined);
   return node;
 }
 
-YAML::Node YamlFields::child(const YAML::Node& map, const std::string& path,
-                             const char* key) const {
+YAML::Node Fields::child(const YAML::Node& map, const std::string& path, const char* key) const {
   require_map(map, path);
   const YAML::Node node = map[key];
   if (!node.IsDefined()) throw Error(cat(file_, ": missing key '", join(path, key), "'"));
@@ -101,8 +100,8 @@ YAML::Node YamlFields::child(const YAML::Node& map, const std::string& path,
   return node;
 }
 
-void YamlFields::only_keys(const YAML::Node& map, const std::string& path,
-                           std::initializer_list<const char*> known) const {
+void Fields::only_keys(const YAML::Node& map, const std::string& path,
+                       std::initializer_list<const char*> known) const {
   require_map(map, path);
   for (const auto& entry : map) {
     const std::string name = entry.first.IsScalar() ? entry.first.Scalar() : std::string("?");
@@ -114,12 +113,12 @@ void YamlFields::only_keys(const YAML::Node& map, const std::string& path,
   }
 }
 
-double YamlFields::number(const YAML::Node& node, const std::string& key) const {
+double Fields::number(const YAML::Node& node, const std::string& key) const {
   if (!node.IsScalar()) fail(key, "expected a number, found " + kind(node));
   return finite_number(node.Scalar(), key, file_);
 }
 
-int YamlFields::integer(const YAML::Node& node, const std::string& key) const {
+int Fields::integer(const YAML::Node& node, const std::string& key) const {
   if (!node.IsScalar()) fail(key, "expected an integer, found " + kind(node));
   const std::string& s = node.Scalar();
   long long value = 0;
@@ -133,12 +132,12 @@ int YamlFields::integer(const YAML::Node& node, const std::string& key) const {
   return static_cast<int>(value);
 }
 
-std::string YamlFields::text(const YAML::Node& node, const std::string& key) const {
+std::string Fields::text(const YAML::Node& node, const std::string& key) const {
   if (!node.IsScalar()) fail(key, "expected a string, found " + kind(node));
   return node.Scalar();
 }
 
-std::vector<double> YamlFields::numbers(const YAML::Node& node, const std::string& key) const {
+std::vector<double> Fields::numbers(const YAML::Node& node, const std::string& key) const {
   if (!node.IsSequence()) fail(key, "expected a sequence of numbers, found " + kind(node));
   std::vector<double> values;
   values.reserve(node.size());
@@ -148,14 +147,14 @@ std::vector<double> YamlFields::numbers(const YAML::Node& node, const std::strin
   return values;
 }
 
-Eigen::MatrixXd YamlFields::matrix(const YAML::Node& node, const std::string& key, int rows,
+std::vector<double> Fields::matrix(const YAML::Node& node, const std::string& key, int rows,
                                    int cols) const {
   const std::string shape = cat(rows, "x", cols, " matrix (", rows, " rows of ", cols, " numbers)");
   if (!node.IsSequence()) fail(key, "expected a " + shape + ", found " + kind(node));
   if (node.size() != static_cast<std::size_t>(rows)) {
     fail(key, cat("expected a ", shape, ", found ", node.size(), " rows"));
   }
-  Eigen::MatrixXd m(rows, cols);
+  std::vector<double> m(static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols));
   for (int r = 0; r < rows; ++r) {
     const YAML::Node row = node[static_cast<std::size_t>(r)];
     if (!row.IsSequence() || row.size() != static_cast<std::size_t>(cols)) {
@@ -163,10 +162,20 @@ Eigen::MatrixXd YamlFields::matrix(const YAML::Node& node, const std::string& ke
                     row.IsSequence() ? cat(row.size(), " numbers") : kind(row)));
     }
     for (int c = 0; c < cols; ++c) {
-      m(r, c) = number(row[static_cast<std::size_t>(c)], cat(key, "[", r, "][", c, "]"));
+      m[static_cast<std::size_t>(r * cols + c)] =
+          number(row[static_cast<std::size_t>(c)], cat(key, "[", r, "][", c, "]"));
     }
   }
   return m;
 }
 
-}  // namespace epipole::calib::detail
+bool Fields::boolean(const YAML::Node& node, const std::string& key) const {
+  if (node.IsScalar()) {
+    const std::string& s = node.Scalar();
+    if (s == "true" || s == "yes" || s == "on") return true;
+    if (s == "false" || s == "no" || s == "off") return false;
+  }
+  fail(key, "expected true or false, found " + kind(node));
+}
+
+}  // namespace epipole::yaml

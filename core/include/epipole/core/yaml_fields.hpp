@@ -1,11 +1,10 @@
 #pragma once
 
-// Reading typed values out of a yaml-cpp tree with errors that name the file and the key.
-// Internal to calib (yaml-cpp is a private dependency).
+// Reading typed values out of a yaml-cpp tree with errors that name the file and the key: the
+// configuration and calibration files share it (the epipole_yaml library).
 
 #include <yaml-cpp/yaml.h>
 
-#include <Eigen/Core>
 #include <filesystem>
 #include <initializer_list>
 #include <string>
@@ -13,14 +12,14 @@
 
 #include "epipole/core/error.hpp"
 
-namespace epipole::calib::detail {
+namespace epipole::yaml {
 
 // The whole file as text; a file that cannot be opened or read is an Error naming it.
 std::string read_file(const std::filesystem::path& file);
 
-class YamlFields {
+class Fields {
  public:
-  explicit YamlFields(std::string file) : file_(std::move(file)) {}
+  explicit Fields(std::string file) : file_(std::move(file)) {}
 
   const std::string& file() const { return file_; }
 
@@ -44,8 +43,10 @@ class YamlFields {
   std::string text(const YAML::Node& node, const std::string& key) const;
   // A flat sequence of finite numbers.
   std::vector<double> numbers(const YAML::Node& node, const std::string& key) const;
-  // A sequence of `rows` sequences of `cols` finite numbers.
-  Eigen::MatrixXd matrix(const YAML::Node& node, const std::string& key, int rows, int cols) const;
+  // A sequence of `rows` sequences of `cols` finite numbers, row by row.
+  std::vector<double> matrix(const YAML::Node& node, const std::string& key, int rows,
+                             int cols) const;
+  bool boolean(const YAML::Node& node, const std::string& key) const;
 
   static std::string join(const std::string& path, const std::string& key) {
     return path.empty() ? key : path + "." + key;
@@ -58,4 +59,4 @@ class YamlFields {
 // The scalar as a finite double, or Error naming the key (`what` says what it is).
 double finite_number(const std::string& scalar, const std::string& key, const std::string& file);
 
-}  // namespace epipole::calib::detail
+}  // namespace epipole::yaml
