@@ -68,6 +68,7 @@ AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {
       timeouts_in_a_row_ = 0;
       return r;
     case AcquireStatus::timeout:
+      if (timeout <= 0) return r;  // a poll that found nothing waiting is no fault
       ++counters_.timeouts;
       if (config_.timeouts_before_reopen == 0 ||
           ++timeouts_in_a_row_ < config_.timeouts_before_reopen) {

@@ -4,6 +4,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/hal/gpiod_trigger.hpp"
+#include "epipole/hal/pty_serial.hpp"
 #include "epipole/hal/sim.hpp"
 #include "epipole/hal/v4l2_camera.hpp"
 
@@ -79,6 +80,9 @@ BackendRegistry make_builtin() {
   register_gpiod(r);
   r.add_serial("termios", [](const SerialConfig& config, const BackendContext&) {
     return std::unique_ptr<SerialPort>(std::make_unique<TermiosSerialPort>(config));
+  });
+  r.add_serial("pty", [](const SerialConfig& config, const BackendContext&) {
+    return std::unique_ptr<SerialPort>(std::make_unique<PtySerialPort>(config));
   });
   return r;
 }

@@ -11,6 +11,7 @@
 #include <iterator>
 
 #include "epipole/core/error.hpp"
+#include "fd_io.hpp"
 
 namespace epipole::hal {
 
@@ -93,8 +94,19 @@ void TermiosSerialPort::reopen() {
 
 IoResult TermiosSerialPort::read(std::span<std::byte> buffer, Nanoseconds timeout) {
   if (fd_ < 0) return {IoStatus::closed, 0};
+  return detail::read_fd(fd_, buffer, timeout);
+}
+
+IoResult TermiosSerialPort::write(std::span<const std::byte> data, Nanoseconds timeout) {
+  if (fd_ < 0) return {IoStatus::closed, 0};
+  return detail::write_fd(fd_, data, timeout);
+}
+
+namespace detail {
+
+IoResult read_fd(int fd, std::span<std::byte> buffer, Nanoseconds timeout) {
   if (buffer.empty()) return {IoStatus::ok, 0};
-  pollfd p{fd_, POLLIN, 0};
+  pollfd p{fd, POLLIN, 0};
   int ready = 0;
   do {
     ready = ::poll(&p, 1, poll_timeout_ms(timeout));
@@ -103,7 +115,7 @@ IoResult TermiosSerialPort::read(std::span<std::byte> buffer, Nanoseconds timeou
   if (ready < 0) return {IoStatus::hung_up, 0};
   // Data that arrived before a hang-up is still delivered first.
   if ((p.revents & POLLIN) != 0) {
-    const ssize_t n = ::read(fd_, buffer.data(), buffer.size());
+    const ssize_t n = ::read(fd, buffer.data(), buffer.size());
     if (n > 0) return {IoStatus::ok, static_cast<std::size_t>(n)};
     if (n < 0 && (errno == EAGAIN || errno == EINTR)) return {IoStatus::timeout, 0};
     return {IoStatus::hung_up, 0};  // end of file or EIO: the other end is gone
@@ -111,13 +123,12 @@ IoResult TermiosSerialPort::read(std::span<std::byte> buffer, Nanoseconds timeou
   return {IoStatus::hung_up, 0};  // POLLHUP / POLLERR / POLLNVAL without data
 }
 
-IoResult TermiosSerialPort::write(std::span<const std::byte> data, Nanoseconds timeout) {
-  if (fd_ < 0) return {IoStatus::closed, 0};
+IoResult write_fd(int fd, std::span<const std::byte> data, Nanoseconds timeout) {
   MonotonicClock clock;
   const Nanoseconds deadline = clock.now() + std::max<Nanoseconds>(timeout, 0);
   std::size_t written = 0;
   while (written < data.size()) {
-    const ssize_t n = ::write(fd_, data.data() + written, data.size() - written);
+    const ssize_t n = ::write(fd, data.data() + written, data.size() - written);
     if (n > 0) {
       written += static_cast<std::size_t>(n);
       continue;
@@ -125,7 +136,7 @@ IoResult TermiosSerialPort::write(std::span<const std::byte> data, Nanoseconds t
     if (n < 0 && errno != EAGAIN && errno != EINTR) return {IoStatus::hung_up, written};
     const Nanoseconds left = deadline - clock.now();
     if (left <= 0) return {IoStatus::timeout, written};
-    pollfd p{fd_, POLLOUT, 0};
+    pollfd p{fd, POLLOUT, 0};
     const int ready = ::poll(&p, 1, poll_timeout_ms(left));
     if (ready < 0 && errno != EINTR) return {IoStatus::hung_up, written};
     if (ready > 0 && (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0) {
@@ -134,5 +145,7 @@ IoResult TermiosSerialPort::write(std::span<const std::byte> data, Nanoseconds t
   }
   return {IoStatus::ok, written};
 }
+
+}  // namespace detail
 
 }  // namespace epipole::hal

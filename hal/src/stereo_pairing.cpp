@@ -103,8 +103,9 @@ PairResult StereoGrabber::next(Nanoseconds timeout) {
   const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
   while (true) {
     if (pairer_.has_pair()) return {PairStatus::ok, pairer_.take(), Side::left};
-    const Nanoseconds left_time = deadline - clock_.now();
-    if (left_time <= 0) return {PairStatus::timeout, {}, Side::left};
+    // Past the deadline the cameras are still asked once more, without waiting: with a
+    // timeout of 0, next() takes whatever pair is already there.
+    const Nanoseconds left_time = std::max<Nanoseconds>(deadline - clock_.now(), 0);
     // Acquire on the side that has nothing waiting (the left one first).
     const Side side = pairer_.waiting(Side::left) == 0 ? Side::left : Side::right;
     CameraSource& camera = side == Side::left ? left_ : right_;

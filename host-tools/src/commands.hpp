@@ -15,5 +15,6 @@ void add_disparity_command(CLI::App& app, const GlobalOptions& global);
 void add_calibrate_command(CLI::App& app, const GlobalOptions& global);
 void add_rectify_command(CLI::App& app, const GlobalOptions& global);
 void add_link_command(CLI::App& app, const GlobalOptions& global);
+void add_sim_command(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace epipole::tools

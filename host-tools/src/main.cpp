@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   tools::add_calibrate_command(app, global);
   tools::add_rectify_command(app, global);
   tools::add_link_command(app, global);
+  tools::add_sim_command(app, global);
 
   try {
     app.parse(argc, argv);

@@ -86,6 +86,7 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
   for (auto& s : health.stage_us) s = rng();
   health.camera_timeouts = u16();
   health.bad_commands = u16();
+  health.messages_dropped = u16();
   FrameSummary summary{rng(), (std::uint64_t{rng()} << 32) | rng(), rng(), u16(), u16(), 999, 3,
                        u16()};
   Detections detections;

@@ -51,7 +51,7 @@ class BackendRegistry {
   std::vector<std::string> serial_backends() const;
 
   // The backends built into this binary: cameras "sim", "v4l2", "libcamera"; triggers "sim",
-  // "gpiod"; serial "termios".
+  // "gpiod"; serial "termios", "pty" (a pseudo-terminal: the simulated board's link).
   static const BackendRegistry& builtin();
 
  private:

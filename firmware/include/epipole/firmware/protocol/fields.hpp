@@ -30,6 +30,7 @@ void fields(Io& io, M& m) {
   io("link_reopens", m.link_reopens);
   io("unpaired_frames", m.unpaired_frames);
   io("bad_commands", m.bad_commands);
+  io("messages_dropped", m.messages_dropped);
 }
 
 template <class Io, class M>

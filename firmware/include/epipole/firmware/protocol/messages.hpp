@@ -54,6 +54,7 @@ struct Health {
   std::uint16_t link_reopens = 0;
   std::uint16_t unpaired_frames = 0;
   std::uint16_t bad_commands = 0;
+  std::uint16_t messages_dropped = 0;  // not sent: the link's byte budget or queue was full
   friend bool operator==(const Health&, const Health&) = default;
 };
 

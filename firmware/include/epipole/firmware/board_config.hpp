@@ -1,0 +1,141 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "epipole/hal/camera.hpp"
+#include "epipole/hal/serial_port.hpp"
+#include "epipole/hal/stereo_pairing.hpp"
+#include "epipole/hal/trigger.hpp"
+#include "epipole/vision/stereo.hpp"
+
+namespace epipole::firmware {
+
+// A board's configuration file (board.yaml, docs/boards.md): which backends and devices the
+// board has, the image size and every stage's limits. The firmware sizes all of its memory from
+// it at start-up. Loading either returns a complete, validated configuration or throws Error
+// naming the file and the key.
+struct BoardConfig {
+  static constexpr int kVersion = 1;
+
+  std::string name;                 // "sim", "raspberrypi5-ov9281", ...
+  std::filesystem::path directory;  // the folder of the file: relative paths start here
+
+  struct Cameras {
+    std::string backend = "sim";  // sim | v4l2 | libcamera
+    hal::CameraConfig left;       // device, size, format, rate, exposure, gain, trigger mode
+    hal::CameraConfig right;
+    hal::Nanoseconds timeout = 200'000'000;  // acquire timeout before a camera counts as late
+  } cameras;
+
+  struct Trigger {
+    std::string backend = "sim";  // sim | gpiod | none (free-running cameras)
+    hal::TriggerConfig line;
+  } trigger;
+
+  hal::PairingConfig pairing;
+
+  enum class LinkProtocol { epipole, mavlink };
+  struct Serial {
+    std::string backend = "pty";  // termios | pty | none
+    hal::SerialConfig port;
+    LinkProtocol protocol = LinkProtocol::epipole;
+    std::uint8_t mavlink_system_id = 1;
+    std::uint8_t mavlink_component_id = 196;  // MAV_COMP_ID_OBSTACLE_AVOIDANCE
+  } serial;
+
+  std::filesystem::path calibration;  // absolute after loading; empty: images are rectified
+
+  struct Stages {
+    bool rectify = true;
+    bool corners = true;
+    bool disparity = true;
+    bool sparse = true;
+    bool detect = true;
+  } stages;
+
+  enum class CornerDetector { fast, harris };
+  struct Corners {
+    CornerDetector detector = CornerDetector::fast;
+    int threshold = 20;      // FAST threshold
+    int max_corners = 2000;  // per image, the strongest kept
+    int grid = 4;            // bucketing: grid x grid cells share max_corners
+  } corners;
+
+  vision::StereoConfig stereo;  // width and height come from the cameras
+
+  struct Sparse {
+    int max_points = 48;    // 3-D points sent per frame (the protocol's limit)
+    int row_tolerance = 1;  // pixels
+    double ratio = 0.8;     // best / second best
+  } sparse;
+
+  struct Detector {
+    std::filesystem::path cascade;  // compiled cascade (.bin); empty: no detection
+    double scale_factor = 1.1;
+    int min_neighbors = 3;
+    int min_size = 30;
+    int max_size = 0;  // 0: the image size
+  } detector;
+
+  struct Obstacles {
+    int sectors = 72;
+    double band_top = 0.25;  // rows of the image searched, as fractions of its height
+    double band_bottom = 0.75;
+    double min_depth_m = 0.2;
+    double max_depth_m = 20.0;
+  } obstacles;
+
+  struct Threads {
+    int count = 1;              // stereo row stripes (the frame loop thread is extra)
+    std::vector<int> affinity;  // CPUs for the frame loop and its workers; empty: any
+    int realtime_priority = 0;  // SCHED_FIFO priority 1..99; 0: normal scheduling
+    bool lock_memory = false;   // mlockall after start-up
+  } threads;
+
+  std::optional<std::size_t> memory_budget_bytes;  // start-up fails above it
+
+  std::filesystem::path snapshot_directory;  // where the snapshot command writes; empty: refused
+
+  // The simulated board (backend "sim"): what its cameras replay.
+  struct SimScene {
+    std::string name;
+    std::vector<std::filesystem::path> left;  // image files, paired in order with right
+    std::vector<std::filesystem::path> right;
+    std::filesystem::path synthesize;   // or: one image, the right view made from it ...
+    int synthesize_disparity = 0;       // ... at this disparity (pixels)
+    std::filesystem::path calibration;  // overrides the board's
+  };
+  struct Sim {
+    std::vector<SimScene> scenes;
+    std::string scene;           // the one replayed
+    bool charge_compute = true;  // the virtual clock advances by the host's processing time
+    double drop_rate = 0;        // random faults per frame (both cameras, independent seeds)
+    double corrupt_rate = 0;
+    std::uint64_t seed = 1;
+  } sim;
+
+  int width() const { return cameras.left.width; }
+  int height() const { return cameras.left.height; }
+  const SimScene* sim_scene() const;
+};
+
+// Reads and validates a board file; `path` is the file or its folder (then board.yaml in it).
+// ${NAME} in paths is replaced by the environment variable NAME; ${EPIPOLE_DATA_DIR} defaults to
+// the data cache of scripts/fetch-data.sh. Relative paths are relative to the file's folder.
+BoardConfig load_board_config(const std::filesystem::path& path);
+BoardConfig parse_board_config(const std::string& yaml, const std::filesystem::path& file);
+
+// Cross-checks a configuration (also done by the loaders): stage limits against the image size,
+// the pairing tolerance against the trigger period, the scene of the simulated board. Throws
+// Error naming the file and the key.
+void validate(const BoardConfig& config, const std::string& file);
+
+// The data cache folder of scripts/fetch-data.sh: $EPIPOLE_DATA_DIR, else
+// ${XDG_CACHE_HOME:-$HOME/.cache}/epipole/data.
+std::filesystem::path default_data_directory();
+
+}  // namespace epipole::firmware

@@ -1,0 +1,61 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "epipole/calib/calibration.hpp"
+#include "epipole/firmware/board.hpp"
+#include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/frame_loop.hpp"
+#include "epipole/firmware/link.hpp"
+#include "epipole/firmware/pipeline.hpp"
+
+namespace epipole::firmware {
+
+// The calibration a board runs with: its simulated scene's, else its own; none when it names
+// none (then the images must already be rectified and nothing gets a depth).
+std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config);
+
+// Scheduling the board asks for (threads: affinity, SCHED_FIFO) for the calling thread, which
+// every thread created after it inherits. Returns what could not be done (e.g. no permission
+// for SCHED_FIFO), one line each; the firmware runs on without it.
+std::vector<std::string> apply_scheduling(const BoardConfig::Threads& threads);
+
+// The whole firmware for one board: its hardware, the vision pipeline, the serial link and the
+// frame loop, all made (and every buffer allocated) by the constructor, which throws Error
+// naming the file and the setting when something in the configuration cannot work.
+class Firmware {
+ public:
+  explicit Firmware(BoardConfig config);
+  // A simulated board with these images instead of its scene's files (tests).
+  Firmware(BoardConfig config, SceneImages sim_images);
+  ~Firmware();
+
+  RunSummary run(std::uint64_t max_frames, const std::atomic<bool>& stop);
+
+  const BoardConfig& config() const { return config_; }
+  Board& board() { return *board_; }
+  Pipeline& pipeline() { return *pipeline_; }
+  Link& link() { return *link_; }
+  FrameLoop& frame_loop() { return *loop_; }
+  const std::optional<calib::StereoCalibration>& calibration() const { return calibration_; }
+  // The frame loop's buffers: vision stages and link queue (the cameras' buffers are the
+  // drivers').
+  std::size_t working_set_bytes() const;
+
+ private:
+  void build(std::unique_ptr<Board> board);
+
+  BoardConfig config_;
+  std::optional<calib::StereoCalibration> calibration_;
+  std::unique_ptr<Board> board_;
+  std::unique_ptr<Pipeline> pipeline_;
+  std::unique_ptr<Link> link_;
+  std::unique_ptr<FrameLoop> loop_;
+};
+
+}  // namespace epipole::firmware

@@ -1,0 +1,88 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+
+#include "epipole/firmware/board.hpp"
+#include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/health_monitor.hpp"
+#include "epipole/firmware/link.hpp"
+#include "epipole/firmware/pipeline.hpp"
+#include "epipole/firmware/snapshot.hpp"
+#include "epipole/firmware/trigger_record.hpp"
+#include "epipole/hal/stereo_pairing.hpp"
+
+namespace epipole::firmware {
+
+// Sees every processed frame pair (the host tool's pictures, tests). Called on the frame loop's
+// thread before the pair's buffers go back to the cameras; whatever it keeps must be copied.
+class FrameObserver {
+ public:
+  virtual ~FrameObserver() = default;
+  virtual void on_frame(const FrameResult& result) = 0;
+  // Every message the firmware published (after it was queued for the link).
+  virtual void on_message(const protocol::Message&) {}
+};
+
+// What a run did, for its last log line and for tests.
+struct RunSummary {
+  std::uint64_t frames = 0;    // pairs processed
+  std::uint64_t stale = 0;     // pairs skipped because a newer one was already there
+  std::uint64_t timeouts = 0;  // waits for a pair that timed out
+  std::uint64_t health_messages = 0;
+  std::uint64_t commands = 0;
+  hal::PairingCounters pairing;
+  FaultCounts faults;
+  LinkCounters link;
+  StageMask stages = 0;  // the stages enabled at the end
+};
+
+// The firmware's frame loop: trigger -> capture pair -> rectify -> corners -> dense stereo ->
+// obstacles -> publish, with health once a second and the robot's commands applied between
+// pairs. Everything it needs is allocated by its constructor (and those of its parts): run()
+// never allocates.
+class FrameLoop {
+ public:
+  FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline, Link& link);
+  ~FrameLoop();
+  FrameLoop(const FrameLoop&) = delete;
+  FrameLoop& operator=(const FrameLoop&) = delete;
+
+  void set_observer(FrameObserver* observer) { observer_ = observer; }
+  // Called after each pair and each wait (the service watchdog).
+  void set_heartbeat(std::function<void()> heartbeat) { heartbeat_ = std::move(heartbeat); }
+
+  // Runs until `stop` is set or `max_frames` pairs (0: no limit) were processed. Returns within
+  // the cameras' timeout of `stop` being set, with the link drained of what it was writing.
+  RunSummary run(std::uint64_t max_frames, const std::atomic<bool>& stop);
+
+ private:
+  void start();
+  void finish();
+  void apply_commands();
+  void publish(const FrameResult& result, hal::Nanoseconds latency);
+  void send(const protocol::Message& message);
+  FaultCounts faults();
+
+  const BoardConfig& config_;
+  Board& board_;
+  Pipeline& pipeline_;
+  Link& link_;
+  hal::StereoGrabber grabber_;
+  std::unique_ptr<TriggerRecord> trigger_;
+  HealthMonitor health_;
+  SnapshotWriter snapshots_;
+  StageMask stages_;
+  FrameObserver* observer_ = nullptr;
+  std::function<void()> heartbeat_;
+  RunSummary summary_;
+  bool started_ = false;
+  bool snapshot_pending_ = false;
+  std::uint16_t snapshot_sequence_ = 0;
+  std::uint64_t rejected_commands_ = 0;
+};
+
+}  // namespace epipole::firmware

@@ -1,0 +1,57 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+
+#include "epipole/firmware/protocol/messages.hpp"
+#include "epipole/hal/clock.hpp"
+
+namespace epipole::firmware {
+
+// Per-stage processing times of one frame pair, nanoseconds (protocol::Stage order).
+using StageTimes = std::array<hal::Nanoseconds, protocol::kStageCount>;
+
+// The fault counters the health message reports, read from the board each second (totals
+// since start; the message carries them saturated to 16 bits).
+struct FaultCounts {
+  std::uint64_t dropped_pairs = 0;
+  std::uint64_t camera_timeouts = 0;
+  std::uint64_t camera_reopens = 0;
+  std::uint64_t trigger_losses = 0;
+  std::uint64_t link_reopens = 0;
+  std::uint64_t unpaired_frames = 0;
+  std::uint64_t bad_commands = 0;
+  std::uint64_t messages_dropped = 0;
+};
+
+// Collects what the health message says: frames per second, the latency from trigger edge to
+// publishing (50th and 99th percentile) and the mean time of each stage, over windows of one
+// second on the board's clock. Fixed memory: room for `max_frames_per_window` latencies is
+// allocated by the constructor (later frames of a window still count, but only the first ones
+// enter the percentiles); record() and due() never allocate.
+class HealthMonitor {
+ public:
+  explicit HealthMonitor(hal::Nanoseconds start, int max_frames_per_window = 1024,
+                         hal::Nanoseconds window = 1'000'000'000);
+
+  void record(hal::Nanoseconds latency, const StageTimes& stages);
+  // When a window has ended by `now`: its health message (and a new window starts).
+  std::optional<protocol::Health> due(hal::Nanoseconds now, const FaultCounts& faults);
+
+  std::uint64_t frames() const { return frames_; }
+
+ private:
+  hal::Nanoseconds start_;
+  hal::Nanoseconds window_;
+  hal::Nanoseconds window_start_;
+  std::unique_ptr<hal::Nanoseconds[]> latencies_;
+  int capacity_;
+  int count_ = 0;  // latencies stored this window
+  int window_frames_ = 0;
+  StageTimes stage_sums_{};
+  std::uint64_t frames_ = 0;
+};
+
+}  // namespace epipole::firmware

@@ -1,0 +1,110 @@
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <thread>
+
+#include "epipole/firmware/protocol/codec.hpp"
+#include "epipole/firmware/protocol/mavlink.hpp"
+#include "epipole/hal/clock.hpp"
+#include "epipole/hal/serial_port.hpp"
+
+namespace epipole::firmware {
+
+enum class LinkProtocol { epipole, mavlink };
+
+struct LinkConfig {
+  LinkProtocol protocol = LinkProtocol::epipole;
+  mavlink::Identity identity;
+  // The link's capacity: 8N1 moves baud / 10 bytes a second. Messages that would exceed it are
+  // dropped (and counted) rather than queued behind, so the robot always gets fresh data.
+  int baud = 115200;
+  hal::Nanoseconds burst = 250'000'000;  // the budget may be saved up for this long
+  std::size_t queue_bytes = 16 * 1024;   // encoded frames waiting for the port
+};
+
+struct LinkCounters {
+  std::uint64_t messages_sent = 0;     // written to the port completely
+  std::uint64_t messages_dropped = 0;  // over budget, queue full, or lost to a hang-up
+  std::uint64_t bytes_written = 0;
+  std::uint64_t commands = 0;         // valid commands received
+  std::uint64_t rejected_frames = 0;  // received frames the decoder rejected
+};
+
+// A command from the robot, with the sequence number its ack must carry.
+struct Command {
+  std::uint16_t sequence = 0;
+  protocol::Message message;
+};
+
+// The serial link: the frame loop publishes messages (encoded at once into a fixed queue), a
+// thread of the link's own writes them to the port whole, and reads and decodes what the robot
+// sends into a fixed queue of commands. Everything is allocated by the constructor; publish()
+// and next_command() never allocate and never block on the port. A null port (no link) drops
+// nothing and sends nothing.
+class Link {
+ public:
+  Link(hal::SerialPort* port, hal::Clock& clock, LinkConfig config);
+  ~Link();
+  Link(const Link&) = delete;
+  Link& operator=(const Link&) = delete;
+
+  void start();
+  // Stops the thread after the message being written (and, within `drain`, those queued).
+  void stop(hal::Nanoseconds drain = 500'000'000);
+
+  // Frame loop side. Each returns false when the message was dropped.
+  bool publish(const protocol::Message& message);
+  bool publish_heartbeat();
+  bool publish_obstacle_distance(const mavlink::ObstacleDistance& message);
+  bool next_command(Command& out);
+
+  LinkCounters counters() const;
+  LinkProtocol protocol() const { return config_.protocol; }
+  // Epipole frames carry their own sequence numbers; the number of the next one.
+  std::uint16_t next_sequence() const { return sequence_; }
+
+ private:
+  bool enqueue(std::span<const std::uint8_t> frame);
+  bool within_budget(std::size_t bytes);
+  void run();
+  bool write_front();
+  void read_commands(hal::Nanoseconds timeout);
+
+  hal::SerialPort* port_;
+  hal::Clock& clock_;
+  LinkConfig config_;
+  double bytes_per_ns_;
+  double tokens_;
+  hal::Nanoseconds last_refill_;
+  std::uint16_t sequence_ = 0;
+  std::uint8_t mavlink_sequence_ = 0;
+  std::array<std::uint8_t, protocol::kMaxFrameSize + mavlink::kMaxFrameSize> encode_buffer_{};
+
+  // The queue of encoded frames: a byte ring with each frame's length, guarded by mutex_.
+  mutable std::mutex mutex_;
+  std::unique_ptr<std::uint8_t[]> ring_;
+  std::size_t ring_head_ = 0, ring_size_ = 0;
+  static constexpr std::size_t kMaxFrames = 256;
+  std::array<std::uint16_t, kMaxFrames> lengths_{};
+  std::size_t frames_head_ = 0, frames_size_ = 0;
+  static constexpr std::size_t kMaxCommands = 16;
+  std::array<Command, kMaxCommands> commands_{};
+  std::size_t commands_head_ = 0, commands_size_ = 0;
+  LinkCounters counters_;
+
+  // The link thread's own state.
+  std::array<std::uint8_t, protocol::kMaxFrameSize + mavlink::kMaxFrameSize> write_buffer_{};
+  std::array<std::byte, 512> read_buffer_{};
+  protocol::FrameDecoder decoder_;
+  std::atomic<bool> stopping_{false};
+  std::atomic<hal::Nanoseconds> drain_deadline_{0};
+  std::thread thread_;
+};
+
+}  // namespace epipole::firmware

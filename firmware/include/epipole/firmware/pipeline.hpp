@@ -1,0 +1,75 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+
+#include "epipole/calib/calibration.hpp"
+#include "epipole/calib/triangulation.hpp"
+#include "epipole/core/image.hpp"
+#include "epipole/core/simd.hpp"
+#include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/health_monitor.hpp"
+#include "epipole/firmware/obstacles.hpp"
+#include "epipole/firmware/protocol/messages.hpp"
+#include "epipole/vision/corner.hpp"
+#include "epipole/vision/stereo.hpp"
+
+namespace epipole::firmware {
+
+// Which stages run, one bit per protocol::Stage (the set_stages command's mask).
+using StageMask = std::uint16_t;
+constexpr StageMask stage_bit(protocol::Stage s) {
+  return static_cast<StageMask>(1u << static_cast<unsigned>(s));
+}
+StageMask stage_mask(const BoardConfig::Stages& stages);
+
+// What the stages made of one frame pair. Views and spans point into the pipeline's own
+// buffers and stay valid until the next process() call.
+struct FrameResult {
+  std::uint32_t frame = 0;          // the trigger's sequence number
+  hal::Nanoseconds trigger_ns = 0;  // the trigger edge on the board's clock
+  StageMask stages = 0;             // the stages that ran
+  GrayView left_raw, right_raw;     // as captured
+  GrayView left, right;             // rectified (the raw images when rectification is off)
+  std::span<const vision::Corner> corners_left, corners_right;
+  ImageView<const std::int16_t> disparity;  // x16, vision::kInvalidDisparity; empty when off
+  int valid_disparity_permille = 0;
+  const protocol::Obstacles* obstacles = nullptr;  // null without disparity or calibration
+  StageTimes times{};
+};
+
+// The vision stages of the frame loop, built once from the board configuration (and the rig's
+// calibration, when there is one) with all their memory; process() never allocates.
+class Pipeline {
+ public:
+  // Throws Error when the calibration does not fit the board (size) or a stage's configuration
+  // is not valid.
+  Pipeline(const BoardConfig& board, const std::optional<calib::StereoCalibration>& calibration,
+           SimdPath path = best_simd_path());
+  ~Pipeline();
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+
+  // Runs the enabled stages (a stage whose inputs are off does not run) on a captured pair.
+  const FrameResult& process(GrayView left, GrayView right, std::uint32_t frame,
+                             hal::Nanoseconds trigger_ns, StageMask enabled);
+
+  // The stages this pipeline can run (rectification needs a calibration, and so on).
+  StageMask available() const { return available_; }
+  bool has_calibration() const { return triangulator_ != nullptr; }
+  const calib::Triangulator* triangulator() const { return triangulator_.get(); }
+  const ObstacleSectors* obstacle_sectors() const { return obstacles_.get(); }
+  std::size_t working_set_bytes() const;
+
+ private:
+  struct Stages;
+  std::unique_ptr<Stages> stages_;
+  std::unique_ptr<calib::Triangulator> triangulator_;
+  std::unique_ptr<ObstacleSectors> obstacles_;
+  StageMask available_ = 0;
+  FrameResult result_;
+};
+
+}  // namespace epipole::firmware

@@ -1,0 +1,490 @@
+#include "epipole/firmware/board_config.hpp"
+
+#include <glob.h>
+#include <cmath>
+#include <cstdlib>
+
+#include <algorithm>
+
+#include "epipole/core/error.hpp"
+#include "epipole/core/yaml_fields.hpp"
+
+namespace epipole::firmware {
+
+namespace fs = std::filesystem;
+
+const BoardConfig::SimScene* BoardConfig::sim_scene() const {
+  for (const SimScene& s : sim.scenes) {
+    if (s.name == sim.scene) return &s;
+  }
+  return nullptr;
+}
+
+fs::path default_data_directory() {
+  if (const char* dir = std::getenv("EPIPOLE_DATA_DIR"); dir != nullptr && *dir != '\0') {
+    return dir;
+  }
+  if (const char* cache = std::getenv("XDG_CACHE_HOME"); cache != nullptr && *cache != '\0') {
+    return fs::path(cache) / "epipole" / "data";
+  }
+  const char* home = std::getenv("HOME");
+  return fs::path(home != nullptr ? home : ".") / ".cache" / "epipole" / "data";
+}
+
+namespace {
+
+// Reads one board file: every key known, every value checked, errors naming file and key.
+class BoardReader {
+ public:
+  explicit BoardReader(const fs::path& file) : file_(file), f_(file.string()) {}
+
+  BoardConfig read(const std::string& text) {
+    const YAML::Node root = f_.parse(text);
+    f_.require_map(root, "");
+    f_.only_keys(root, "",
+                 {"version", "name", "cameras", "trigger", "pairing", "serial", "calibration",
+                  "stages", "corners", "stereo", "sparse", "detector", "obstacles", "threads",
+                  "memory_budget_mb", "snapshot_directory", "sim"});
+    const int version = f_.integer(f_.child(root, "", "version"), "version");
+    if (version < 1 || version > BoardConfig::kVersion) {
+      f_.fail("version", cat(version, " is not a board file version this firmware reads (1..",
+                             BoardConfig::kVersion, ")"));
+    }
+    BoardConfig c;
+    c.directory = file_.parent_path();
+    c.name = f_.text(f_.child(root, "", "name"), "name");
+    read_cameras(root, c);
+    read_trigger(root, c);
+    read_pairing(root, c);
+    read_serial(root, c);
+    if (const YAML::Node n = f_.optional_child(root, "", "calibration"); n.IsDefined()) {
+      c.calibration = path(n, "calibration");
+    }
+    read_stages(root, c);
+    read_corners(root, c);
+    read_stereo(root, c);
+    read_sparse(root, c);
+    read_detector(root, c);
+    read_obstacles(root, c);
+    read_threads(root, c);
+    if (const YAML::Node n = f_.optional_child(root, "", "memory_budget_mb"); n.IsDefined()) {
+      const double mb = f_.number(n, "memory_budget_mb");
+      if (mb <= 0 || mb > 65536) f_.fail("memory_budget_mb", "must be in (0, 65536]");
+      c.memory_budget_bytes = static_cast<std::size_t>(mb * 1024 * 1024);
+    }
+    if (const YAML::Node n = f_.optional_child(root, "", "snapshot_directory"); n.IsDefined()) {
+      c.snapshot_directory = path(n, "snapshot_directory");
+    }
+    read_sim(root, c);
+    return c;
+  }
+
+ private:
+  // A map at `key` of the top level, or an undefined node; unknown keys in it are errors.
+  YAML::Node section(const YAML::Node& root, const char* key,
+                     std::initializer_list<const char*> known) {
+    const YAML::Node n = f_.optional_child(root, "", key);
+    if (n.IsDefined()) f_.only_keys(n, key, known);
+    return n;
+  }
+  template <typename T, typename Read>
+  void optional(const YAML::Node& map, const std::string& path, const char* key, T& out,
+                Read read) {
+    if (!map.IsDefined()) return;
+    const YAML::Node n = f_.optional_child(map, path, key);
+    if (n.IsDefined()) out = read(n, yaml::Fields::join(path, key));
+  }
+  void integer(const YAML::Node& map, const std::string& path, const char* key, int& out, int lo,
+               int hi) {
+    optional(map, path, key, out, [&](const YAML::Node& n, const std::string& k) {
+      const int v = f_.integer(n, k);
+      if (v < lo || v > hi) f_.fail(k, cat(v, " is outside ", lo, "..", hi));
+      return v;
+    });
+  }
+  void number(const YAML::Node& map, const std::string& path, const char* key, double& out,
+              double lo, double hi) {
+    optional(map, path, key, out, [&](const YAML::Node& n, const std::string& k) {
+      const double v = f_.number(n, k);
+      if (v < lo || v > hi) f_.fail(k, cat(v, " is outside ", lo, "..", hi));
+      return v;
+    });
+  }
+  void boolean(const YAML::Node& map, const std::string& path, const char* key, bool& out) {
+    optional(map, path, key, out,
+             [&](const YAML::Node& n, const std::string& k) { return f_.boolean(n, k); });
+  }
+  void text(const YAML::Node& map, const std::string& path, const char* key, std::string& out) {
+    optional(map, path, key, out,
+             [&](const YAML::Node& n, const std::string& k) { return f_.text(n, k); });
+  }
+  // One of `names`; returns its index.
+  template <typename E>
+  void choice(const YAML::Node& map, const std::string& path, const char* key, E& out,
+              std::initializer_list<const char*> names) {
+    optional(map, path, key, out, [&](const YAML::Node& n, const std::string& k) {
+      const std::string v = f_.text(n, k);
+      int i = 0;
+      std::string list;
+      for (const char* name : names) {
+        if (v == name) return static_cast<E>(i);
+        list += (i++ == 0 ? "" : ", ") + std::string(name);
+      }
+      f_.fail(k, cat("'", v, "' is not one of ", list));
+    });
+  }
+
+  std::string expand(const std::string& value, const std::string& key) const {
+    std::string out;
+    for (std::size_t i = 0; i < value.size(); ++i) {
+      if (value.compare(i, 2, "${") != 0) {
+        out += value[i];
+        continue;
+      }
+      const std::size_t end = value.find('}', i);
+      if (end == std::string::npos) f_.fail(key, cat("'", value, "': unterminated ${"));
+      const std::string name = value.substr(i + 2, end - i - 2);
+      if (name == "EPIPOLE_DATA_DIR") {
+        out += default_data_directory().string();
+      } else if (const char* v = std::getenv(name.c_str()); v != nullptr) {
+        out += v;
+      } else {
+        f_.fail(key, cat("'", value, "': environment variable ", name, " is not set"));
+      }
+      i = end;
+    }
+    return out;
+  }
+  fs::path path(const YAML::Node& n, const std::string& key) const {
+    const std::string value = f_.text(n, key);
+    if (value.empty()) f_.fail(key, "is an empty path");
+    fs::path p = expand(value, key);
+    return p.is_absolute() ? p : file_.parent_path() / p;
+  }
+  // A file name, a glob pattern (matched in name order) or a sequence of them.
+  std::vector<fs::path> files(const YAML::Node& n, const std::string& key) const {
+    std::vector<fs::path> out;
+    const auto add = [&](const YAML::Node& item, const std::string& k) {
+      const fs::path p = path(item, k);
+      if (p.string().find_first_of("*?[") == std::string::npos) {
+        out.push_back(p);
+        return;
+      }
+      glob_t g{};
+      const int rc = ::glob(p.c_str(), 0, nullptr, &g);
+      for (std::size_t i = 0; rc == 0 && i < g.gl_pathc; ++i) out.emplace_back(g.gl_pathv[i]);
+      globfree(&g);
+      if (rc != 0) f_.fail(k, cat("no file matches '", p.string(), "'"));
+    };
+    if (n.IsSequence()) {
+      for (std::size_t i = 0; i < n.size(); ++i) add(n[i], cat(key, "[", i, "]"));
+    } else {
+      add(n, key);
+    }
+    return out;
+  }
+
+  void read_camera(const YAML::Node& cams, const char* side, hal::CameraConfig& camera) {
+    const std::string p = cat("cameras.", side);
+    const YAML::Node n = f_.child(cams, "cameras", side);
+    if (n.IsScalar()) {
+      camera.device = f_.text(n, p);
+      return;
+    }
+    f_.only_keys(n, p, {"device"});
+    camera.device = f_.text(f_.child(n, p, "device"), p + ".device");
+  }
+  void read_cameras(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n = f_.child(root, "", "cameras");
+    f_.only_keys(n, "cameras",
+                 {"backend", "left", "right", "width", "height", "format", "fps", "exposure_us",
+                  "gain", "trigger", "buffers", "timeout_ms"});
+    hal::CameraConfig common;
+    common.width = f_.integer(f_.child(n, "cameras", "width"), "cameras.width");
+    common.height = f_.integer(f_.child(n, "cameras", "height"), "cameras.height");
+    text(n, "cameras", "backend", c.cameras.backend);
+    optional(n, "cameras", "format", common.format, [&](const YAML::Node& v, const std::string& k) {
+      const std::string s = f_.text(v, k);
+      const auto format = hal::parse_pixel_format(s);
+      if (!format) f_.fail(k, cat("'", s, "' is not one of grey, y10, y16, yuyv, nv12, yu12"));
+      return *format;
+    });
+    number(n, "cameras", "fps", common.fps, 0.001, 1000);
+    double exposure_us = 0;
+    number(n, "cameras", "exposure_us", exposure_us, 0, 10e6);
+    common.exposure = static_cast<hal::Nanoseconds>(exposure_us * 1000);
+    number(n, "cameras", "gain", common.gain, 0, 1000);
+    choice(n, "cameras", "trigger", common.trigger, {"free_running", "external"});
+    integer(n, "cameras", "buffers", common.buffer_count, 2, 32);
+    int timeout_ms = 200;
+    integer(n, "cameras", "timeout_ms", timeout_ms, 1, 60'000);
+    c.cameras.timeout = static_cast<hal::Nanoseconds>(timeout_ms) * 1'000'000;
+    c.cameras.left = common;
+    c.cameras.right = common;
+    read_camera(n, "left", c.cameras.left);
+    read_camera(n, "right", c.cameras.right);
+    for (const hal::CameraConfig* cam : {&c.cameras.left, &c.cameras.right}) {
+      try {
+        hal::validate(*cam);
+      } catch (const Error& e) {
+        f_.fail("cameras", e.what());
+      }
+    }
+  }
+
+  void read_trigger(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n =
+        section(root, "trigger", {"backend", "line", "chip", "role", "rate_hz", "pulse_width_us"});
+    text(n, "trigger", "backend", c.trigger.backend);
+    hal::TriggerConfig& t = c.trigger.line;
+    t.line = "sim";
+    text(n, "trigger", "line", t.line);
+    text(n, "trigger", "chip", t.chip);
+    choice(n, "trigger", "role", t.role, {"master", "slave"});
+    number(n, "trigger", "rate_hz", t.rate_hz, 0.001, 1000);
+    double width_us = 1000;
+    number(n, "trigger", "pulse_width_us", width_us, 1, 1e6);
+    t.pulse_width = static_cast<hal::Nanoseconds>(width_us * 1000);
+    if (c.trigger.backend != "none") {
+      try {
+        hal::validate(t);
+      } catch (const Error& e) {
+        f_.fail("trigger", e.what());
+      }
+      c.pairing.trigger_period = static_cast<hal::Nanoseconds>(std::llround(1e9 / t.rate_hz));
+    }
+  }
+
+  void read_pairing(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n = section(root, "pairing", {"tolerance_us"});
+    double tolerance_us = 2000;
+    number(n, "pairing", "tolerance_us", tolerance_us, 1, 1e6);
+    c.pairing.tolerance = static_cast<hal::Nanoseconds>(tolerance_us * 1000);
+  }
+
+  void read_serial(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n =
+        section(root, "serial", {"backend", "device", "baud", "protocol", "mavlink"});
+    text(n, "serial", "backend", c.serial.backend);
+    text(n, "serial", "device", c.serial.port.device);
+    integer(n, "serial", "baud", c.serial.port.baud, 50, 4'000'000);
+    choice(n, "serial", "protocol", c.serial.protocol, {"epipole", "mavlink"});
+    if (n.IsDefined()) {
+      const YAML::Node m = f_.optional_child(n, "serial", "mavlink");
+      if (m.IsDefined()) {
+        f_.only_keys(m, "serial.mavlink", {"system_id", "component_id"});
+        int system = c.serial.mavlink_system_id;
+        int component = c.serial.mavlink_component_id;
+        integer(m, "serial.mavlink", "system_id", system, 1, 255);
+        integer(m, "serial.mavlink", "component_id", component, 1, 255);
+        c.serial.mavlink_system_id = static_cast<std::uint8_t>(system);
+        c.serial.mavlink_component_id = static_cast<std::uint8_t>(component);
+      }
+    }
+    if (c.serial.backend == "termios" && c.serial.port.device.empty()) {
+      f_.fail("serial.device", "a termios serial port needs a device");
+    }
+    if (c.serial.backend == "termios" && !hal::is_supported_baud(c.serial.port.baud)) {
+      f_.fail("serial.baud", cat(c.serial.port.baud, " is not a baud rate termios supports"));
+    }
+  }
+
+  void read_stages(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n =
+        section(root, "stages", {"rectify", "corners", "disparity", "sparse", "detect"});
+    boolean(n, "stages", "rectify", c.stages.rectify);
+    boolean(n, "stages", "corners", c.stages.corners);
+    boolean(n, "stages", "disparity", c.stages.disparity);
+    boolean(n, "stages", "sparse", c.stages.sparse);
+    boolean(n, "stages", "detect", c.stages.detect);
+  }
+
+  void read_corners(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n = section(root, "corners", {"detector", "threshold", "max_corners", "grid"});
+    choice(n, "corners", "detector", c.corners.detector, {"fast", "harris"});
+    integer(n, "corners", "threshold", c.corners.threshold, 0, 255);
+    integer(n, "corners", "max_corners", c.corners.max_corners, 1, 100'000);
+    integer(n, "corners", "grid", c.corners.grid, 1, 64);
+  }
+
+  void read_stereo(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n = section(root, "stereo",
+                                 {"method", "max_disparity", "p1", "p2", "block_size", "uniqueness",
+                                  "lr_max_diff", "speckle_size", "speckle_range"});
+    vision::StereoConfig& s = c.stereo;
+    choice(n, "stereo", "method", s.method, {"sgm", "bm"});
+    integer(n, "stereo", "max_disparity", s.max_disparity, 16, 256);
+    if (s.max_disparity % 16 != 0) {
+      f_.fail("stereo.max_disparity", cat(s.max_disparity, " is not a multiple of 16"));
+    }
+    integer(n, "stereo", "p1", s.p1, 1, 1000);
+    integer(n, "stereo", "p2", s.p2, 1, 4000);
+    if (s.p2 < s.p1) f_.fail("stereo.p2", cat(s.p2, " is smaller than p1 ", s.p1));
+    integer(n, "stereo", "block_size", s.block_size, 3, 21);
+    if (s.block_size % 2 == 0) f_.fail("stereo.block_size", cat(s.block_size, " is not odd"));
+    integer(n, "stereo", "uniqueness", s.uniqueness, 0, 99);
+    integer(n, "stereo", "lr_max_diff", s.lr_max_diff, -1, 256);
+    integer(n, "stereo", "speckle_size", s.speckle_size, 0, 1'000'000);
+    integer(n, "stereo", "speckle_range", s.speckle_range, 0, 256);
+  }
+
+  void read_sparse(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n = section(root, "sparse", {"max_points", "row_tolerance", "ratio"});
+    integer(n, "sparse", "max_points", c.sparse.max_points, 1, 48);
+    integer(n, "sparse", "row_tolerance", c.sparse.row_tolerance, 0, 8);
+    number(n, "sparse", "ratio", c.sparse.ratio, 0.1, 1.0);
+  }
+
+  void read_detector(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n = section(
+        root, "detector", {"cascade", "scale_factor", "min_neighbors", "min_size", "max_size"});
+    if (n.IsDefined()) {
+      if (const YAML::Node p = f_.optional_child(n, "detector", "cascade"); p.IsDefined()) {
+        c.detector.cascade = path(p, "detector.cascade");
+      }
+    }
+    number(n, "detector", "scale_factor", c.detector.scale_factor, 1.0001, 4.0);
+    integer(n, "detector", "min_neighbors", c.detector.min_neighbors, 0, 100);
+    integer(n, "detector", "min_size", c.detector.min_size, 1, 16384);
+    integer(n, "detector", "max_size", c.detector.max_size, 0, 16384);
+  }
+
+  void read_obstacles(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n =
+        section(root, "obstacles", {"sectors", "band", "min_depth_m", "max_depth_m"});
+    BoardConfig::Obstacles& o = c.obstacles;
+    integer(n, "obstacles", "sectors", o.sectors, 1, 72);
+    if (n.IsDefined()) {
+      if (const YAML::Node b = f_.optional_child(n, "obstacles", "band"); b.IsDefined()) {
+        const std::vector<double> band = f_.numbers(b, "obstacles.band");
+        if (band.size() != 2 || band[0] < 0 || band[1] > 1 || band[0] >= band[1]) {
+          f_.fail("obstacles.band", "expected [top, bottom] with 0 <= top < bottom <= 1");
+        }
+        o.band_top = band[0];
+        o.band_bottom = band[1];
+      }
+    }
+    number(n, "obstacles", "min_depth_m", o.min_depth_m, 0.0, 1000.0);
+    number(n, "obstacles", "max_depth_m", o.max_depth_m, 0.001, 655.0);
+    if (o.max_depth_m <= o.min_depth_m) {
+      f_.fail("obstacles.max_depth_m", "must be greater than min_depth_m");
+    }
+  }
+
+  void read_threads(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n =
+        section(root, "threads", {"count", "affinity", "realtime_priority", "lock_memory"});
+    integer(n, "threads", "count", c.threads.count, 1, 64);
+    if (n.IsDefined()) {
+      if (const YAML::Node a = f_.optional_child(n, "threads", "affinity"); a.IsDefined()) {
+        for (const double cpu : f_.numbers(a, "threads.affinity")) {
+          if (cpu < 0 || cpu > 1023 || cpu != std::floor(cpu)) {
+            f_.fail("threads.affinity", cat(cpu, " is not a CPU number (0..1023)"));
+          }
+          c.threads.affinity.push_back(static_cast<int>(cpu));
+        }
+      }
+    }
+    integer(n, "threads", "realtime_priority", c.threads.realtime_priority, 0, 99);
+    boolean(n, "threads", "lock_memory", c.threads.lock_memory);
+  }
+
+  void read_sim(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n = section(
+        root, "sim", {"scene", "scenes", "charge_compute", "drop_rate", "corrupt_rate", "seed"});
+    if (!n.IsDefined()) return;
+    text(n, "sim", "scene", c.sim.scene);
+    boolean(n, "sim", "charge_compute", c.sim.charge_compute);
+    number(n, "sim", "drop_rate", c.sim.drop_rate, 0, 1);
+    number(n, "sim", "corrupt_rate", c.sim.corrupt_rate, 0, 1);
+    int seed = 1;
+    integer(n, "sim", "seed", seed, 0, 1'000'000'000);
+    c.sim.seed = static_cast<std::uint64_t>(seed);
+    const YAML::Node scenes = f_.child(n, "sim", "scenes");
+    f_.require_map(scenes, "sim.scenes");
+    for (const auto& entry : scenes) {
+      BoardConfig::SimScene s;
+      s.name = entry.first.Scalar();
+      const std::string p = "sim.scenes." + s.name;
+      const YAML::Node m = entry.second;
+      f_.only_keys(m, p, {"left", "right", "synthesize", "disparity", "calibration"});
+      if (const YAML::Node v = f_.optional_child(m, p, "synthesize"); v.IsDefined()) {
+        s.synthesize = path(v, p + ".synthesize");
+        s.synthesize_disparity = f_.integer(f_.child(m, p, "disparity"), p + ".disparity");
+        if (s.synthesize_disparity < 0 || s.synthesize_disparity > 255) {
+          f_.fail(p + ".disparity", "must be in 0..255");
+        }
+      } else {
+        s.left = files(f_.child(m, p, "left"), p + ".left");
+        s.right = files(f_.child(m, p, "right"), p + ".right");
+        if (s.left.size() != s.right.size()) {
+          f_.fail(p, cat(s.left.size(), " left images but ", s.right.size(), " right images"));
+        }
+      }
+      if (const YAML::Node v = f_.optional_child(m, p, "calibration"); v.IsDefined()) {
+        s.calibration = path(v, p + ".calibration");
+      }
+      c.sim.scenes.push_back(std::move(s));
+    }
+    if (c.sim.scene.empty() && !c.sim.scenes.empty()) c.sim.scene = c.sim.scenes.front().name;
+  }
+
+  fs::path file_;
+  yaml::Fields f_;
+};
+
+}  // namespace
+
+void validate(const BoardConfig& c, const std::string& file) {
+  const auto fail = [&](const std::string& key, const std::string& message) {
+    throw Error(cat(file, ": ", key, ": ", message));
+  };
+  if (c.cameras.left.width != c.cameras.right.width ||
+      c.cameras.left.height != c.cameras.right.height) {
+    fail("cameras", "left and right cameras differ in size");
+  }
+  const std::string backends[] = {"sim", "v4l2", "libcamera"};
+  if (std::find(std::begin(backends), std::end(backends), c.cameras.backend) ==
+      std::end(backends)) {
+    fail("cameras.backend", cat("'", c.cameras.backend, "' is not one of sim, v4l2, libcamera"));
+  }
+  if (c.trigger.backend != "none" && c.pairing.trigger_period > 0 &&
+      2 * c.pairing.tolerance >= c.pairing.trigger_period) {
+    fail("pairing.tolerance_us",
+         cat(c.pairing.tolerance / 1000, " us is not below half the trigger period (",
+             c.pairing.trigger_period / 1000, " us): frames of neighbouring triggers could pair"));
+  }
+  if (c.stages.disparity && c.stereo.max_disparity >= c.width()) {
+    fail("stereo.max_disparity",
+         cat(c.stereo.max_disparity, " is not smaller than the width ", c.width()));
+  }
+  if (c.stages.detect && c.detector.max_size != 0 && c.detector.max_size < c.detector.min_size) {
+    fail("detector.max_size", "is smaller than min_size");
+  }
+  if (c.threads.realtime_priority > 0 && c.threads.realtime_priority > 99) {
+    fail("threads.realtime_priority", "must be in 1..99");
+  }
+  if (c.cameras.backend == "sim") {
+    if (c.sim.scenes.empty()) fail("sim.scenes", "the simulated cameras need at least one scene");
+    if (c.sim_scene() == nullptr) {
+      std::string names;
+      for (const auto& s : c.sim.scenes) names += (names.empty() ? "" : ", ") + s.name;
+      fail("sim.scene", cat("'", c.sim.scene, "' is not a scene of this board (", names, ")"));
+    }
+  }
+}
+
+BoardConfig parse_board_config(const std::string& yaml_text, const fs::path& file) {
+  BoardConfig c = BoardReader(file).read(yaml_text);
+  validate(c, file.string());
+  return c;
+}
+
+BoardConfig load_board_config(const fs::path& path) {
+  fs::path file = path;
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) file = path / "board.yaml";
+  return parse_board_config(yaml::read_file(file), file);
+}
+
+}  // namespace epipole::firmware

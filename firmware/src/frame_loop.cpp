@@ -1,0 +1,243 @@
+#include "epipole/firmware/frame_loop.hpp"
+#include "steady_time.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/protocol/mavlink.hpp"
+
+namespace epipole::firmware {
+
+using detail::steady_now;
+
+using protocol::Stage;
+
+namespace {
+
+template <typename T>
+T saturate(std::uint64_t v) {
+  return static_cast<T>(std::min<std::uint64_t>(v, std::numeric_limits<T>::max()));
+}
+
+constexpr StageMask kAlwaysOn = stage_bit(Stage::capture) | stage_bit(Stage::publish);
+constexpr StageMask kKnownStages = kAlwaysOn | stage_bit(Stage::rectify) |
+                                   stage_bit(Stage::corners) | stage_bit(Stage::disparity) |
+                                   stage_bit(Stage::sparse) | stage_bit(Stage::detect);
+
+}  // namespace
+
+FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline, Link& link)
+    : config_(config),
+      board_(board),
+      pipeline_(pipeline),
+      link_(link),
+      grabber_(board.left(), board.right(), board.clock(), config.pairing),
+      health_(board.clock().now()),
+      snapshots_(config.snapshot_directory, config.width(), config.height()),
+      stages_(stage_mask(config.stages)) {
+  if (board.trigger() != nullptr) {
+    const auto period = static_cast<hal::Nanoseconds>(1e9 / config.trigger.line.rate_hz);
+    trigger_ = std::make_unique<TriggerRecord>(*board.trigger(), board.sim() == nullptr, period);
+  }
+}
+
+FrameLoop::~FrameLoop() {
+  finish();
+}
+
+void FrameLoop::start() {
+  if (started_) return;
+  board_.left().start();
+  board_.right().start();
+  if (trigger_) trigger_->start();
+  link_.start();
+  if (link_.protocol() == LinkProtocol::mavlink) link_.publish_heartbeat();
+  started_ = true;
+}
+
+void FrameLoop::finish() {
+  if (!started_) return;
+  started_ = false;
+  if (trigger_) trigger_->stop();
+  board_.left().stop();
+  board_.right().stop();
+  link_.stop();
+  snapshots_.flush();
+}
+
+FaultCounts FrameLoop::faults() {
+  FaultCounts f;
+  const hal::PairingCounters& p = grabber_.pairer().counters();
+  const auto& l = board_.left_recovery().counters();
+  const auto& r = board_.right_recovery().counters();
+  f.unpaired_frames = p.unpaired_left + p.unpaired_right;
+  f.dropped_pairs =
+      summary_.stale + std::max(p.unpaired_left + p.mismatched_left + p.out_of_order_left,
+                                p.unpaired_right + p.mismatched_right + p.out_of_order_right);
+  f.camera_timeouts = l.timeouts + r.timeouts;
+  f.camera_reopens = l.reopens + r.reopens;
+  if (trigger_) f.trigger_losses = trigger_->losses();
+  if (const hal::RecoveringSerialPort* s = board_.serial_recovery()) {
+    f.link_reopens = s->counters().reopens;
+  }
+  const LinkCounters link = link_.counters();
+  f.bad_commands = link.rejected_frames + rejected_commands_;
+  f.messages_dropped = link.messages_dropped;
+  return f;
+}
+
+void FrameLoop::send(const protocol::Message& message) {
+  link_.publish(message);
+  if (observer_ != nullptr) observer_->on_message(message);
+}
+
+void FrameLoop::apply_commands() {
+  Command c;
+  while (link_.next_command(c)) {
+    ++summary_.commands;
+    protocol::CommandAck ack;
+    ack.command_sequence = c.sequence;
+    ack.status = protocol::AckStatus::unsupported;
+    if (const auto* s = std::get_if<protocol::SetStages>(&c.message)) {
+      if ((s->enabled_mask & ~kKnownStages) == 0) {
+        stages_ = static_cast<StageMask>(s->enabled_mask | kAlwaysOn);
+        ack.status = protocol::AckStatus::ok;
+      } else {
+        ack.status = protocol::AckStatus::rejected;
+      }
+    } else if (std::holds_alternative<protocol::Snapshot>(c.message)) {
+      if (snapshots_.enabled() && !snapshot_pending_) {
+        snapshot_pending_ = true;
+        snapshot_sequence_ = c.sequence;
+        continue;  // acknowledged with the next pair, when it is taken
+      }
+      ack.status = protocol::AckStatus::rejected;
+    } else if (std::holds_alternative<protocol::SetTriggerRate>(c.message) ||
+               std::holds_alternative<protocol::SetExposure>(c.message)) {
+      ack.status = protocol::AckStatus::unsupported;
+    } else {
+      // A message the firmware sends, not a command.
+      ack.status = protocol::AckStatus::rejected;
+    }
+    if (ack.status == protocol::AckStatus::rejected) ++rejected_commands_;
+    send(ack);
+  }
+}
+
+void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency) {
+  if (link_.protocol() == LinkProtocol::mavlink) {
+    if (r.obstacles != nullptr) {
+      const auto cm = [](double m) { return static_cast<std::uint16_t>(m * 100 + 0.5); };
+      link_.publish_obstacle_distance(mavlink::to_obstacle_distance(
+          *r.obstacles, static_cast<std::uint64_t>(r.trigger_ns / 1000),
+          cm(config_.obstacles.min_depth_m), cm(config_.obstacles.max_depth_m)));
+    }
+    return;
+  }
+  protocol::FrameSummary s;
+  s.frame = r.frame;
+  s.trigger_ns = static_cast<std::uint64_t>(std::max<hal::Nanoseconds>(r.trigger_ns, 0));
+  s.latency_us = saturate<std::uint32_t>(
+      static_cast<std::uint64_t>(std::max<hal::Nanoseconds>(latency, 0)) / 1000);
+  s.corners_left = saturate<std::uint16_t>(r.corners_left.size());
+  s.corners_right = saturate<std::uint16_t>(r.corners_right.size());
+  s.valid_disparity_permille = static_cast<std::uint16_t>(r.valid_disparity_permille);
+  send(s);
+  if (r.obstacles != nullptr) send(*r.obstacles);
+}
+
+RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& stop) {
+  start();
+  hal::Clock& clock = board_.clock();
+  hal::VirtualClock* charge =
+      board_.sim() != nullptr && config_.sim.charge_compute ? &board_.sim()->clock : nullptr;
+  bool left_lost = false;
+  bool right_lost = false;
+  const auto note_health = [&] {
+    if (auto h = health_.due(clock.now(), faults())) {
+      ++summary_.health_messages;
+      if (link_.protocol() == LinkProtocol::mavlink) {
+        link_.publish_heartbeat();
+      } else {
+        send(*h);
+      }
+    }
+    // Say when a camera goes and comes back (the counters are in the health message).
+    for (auto [camera, lost] : {std::pair{&board_.left_recovery(), &left_lost},
+                                std::pair{&board_.right_recovery(), &right_lost}}) {
+      if (camera->recovering() != *lost) {
+        *lost = camera->recovering();
+        std::fprintf(stderr, "epipole-fw: camera %s %s%s%s\n", camera->name().c_str(),
+                     *lost ? "lost, reopening" : "recovered", *lost ? ": " : "",
+                     *lost ? camera->last_error().c_str() : "");
+      }
+    }
+    if (heartbeat_) heartbeat_();
+  };
+
+  while (!stop.load(std::memory_order_relaxed) &&
+         (max_frames == 0 || summary_.frames < max_frames)) {
+    apply_commands();
+    hal::PairResult got = grabber_.next(config_.cameras.timeout);
+    if (got.status == hal::PairStatus::timeout) {
+      ++summary_.timeouts;
+      note_health();
+      continue;
+    }
+    if (got.status == hal::PairStatus::device_lost) {
+      grabber_.pairer().reset(got.lost_side);
+      note_health();
+      continue;
+    }
+    // The freshest pair: older ones that waited behind it are skipped.
+    for (;;) {
+      hal::PairResult newer = grabber_.next(0);
+      if (newer.status != hal::PairStatus::ok) break;
+      grabber_.release(got.pair);
+      got = newer;
+      ++summary_.stale;
+    }
+    const hal::StereoPair& pair = got.pair;
+    hal::Nanoseconds trigger_ns = pair.left.timestamp;
+    if (trigger_) {
+      if (board_.sim() != nullptr) trigger_->poll();
+      if (const auto edge = trigger_->find(pair.left.sequence)) trigger_ns = edge->timestamp;
+    }
+    const hal::Nanoseconds captured = clock.now() - trigger_ns;
+    const hal::Nanoseconds t0 = steady_now();
+    const FrameResult& r =
+        pipeline_.process(pair.left.gray, pair.right.gray, pair.left.sequence, trigger_ns, stages_);
+    if (charge != nullptr) charge->advance(steady_now() - t0);
+    const hal::Nanoseconds t1 = steady_now();
+    publish(r, clock.now() - trigger_ns);
+    const hal::Nanoseconds t2 = steady_now();
+    if (charge != nullptr) charge->advance(t2 - t1);
+    const hal::Nanoseconds latency = clock.now() - trigger_ns;
+    StageTimes times = r.times;
+    times[static_cast<std::size_t>(Stage::capture)] = captured;
+    times[static_cast<std::size_t>(Stage::publish)] = t2 - t1;
+    times[static_cast<std::size_t>(Stage::total)] = t2 - t0;
+    health_.record(latency, times);
+    if (snapshot_pending_) {
+      protocol::CommandAck ack;
+      ack.command_sequence = snapshot_sequence_;
+      ack.status = snapshots_.take(r) ? protocol::AckStatus::ok : protocol::AckStatus::rejected;
+      snapshot_pending_ = false;
+      send(ack);
+    }
+    if (observer_ != nullptr) observer_->on_frame(r);
+    grabber_.release(pair);
+    ++summary_.frames;
+    note_health();
+  }
+  finish();
+  summary_.pairing = grabber_.pairer().counters();
+  summary_.faults = faults();
+  summary_.link = link_.counters();
+  summary_.stages = stages_;
+  return summary_;
+}
+
+}  // namespace epipole::firmware

@@ -1,0 +1,77 @@
+#include "epipole/firmware/health_monitor.hpp"
+
+#include <algorithm>
+#include <limits>
+
+#include "epipole/core/error.hpp"
+
+namespace epipole::firmware {
+
+namespace {
+template <typename T>
+T saturate(std::uint64_t value) {
+  return static_cast<T>(std::min<std::uint64_t>(value, std::numeric_limits<T>::max()));
+}
+std::uint32_t to_us(hal::Nanoseconds ns) {
+  return saturate<std::uint32_t>(static_cast<std::uint64_t>(std::max<hal::Nanoseconds>(ns, 0)) /
+                                 1000);
+}
+}  // namespace
+
+HealthMonitor::HealthMonitor(hal::Nanoseconds start, int max_frames_per_window,
+                             hal::Nanoseconds window)
+    : start_(start), window_(window), window_start_(start), capacity_(max_frames_per_window) {
+  require(max_frames_per_window >= 1, "health: room for at least one frame per window is needed");
+  require(window > 0, "health: the window must be positive");
+  latencies_ = std::make_unique<hal::Nanoseconds[]>(static_cast<std::size_t>(capacity_));
+}
+
+void HealthMonitor::record(hal::Nanoseconds latency, const StageTimes& stages) {
+  if (count_ < capacity_) latencies_[static_cast<std::size_t>(count_++)] = latency;
+  for (std::size_t i = 0; i < stages.size(); ++i) stage_sums_[i] += stages[i];
+  ++window_frames_;
+  ++frames_;
+}
+
+std::optional<protocol::Health> HealthMonitor::due(hal::Nanoseconds now, const FaultCounts& f) {
+  if (now - window_start_ < window_) return std::nullopt;
+  protocol::Health h;
+  h.uptime_ms = saturate<std::uint32_t>(static_cast<std::uint64_t>(now - start_) / 1'000'000);
+  h.frames = saturate<std::uint32_t>(frames_);
+  h.dropped = saturate<std::uint32_t>(f.dropped_pairs);
+  const double seconds = static_cast<double>(now - window_start_) * 1e-9;
+  h.fps_centi = saturate<std::uint16_t>(
+      static_cast<std::uint64_t>(static_cast<double>(window_frames_) * 100.0 / seconds + 0.5));
+  if (count_ > 0) {
+    // Nearest-rank percentiles of the window's latencies.
+    hal::Nanoseconds* first = latencies_.get();
+    const auto rank = [&](int percent) {
+      const int k = std::max(0, (count_ * percent + 99) / 100 - 1);
+      std::nth_element(first, first + k, first + count_);
+      return first[k];
+    };
+    h.latency_p50_us = to_us(rank(50));
+    h.latency_p99_us = to_us(rank(99));
+  }
+  if (window_frames_ > 0) {
+    for (std::size_t i = 0; i < stage_sums_.size(); ++i) {
+      h.stage_us[i] = to_us(stage_sums_[i] / window_frames_);
+    }
+  }
+  h.camera_timeouts = saturate<std::uint16_t>(f.camera_timeouts);
+  h.camera_reopens = saturate<std::uint16_t>(f.camera_reopens);
+  h.trigger_losses = saturate<std::uint16_t>(f.trigger_losses);
+  h.link_reopens = saturate<std::uint16_t>(f.link_reopens);
+  h.unpaired_frames = saturate<std::uint16_t>(f.unpaired_frames);
+  h.bad_commands = saturate<std::uint16_t>(f.bad_commands);
+  h.messages_dropped = saturate<std::uint16_t>(f.messages_dropped);
+  // The next window starts where this one should have ended, so windows do not drift; after a
+  // long gap (a stall) it starts now.
+  window_start_ = now - window_start_ >= 2 * window_ ? now : window_start_ + window_;
+  count_ = 0;
+  window_frames_ = 0;
+  stage_sums_.fill(0);
+  return h;
+}
+
+}  // namespace epipole::firmware

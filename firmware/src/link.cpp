@@ -1,0 +1,201 @@
+#include "epipole/firmware/link.hpp"
+#include "steady_time.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+
+#include "epipole/core/error.hpp"
+
+namespace epipole::firmware {
+
+using detail::steady_now;
+
+namespace {
+constexpr hal::Nanoseconds kWriteTimeout = 100'000'000;
+constexpr hal::Nanoseconds kIdlePoll = 5'000'000;
+std::uint64_t rejected(const protocol::DecoderStats& s) {
+  return s.bad_cobs + s.too_long + s.bad_crc + s.bad_version + s.unknown_type + s.bad_body;
+}
+}  // namespace
+
+Link::Link(hal::SerialPort* port, hal::Clock& clock, LinkConfig config)
+    : port_(port),
+      clock_(clock),
+      config_(config),
+      bytes_per_ns_(static_cast<double>(config.baud) / 10.0 * 1e-9),
+      tokens_(bytes_per_ns_ * static_cast<double>(config.burst)),
+      last_refill_(clock.now()) {
+  require(config.baud > 0, "serial link: baud rate ", config.baud, " is not positive");
+  require(config.queue_bytes >= 2 * sizeof(encode_buffer_), "serial link: a queue of ",
+          config.queue_bytes, " bytes cannot hold two frames");
+  require(config.burst > 0, "serial link: the burst must be positive");
+  ring_ = std::make_unique<std::uint8_t[]>(config.queue_bytes);
+}
+
+Link::~Link() {
+  stop(0);
+}
+
+void Link::start() {
+  if (port_ == nullptr || thread_.joinable()) return;
+  stopping_ = false;
+  thread_ = std::thread([this] { run(); });
+}
+
+void Link::stop(hal::Nanoseconds drain) {
+  if (!thread_.joinable()) return;
+  drain_deadline_ = steady_now() + drain;
+  stopping_ = true;
+  thread_.join();
+}
+
+bool Link::within_budget(std::size_t bytes) {
+  const hal::Nanoseconds now = clock_.now();
+  const double cap = bytes_per_ns_ * static_cast<double>(config_.burst);
+  tokens_ = std::min(cap, tokens_ + bytes_per_ns_ * static_cast<double>(now - last_refill_));
+  last_refill_ = now;
+  if (static_cast<double>(bytes) > tokens_) return false;
+  tokens_ -= static_cast<double>(bytes);
+  return true;
+}
+
+bool Link::enqueue(std::span<const std::uint8_t> frame) {
+  if (port_ == nullptr) return true;
+  const std::lock_guard lock(mutex_);
+  if (!within_budget(frame.size()) || frames_size_ == kMaxFrames ||
+      config_.queue_bytes - ring_size_ < frame.size()) {
+    ++counters_.messages_dropped;
+    return false;
+  }
+  std::size_t at = (ring_head_ + ring_size_) % config_.queue_bytes;
+  for (const std::uint8_t b : frame) {
+    ring_[at] = b;
+    at = at + 1 == config_.queue_bytes ? 0 : at + 1;
+  }
+  ring_size_ += frame.size();
+  lengths_[(frames_head_ + frames_size_) % kMaxFrames] = static_cast<std::uint16_t>(frame.size());
+  ++frames_size_;
+  return true;
+}
+
+bool Link::publish(const protocol::Message& message) {
+  if (config_.protocol != LinkProtocol::epipole) return false;
+  const std::size_t n = protocol::encode_frame(message, sequence_, encode_buffer_);
+  ++sequence_;
+  return enqueue({encode_buffer_.data(), n});
+}
+
+bool Link::publish_heartbeat() {
+  if (config_.protocol != LinkProtocol::mavlink) return false;
+  const std::size_t n =
+      mavlink::encode_heartbeat(config_.identity, mavlink_sequence_++, encode_buffer_);
+  return enqueue({encode_buffer_.data(), n});
+}
+
+bool Link::publish_obstacle_distance(const mavlink::ObstacleDistance& message) {
+  if (config_.protocol != LinkProtocol::mavlink) return false;
+  const std::size_t n = mavlink::encode_obstacle_distance(message, config_.identity,
+                                                          mavlink_sequence_++, encode_buffer_);
+  return enqueue({encode_buffer_.data(), n});
+}
+
+bool Link::next_command(Command& out) {
+  const std::lock_guard lock(mutex_);
+  if (commands_size_ == 0) return false;
+  out = commands_[commands_head_];
+  commands_head_ = (commands_head_ + 1) % kMaxCommands;
+  --commands_size_;
+  return true;
+}
+
+LinkCounters Link::counters() const {
+  const std::lock_guard lock(mutex_);
+  return counters_;
+}
+
+// Copies the oldest queued frame out of the ring and writes it whole; false when none waits.
+bool Link::write_front() {
+  std::size_t length = 0;
+  {
+    const std::lock_guard lock(mutex_);
+    if (frames_size_ == 0) return false;
+    length = lengths_[frames_head_];
+    for (std::size_t i = 0; i < length; ++i) {
+      write_buffer_[i] = ring_[(ring_head_ + i) % config_.queue_bytes];
+    }
+  }
+  std::size_t written = 0;
+  bool ok = true;
+  while (written < length) {
+    const std::span<const std::byte> rest(
+        reinterpret_cast<const std::byte*>(write_buffer_.data()) + written, length - written);
+    const hal::IoResult r = port_->write(rest, kWriteTimeout);
+    written += r.bytes;
+    if (r.status == hal::IoStatus::ok) continue;
+    // A timeout leaves the frame half written only while the port is stuck; give up on it when
+    // stopping (the drain deadline) or when the port is gone.
+    if (r.status != hal::IoStatus::timeout ||
+        (stopping_ && steady_now() >= drain_deadline_.load())) {
+      ok = false;
+      break;
+    }
+  }
+  const std::lock_guard lock(mutex_);
+  ring_head_ = (ring_head_ + length) % config_.queue_bytes;
+  ring_size_ -= length;
+  frames_head_ = (frames_head_ + 1) % kMaxFrames;
+  --frames_size_;
+  if (ok) {
+    ++counters_.messages_sent;
+  } else {
+    ++counters_.messages_dropped;
+  }
+  counters_.bytes_written += written;
+  return true;
+}
+
+void Link::read_commands(hal::Nanoseconds timeout) {
+  const hal::IoResult r = port_->read(read_buffer_, timeout);
+  if (r.status != hal::IoStatus::ok) {
+    // A closed port (waiting for its next reopen attempt) returns at once: do not spin.
+    if (r.status != hal::IoStatus::timeout && timeout > 0) {
+      std::this_thread::sleep_for(std::chrono::nanoseconds(timeout));
+    }
+    return;
+  }
+  if (config_.protocol != LinkProtocol::epipole) return;  // MAVLink input is not read
+  for (std::size_t i = 0; i < r.bytes; ++i) {
+    const std::uint64_t rejected_before = rejected(decoder_.stats());
+    const auto decoded = decoder_.push(static_cast<std::uint8_t>(read_buffer_[i]));
+    const std::lock_guard lock(mutex_);
+    counters_.rejected_frames += rejected(decoder_.stats()) - rejected_before;
+    if (!decoded) continue;
+    if (commands_size_ == kMaxCommands) {
+      ++counters_.rejected_frames;  // the frame loop is not taking commands
+      continue;
+    }
+    commands_[(commands_head_ + commands_size_) % kMaxCommands] = {decoded->sequence,
+                                                                   decoded->message};
+    ++commands_size_;
+    ++counters_.commands;
+  }
+}
+
+void Link::run() {
+  for (;;) {
+    const bool wrote = write_front();
+    if (stopping_) {
+      bool empty = false;
+      {
+        const std::lock_guard lock(mutex_);
+        empty = frames_size_ == 0;
+      }
+      if (empty || steady_now() >= drain_deadline_.load()) return;
+      continue;
+    }
+    read_commands(wrote ? 0 : kIdlePoll);
+  }
+}
+
+}  // namespace epipole::firmware

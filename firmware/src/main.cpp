@@ -1,0 +1,97 @@
+// epipole-fw: the firmware. Loads a board's configuration, allocates everything, then runs the
+// frame loop until SIGTERM or SIGINT (or --frames pairs), speaking to the service manager when
+// it runs as a service.
+#include <sys/mman.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/build_info.hpp"
+#include "epipole/firmware/firmware.hpp"
+#include "epipole/firmware/service.hpp"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void on_signal(int) {
+  g_stop.store(true);
+}
+
+void install_signal_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGINT, &action, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace epipole;
+  CLI::App app{"Epipole stereo-vision firmware: runs a board's frame loop.", "epipole-fw"};
+  app.set_version_flag("--version", firmware::build_info());
+  std::string board_path;
+  std::uint64_t frames = 0;
+  std::string scene;
+  app.add_option("--board", board_path, "Board folder (with board.yaml) or board file")->required();
+  app.add_option("--frames", frames, "Stop after this many frame pairs (0: run until stopped)");
+  app.add_option("--scene", scene, "Simulated board: the scene to replay (default: the board's)");
+  CLI11_PARSE(app, argc, argv);
+
+  firmware::ServiceNotifier service;
+  try {
+    firmware::BoardConfig config = firmware::load_board_config(board_path);
+    if (!scene.empty()) {
+      config.sim.scene = scene;
+      firmware::validate(config, board_path);
+    }
+    install_signal_handlers();
+    for (const std::string& problem : firmware::apply_scheduling(config.threads)) {
+      std::fprintf(stderr, "epipole-fw: warning: %s\n", problem.c_str());
+    }
+    firmware::Firmware fw(std::move(config));
+    if (fw.config().threads.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
+      std::fprintf(stderr, "epipole-fw: warning: threads.lock_memory: mlockall failed: %s\n",
+                   std::strerror(errno));
+    }
+    std::fprintf(stderr, "epipole-fw: board %s, %dx%d, %zu KiB of frame buffers%s%s\n",
+                 fw.config().name.c_str(), fw.config().width(), fw.config().height(),
+                 fw.working_set_bytes() / 1024,
+                 fw.board().serial_peer().empty() ? "" : ", link at ",
+                 fw.board().serial_peer().c_str());
+    if (!fw.calibration()) {
+      std::fprintf(stderr,
+                   "epipole-fw: warning: no calibration: images are taken as rectified and "
+                   "nothing gets a depth\n");
+    }
+    fw.frame_loop().set_heartbeat([&service] { service.watchdog(); });
+    service.ready();
+    service.status("running");
+    const firmware::RunSummary s = fw.run(frames, g_stop);
+    service.stopping();
+    std::fprintf(stderr,
+                 "epipole-fw: stopped after %llu pairs (%llu stale, %llu timeouts), %llu health "
+                 "messages, %llu messages sent, %llu dropped\n",
+                 static_cast<unsigned long long>(s.frames),
+                 static_cast<unsigned long long>(s.stale),
+                 static_cast<unsigned long long>(s.timeouts),
+                 static_cast<unsigned long long>(s.health_messages),
+                 static_cast<unsigned long long>(s.link.messages_sent),
+                 static_cast<unsigned long long>(s.link.messages_dropped));
+  } catch (const Error& e) {
+    std::fprintf(stderr, "epipole-fw: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "epipole-fw: internal error: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,185 @@
+#include "epipole/firmware/pipeline.hpp"
+#include "steady_time.hpp"
+
+#include <chrono>
+#include <variant>
+
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/stereo_rectification.hpp"
+#include "epipole/vision/fast.hpp"
+#include "epipole/vision/harris.hpp"
+#include "epipole/vision/remap.hpp"
+
+namespace epipole::firmware {
+
+using detail::steady_now;
+
+using protocol::Stage;
+
+StageMask stage_mask(const BoardConfig::Stages& s) {
+  StageMask m = stage_bit(Stage::capture) | stage_bit(Stage::publish);
+  if (s.rectify) m |= stage_bit(Stage::rectify);
+  if (s.corners) m |= stage_bit(Stage::corners);
+  if (s.disparity) m |= stage_bit(Stage::disparity);
+  if (s.sparse) m |= stage_bit(Stage::sparse);
+  if (s.detect) m |= stage_bit(Stage::detect);
+  return m;
+}
+
+namespace {
+
+// One corner detector per image, FAST or Harris as the board says.
+class CornerDetector {
+ public:
+  CornerDetector(const BoardConfig& board, SimdPath path) {
+    if (board.corners.detector == BoardConfig::CornerDetector::fast) {
+      vision::FastConfig c;
+      c.width = board.width();
+      c.height = board.height();
+      c.threshold = board.corners.threshold;
+      c.max_corners = board.corners.max_corners;
+      c.grid_columns = c.grid_rows = board.corners.grid;
+      detector_.emplace<vision::FastDetector>(c, path);
+    } else {
+      vision::HarrisConfig c;
+      c.width = board.width();
+      c.height = board.height();
+      c.max_corners = board.corners.max_corners;
+      detector_.emplace<vision::HarrisDetector>(c, path);
+    }
+  }
+  std::span<const vision::Corner> detect(GrayView image) {
+    return std::visit(
+        [&](auto& d) -> std::span<const vision::Corner> {
+          if constexpr (std::is_same_v<std::decay_t<decltype(d)>, std::monostate>) {
+            return {};
+          } else {
+            return d.detect(image);
+          }
+        },
+        detector_);
+  }
+  std::size_t working_set_bytes() const {
+    return std::visit(
+        [](const auto& d) -> std::size_t {
+          if constexpr (std::is_same_v<std::decay_t<decltype(d)>, std::monostate>) {
+            return 0;
+          } else {
+            return d.working_set_bytes();
+          }
+        },
+        detector_);
+  }
+
+ private:
+  std::variant<std::monostate, vision::FastDetector, vision::HarrisDetector> detector_;
+};
+
+}  // namespace
+
+struct Pipeline::Stages {
+  std::optional<StereoRectifiers> rectifiers;
+  CornerDetector corners_left, corners_right;
+  std::unique_ptr<vision::StereoMatcher> matcher;
+  Stages(const BoardConfig& board, SimdPath path)
+      : corners_left(board, path), corners_right(board, path) {}
+};
+
+Pipeline::Pipeline(const BoardConfig& board,
+                   const std::optional<calib::StereoCalibration>& calibration, SimdPath path)
+    : stages_(std::make_unique<Stages>(board, path)) {
+  available_ = stage_bit(Stage::capture) | stage_bit(Stage::publish) | stage_bit(Stage::corners) |
+               stage_bit(Stage::disparity);
+  if (calibration) {
+    require(calibration->width == board.width() && calibration->height == board.height(),
+            "calibration ", board.calibration.string(), " is for ", calibration->width, "x",
+            calibration->height, " images but the cameras deliver ", board.width(), "x",
+            board.height());
+    stages_->rectifiers.emplace(make_stereo_rectifiers(*calibration, path));
+    available_ |= stage_bit(Stage::rectify);
+    // Only point() and depth() are used: no point image is needed.
+    triangulator_ = std::make_unique<calib::Triangulator>(calibration->Q, 1, 1);
+  }
+  vision::StereoConfig stereo = board.stereo;
+  stereo.width = board.width();
+  stereo.height = board.height();
+  stereo.threads = board.threads.count;
+  stages_->matcher = std::make_unique<vision::StereoMatcher>(stereo, path);
+  if (calibration) {
+    ObstacleConfig o;
+    o.width = board.width();
+    o.height = board.height();
+    o.max_disparity = stereo.max_disparity;
+    o.sectors = board.obstacles.sectors;
+    o.band_top = board.obstacles.band_top;
+    o.band_bottom = board.obstacles.band_bottom;
+    o.min_depth_m = board.obstacles.min_depth_m;
+    o.max_depth_m = board.obstacles.max_depth_m;
+    const auto& P1 = calibration->left.projection;
+    obstacles_ = std::make_unique<ObstacleSectors>(o, *triangulator_, P1(0, 0), P1(0, 2));
+  }
+}
+
+Pipeline::~Pipeline() = default;
+
+std::size_t Pipeline::working_set_bytes() const {
+  std::size_t n = stages_->corners_left.working_set_bytes() +
+                  stages_->corners_right.working_set_bytes() +
+                  stages_->matcher->working_set_bytes();
+  if (stages_->rectifiers) {
+    n += stages_->rectifiers->left.working_set_bytes() +
+         stages_->rectifiers->right.working_set_bytes();
+  }
+  if (obstacles_) n += obstacles_->working_set_bytes();
+  return n;
+}
+
+const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_t frame,
+                                     hal::Nanoseconds trigger_ns, StageMask enabled) {
+  FrameResult& r = result_;
+  const StageMask run = enabled & available_;
+  const auto on = [&](Stage s) { return (run & stage_bit(s)) != 0; };
+  r.frame = frame;
+  r.trigger_ns = trigger_ns;
+  r.stages = stage_bit(Stage::capture);
+  r.times.fill(0);
+  r.left_raw = r.left = left;
+  r.right_raw = r.right = right;
+  r.corners_left = r.corners_right = {};
+  r.disparity = {};
+  r.valid_disparity_permille = 0;
+  r.obstacles = nullptr;
+
+  hal::Nanoseconds t = steady_now();
+  const auto lap = [&](Stage s) {
+    const hal::Nanoseconds now = steady_now();
+    r.times[static_cast<std::size_t>(s)] = now - t;
+    r.stages |= stage_bit(s);
+    t = now;
+  };
+  if (on(Stage::rectify)) {
+    r.left = stages_->rectifiers->left.rectify(left);
+    r.right = stages_->rectifiers->right.rectify(right);
+    lap(Stage::rectify);
+  }
+  if (on(Stage::corners)) {
+    r.corners_left = stages_->corners_left.detect(r.left);
+    r.corners_right = stages_->corners_right.detect(r.right);
+    lap(Stage::corners);
+  }
+  if (on(Stage::disparity)) {
+    r.disparity = stages_->matcher->compute(r.left, r.right);
+    std::uint64_t valid = 0;
+    for (int y = 0; y < r.disparity.height(); ++y) {
+      const std::int16_t* row = r.disparity.row(y);
+      for (int x = 0; x < r.disparity.width(); ++x) valid += row[x] >= 0 ? 1 : 0;
+    }
+    r.valid_disparity_permille = static_cast<int>(
+        valid * 1000 / (static_cast<std::uint64_t>(r.disparity.width()) * r.disparity.height()));
+    if (obstacles_) r.obstacles = &obstacles_->measure(r.disparity, frame);
+    lap(Stage::disparity);
+  }
+  return r;
+}
+
+}  // namespace epipole::firmware

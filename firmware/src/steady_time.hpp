@@ -1,0 +1,17 @@
+#pragma once
+
+#include <chrono>
+
+#include "epipole/hal/clock.hpp"
+
+namespace epipole::firmware::detail {
+
+// Host time for measuring how long work takes (stage times) and for real-time deadlines, even
+// on the simulated board, whose clock is virtual.
+inline hal::Nanoseconds steady_now() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+}  // namespace epipole::firmware::detail

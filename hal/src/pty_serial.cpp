@@ -1,0 +1,88 @@
+#include "epipole/hal/pty_serial.hpp"
+
+#include <fcntl.h>
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <system_error>
+
+#include "epipole/core/error.hpp"
+#include "fd_io.hpp"
+
+namespace epipole::hal {
+
+PtySerialPort::PtySerialPort(SerialConfig config) : config_(std::move(config)) {
+  open_pair();
+}
+
+PtySerialPort::~PtySerialPort() {
+  close();
+  if (!config_.device.empty()) {
+    std::error_code ec;
+    if (std::filesystem::is_symlink(config_.device, ec))
+      std::filesystem::remove(config_.device, ec);
+  }
+}
+
+void PtySerialPort::open_pair() {
+  int master = -1;
+  int peer = -1;
+  termios raw{};
+  cfmakeraw(&raw);
+  raw.c_cflag |= CLOCAL | CREAD;
+  require(::openpty(&master, &peer, nullptr, &raw, nullptr) == 0,
+          "serial port (pseudo-terminal): cannot create one: ", std::strerror(errno));
+  const int flags = ::fcntl(master, F_GETFL);
+  char name[256] = {};
+  if (flags < 0 || ::fcntl(master, F_SETFL, flags | O_NONBLOCK) != 0 ||
+      ::fcntl(master, F_SETFD, FD_CLOEXEC) != 0 || ::fcntl(peer, F_SETFD, FD_CLOEXEC) != 0 ||
+      ::ttyname_r(peer, name, sizeof name) != 0) {
+    const int error = errno;
+    ::close(master);
+    ::close(peer);
+    throw Error(cat("serial port (pseudo-terminal): cannot set it up: ", std::strerror(error)));
+  }
+  if (!config_.device.empty()) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path link = config_.device;
+    if (fs::is_symlink(link, ec)) fs::remove(link, ec);
+    fs::create_symlink(name, link, ec);
+    if (ec) {
+      ::close(master);
+      ::close(peer);
+      throw Error(cat("serial port ", config_.device, ": cannot link it to the pseudo-terminal ",
+                      name, ": ", ec.message()));
+    }
+  }
+  master_ = master;
+  peer_ = peer;
+  peer_path_ = name;
+}
+
+void PtySerialPort::close() {
+  if (master_ >= 0) ::close(master_);
+  if (peer_ >= 0) ::close(peer_);
+  master_ = peer_ = -1;
+}
+
+void PtySerialPort::reopen() {
+  close();
+  open_pair();
+}
+
+IoResult PtySerialPort::read(std::span<std::byte> buffer, Nanoseconds timeout) {
+  if (master_ < 0) return {IoStatus::closed, 0};
+  return detail::read_fd(master_, buffer, timeout);
+}
+
+IoResult PtySerialPort::write(std::span<const std::byte> data, Nanoseconds timeout) {
+  if (master_ < 0) return {IoStatus::closed, 0};
+  return detail::write_fd(master_, data, timeout);
+}
+
+}  // namespace epipole::hal

@@ -1,0 +1,243 @@
+// epipole sim: the firmware on the simulated board, scene by scene, with what a person wants to
+// look at: the rectified pair with epipolar lines, corners, colour disparity with a legend, the
+// decoded serial stream (read from the simulated link's far end, as a robot would) and a
+// summary.
+#include <algorithm>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "commands.hpp"
+#include "epipole/core/draw.hpp"
+#include "epipole/core/error.hpp"
+#include "epipole/core/image_io.hpp"
+#include "epipole/firmware/firmware.hpp"
+#include "epipole/hal/serial_port.hpp"
+#include "message_json.hpp"
+#include "pictures.hpp"
+#include "stereo_preview.hpp"
+
+namespace epipole::tools {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct SimOptions {
+  std::string board = "board/sim";
+  std::vector<std::string> scenes;  // empty: every scene of the board
+  std::uint64_t frames = 30;
+  int pictures = 1;
+  std::string out = "out/sim";
+};
+
+// Reads the simulated link's far end, as the robot would, keeping the raw bytes and decoding
+// them into JSON lines.
+class LinkRecorder {
+ public:
+  LinkRecorder(const std::string& peer, const fs::path& directory)
+      : port_({peer, 115200}),
+        raw_(directory / "serial.bin", std::ios::binary),
+        lines_(directory / "serial.jsonl") {
+    require(raw_.good() && lines_.good(), directory.string(), ": cannot write the serial stream");
+    thread_ = std::thread([this] { run(); });
+  }
+  // Reads what is still in the link, then stops.
+  void finish() {
+    stopping_ = true;
+    thread_.join();
+    lines_ << stats_json(decoder_.stats()).dump() << "\n";
+  }
+  const std::map<std::string, int>& counts() const { return counts_; }
+  const protocol::DecoderStats& stats() const { return decoder_.stats(); }
+  const nlohmann::json& last_health() const { return last_health_; }
+
+ private:
+  void run() {
+    std::array<std::byte, 4096> buffer{};
+    for (;;) {
+      const hal::IoResult r = port_.read(buffer, 50'000'000);
+      if (r.status != hal::IoStatus::ok) {
+        if (stopping_) return;
+        continue;
+      }
+      raw_.write(reinterpret_cast<const char*>(buffer.data()),
+                 static_cast<std::streamsize>(r.bytes));
+      for (std::size_t i = 0; i < r.bytes; ++i) {
+        if (const auto decoded = decoder_.push(static_cast<std::uint8_t>(buffer[i]))) {
+          const nlohmann::json json = to_json(*decoded);
+          lines_ << json.dump() << "\n";
+          ++counts_[json["type"].get<std::string>()];
+          if (json["type"] == "health") last_health_ = json;
+        }
+      }
+    }
+  }
+
+  hal::TermiosSerialPort port_;
+  std::ofstream raw_;
+  std::ofstream lines_;
+  protocol::FrameDecoder decoder_;
+  std::map<std::string, int> counts_;
+  nlohmann::json last_health_;
+  std::atomic<bool> stopping_{false};
+  std::thread thread_;
+};
+
+// Writes the pictures of the first frames that show distinct images of the scene.
+class PictureWriter final : public firmware::FrameObserver {
+ public:
+  PictureWriter(fs::path directory, int images, int pictures, int max_disparity)
+      : directory_(std::move(directory)),
+        images_(images),
+        pictures_(pictures),
+        max_disparity_(max_disparity) {}
+
+  void on_frame(const firmware::FrameResult& r) override {
+    const int image = static_cast<int>(r.frame % static_cast<std::uint32_t>(images_));
+    if (image >= pictures_ || std::find(done_.begin(), done_.end(), image) != done_.end()) return;
+    done_.push_back(image);
+    const std::string prefix = cat("frame", r.frame, "-");
+    const auto file = [&](const char* what) {
+      written_.push_back(prefix + what);
+      return directory_ / (prefix + what);
+    };
+    save_image(file("rectified-pair.png"), side_by_side_preview(r.left, r.right).view());
+    if (!r.corners_left.empty() || (r.stages & firmware::stage_bit(protocol::Stage::corners))) {
+      RgbImage corners(r.left.width(), r.left.height());
+      gray_to_rgb(r.left, corners.view());
+      for (const vision::Corner& c : r.corners_left) {
+        draw_circle(corners.view(), c.x, c.y, 3, {0, 255, 0});
+      }
+      save_image(file("corners.png"), corners.view());
+    }
+    if (!r.disparity.empty()) {
+      save_image(file("disparity.png"), disparity_picture(r.disparity, max_disparity_).view());
+      Image<std::uint16_t> png(r.disparity.width(), r.disparity.height());
+      for (int y = 0; y < png.height(); ++y) {
+        for (int x = 0; x < png.width(); ++x) {
+          png.view()(x, y) = static_cast<std::uint16_t>(std::max<int>(r.disparity(x, y), 0));
+        }
+      }
+      save_image(file("disparity16.png"), ImageView<const std::uint16_t>(png.view()));
+    }
+  }
+  const std::vector<std::string>& written() const { return written_; }
+
+ private:
+  fs::path directory_;
+  int images_;
+  int pictures_;
+  int max_disparity_;
+  std::vector<int> done_;
+  std::vector<std::string> written_;
+};
+
+nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& scene,
+                         const SimOptions& options) {
+  firmware::BoardConfig config = board;
+  config.sim.scene = scene;
+  firmware::validate(config, options.board);
+  const fs::path directory = fs::path(options.out) / scene;
+  fs::create_directories(directory);
+  // The pty's robot end: a link in the output folder, so the firmware's link is easy to find.
+  if (config.serial.backend == "pty" && config.serial.port.device.empty()) {
+    config.serial.port.device = (directory / "link").string();
+  }
+  firmware::Firmware fw(config);
+  const int images = static_cast<int>(fw.board().sim()->left->size());
+  PictureWriter pictures(directory, images, options.pictures, config.stereo.max_disparity);
+  fw.frame_loop().set_observer(&pictures);
+  std::unique_ptr<LinkRecorder> recorder;
+  if (!fw.board().serial_peer().empty()) {
+    recorder = std::make_unique<LinkRecorder>(fw.board().serial_peer(), directory);
+  }
+  const std::atomic<bool> stop{false};
+  const firmware::RunSummary s = fw.run(options.frames, stop);
+  if (recorder) recorder->finish();
+
+  nlohmann::json out = {{"scene", scene},
+                        {"images", images},
+                        {"frames", s.frames},
+                        {"stale_pairs", s.stale},
+                        {"timeouts", s.timeouts},
+                        {"pairs", s.pairing.pairs},
+                        {"health_messages", s.health_messages},
+                        {"messages_sent", s.link.messages_sent},
+                        {"messages_dropped", s.link.messages_dropped},
+                        {"calibration", fw.calibration() ? "yes" : "none"},
+                        {"pictures", pictures.written()}};
+  if (recorder) {
+    out["received"] = recorder->counts();
+    out["decoder"] = stats_json(recorder->stats());
+    out["last_health"] = recorder->last_health();
+  }
+  return out;
+}
+
+void print_scene(const nlohmann::json& s) {
+  std::cout << "sim: scene " << s["scene"].get<std::string>() << ": " << s["frames"] << " pairs of "
+            << s["images"] << " images, " << s["messages_sent"] << " messages sent ("
+            << s["messages_dropped"] << " dropped)";
+  if (s.contains("last_health") && !s["last_health"].is_null()) {
+    const nlohmann::json& h = s["last_health"];
+    std::cout << "; last health: " << h["fps_centi"].get<int>() / 100.0 << " fps, latency p50 "
+              << h["latency_p50_us"].get<int>() / 1000.0 << " ms, p99 "
+              << h["latency_p99_us"].get<int>() / 1000.0 << " ms, rectify "
+              << h["rectify_us"].get<int>() / 1000.0 << " ms, corners "
+              << h["corners_us"].get<int>() / 1000.0 << " ms, disparity "
+              << h["disparity_us"].get<int>() / 1000.0 << " ms";
+  }
+  std::cout << "\n";
+}
+
+void run_sim(const SimOptions& options) {
+  const firmware::BoardConfig board = firmware::load_board_config(options.board);
+  require(board.cameras.backend == "sim", options.board,
+          ": not a simulated board (cameras.backend "
+          "is '",
+          board.cameras.backend, "')");
+  std::vector<std::string> scenes = options.scenes;
+  if (scenes.empty()) {
+    for (const auto& s : board.sim.scenes) scenes.push_back(s.name);
+  }
+  fs::create_directories(options.out);
+  nlohmann::json summary = {{"board", board.name}, {"scenes", nlohmann::json::array()}};
+  for (const std::string& scene : scenes) {
+    const nlohmann::json s = run_scene(board, scene, options);
+    print_scene(s);
+    summary["scenes"].push_back(s);
+  }
+  std::ofstream(fs::path(options.out) / "summary.json") << summary.dump(2) << "\n";
+  std::cout << "sim: pictures, serial streams and summary.json in " << options.out << "\n";
+}
+
+}  // namespace
+
+void add_sim_command(CLI::App& app, const GlobalOptions&) {
+  auto options = std::make_shared<SimOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "sim", "Run the firmware on the simulated board over real stereo images, with pictures");
+  cmd->add_option("--board", options->board, "The simulated board's folder or file")
+      ->capture_default_str();
+  cmd->add_option("--scene", options->scenes, "Scenes to run (default: all of the board's)");
+  cmd->add_option("--frames,-n", options->frames, "Frame pairs per scene")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--pictures", options->pictures,
+                  "Pictures of the first N distinct images of each scene")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--out,-o", options->out, "Output folder")->capture_default_str();
+  cmd->callback([options] { run_sim(*options); });
+}
+
+}  // namespace epipole::tools
