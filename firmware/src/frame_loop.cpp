@@ -1,5 +1,4 @@
 #include "epipole/firmware/frame_loop.hpp"
-#include "steady_time.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -7,6 +6,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/protocol/mavlink.hpp"
+#include "steady_time.hpp"
 
 namespace epipole::firmware {
 

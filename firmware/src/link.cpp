@@ -1,11 +1,11 @@
 #include "epipole/firmware/link.hpp"
-#include "steady_time.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cstring>
 
 #include "epipole/core/error.hpp"
+#include "steady_time.hpp"
 
 namespace epipole::firmware {
 

@@ -1,5 +1,4 @@
 #include "epipole/firmware/pipeline.hpp"
-#include "steady_time.hpp"
 
 #include <chrono>
 #include <variant>
@@ -9,6 +8,7 @@
 #include "epipole/vision/fast.hpp"
 #include "epipole/vision/harris.hpp"
 #include "epipole/vision/remap.hpp"
+#include "steady_time.hpp"
 
 namespace epipole::firmware {
 

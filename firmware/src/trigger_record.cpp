@@ -1,13 +1,11 @@
 #include "epipole/firmware/trigger_record.hpp"
-#include "steady_time.hpp"
 
 #include <chrono>
+#include "steady_time.hpp"
 
 namespace epipole::firmware {
 
 using detail::steady_now;
-
-namespace {}  // namespace
 
 TriggerRecord::TriggerRecord(hal::TriggerLine& line, bool threaded, hal::Nanoseconds period)
     : line_(line), threaded_(threaded), period_(period) {}
