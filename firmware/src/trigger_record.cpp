@@ -1,6 +1,7 @@
 #include "epipole/firmware/trigger_record.hpp"
 
 #include <chrono>
+
 #include "steady_time.hpp"
 
 namespace epipole::firmware {
