@@ -181,14 +181,14 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
          (max_frames == 0 || summary_.frames < max_frames)) {
     apply_commands();
     hal::PairResult got = grabber_.next(config_.cameras.timeout);
+    // Health before the new pair is recorded: the window that ended holds the pairs before it.
+    note_health();
     if (got.status == hal::PairStatus::timeout) {
       ++summary_.timeouts;
-      note_health();
       continue;
     }
     if (got.status == hal::PairStatus::device_lost) {
       grabber_.pairer().reset(got.lost_side);
-      note_health();
       continue;
     }
     // The freshest pair: older ones that waited behind it are skipped.
@@ -230,7 +230,6 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
     if (observer_ != nullptr) observer_->on_frame(r);
     grabber_.release(pair);
     ++summary_.frames;
-    note_health();
   }
   finish();
   summary_.pairing = grabber_.pairer().counters();

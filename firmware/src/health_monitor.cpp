@@ -39,7 +39,10 @@ std::optional<protocol::Health> HealthMonitor::due(hal::Nanoseconds now, const F
   h.uptime_ms = saturate<std::uint32_t>(static_cast<std::uint64_t>(now - start_) / 1'000'000);
   h.frames = saturate<std::uint32_t>(frames_);
   h.dropped = saturate<std::uint32_t>(f.dropped_pairs);
-  const double seconds = static_cast<double>(now - window_start_) * 1e-9;
+  // Frames per second over the window's nominal length (the window is checked when a frame
+  // arrives, a little after it ended), or over the real time after a stall.
+  const bool stalled = now - window_start_ >= 2 * window_;
+  const double seconds = static_cast<double>(stalled ? now - window_start_ : window_) * 1e-9;
   h.fps_centi = saturate<std::uint16_t>(
       static_cast<std::uint64_t>(static_cast<double>(window_frames_) * 100.0 / seconds + 0.5));
   if (count_ > 0) {
@@ -67,7 +70,7 @@ std::optional<protocol::Health> HealthMonitor::due(hal::Nanoseconds now, const F
   h.messages_dropped = saturate<std::uint16_t>(f.messages_dropped);
   // The next window starts where this one should have ended, so windows do not drift; after a
   // long gap (a stall) it starts now.
-  window_start_ = now - window_start_ >= 2 * window_ ? now : window_start_ + window_;
+  window_start_ = stalled ? now : window_start_ + window_;
   count_ = 0;
   window_frames_ = 0;
   stage_sums_.fill(0);

@@ -41,6 +41,7 @@ ObstacleSectors::ObstacleSectors(const ObstacleConfig& config,
         static_cast<std::uint8_t>(std::clamp(s, 0, config.sectors - 1));
   }
   histogram_.assign(static_cast<std::size_t>(config.sectors * config.max_disparity), 0);
+  sums_.assign(histogram_.size(), 0);
   band_pixels_.assign(static_cast<std::size_t>(config.sectors), 0);
 }
 
@@ -49,7 +50,8 @@ double ObstacleSectors::sector_centre_deg(int sector) const {
 }
 
 std::size_t ObstacleSectors::working_set_bytes() const {
-  return sector_of_column_.size() + histogram_.size() * 4 + band_pixels_.size() * 4;
+  return sector_of_column_.size() + histogram_.size() * 4 + sums_.size() * 4 +
+         band_pixels_.size() * 4;
 }
 
 const protocol::Obstacles& ObstacleSectors::measure(ImageView<const std::int16_t> disparity,
@@ -59,6 +61,7 @@ const protocol::Obstacles& ObstacleSectors::measure(ImageView<const std::int16_t
           " is not the configured ", config_.width, "x", config_.height);
   const int D = config_.max_disparity;
   std::fill(histogram_.begin(), histogram_.end(), 0u);
+  std::fill(sums_.begin(), sums_.end(), 0u);
   std::fill(band_pixels_.begin(), band_pixels_.end(), 0u);
   const int y0 = static_cast<int>(config_.band_top * config_.height);
   const int y1 = std::max(y0 + 1, static_cast<int>(config_.band_bottom * config_.height));
@@ -69,7 +72,9 @@ const protocol::Obstacles& ObstacleSectors::measure(ImageView<const std::int16_t
       ++band_pixels_[static_cast<std::size_t>(s)];
       const int d = row[x] / vision::kDisparityScale;
       if (row[x] <= 0 || d >= D) continue;
-      ++histogram_[static_cast<std::size_t>(s * D + d)];
+      const auto bin = static_cast<std::size_t>(s * D + d);
+      ++histogram_[bin];
+      sums_[bin] += static_cast<std::uint32_t>(row[x]);
     }
   }
   result_.frame = frame;
@@ -77,6 +82,7 @@ const protocol::Obstacles& ObstacleSectors::measure(ImageView<const std::int16_t
   result_.field_of_view_centideg = static_cast<std::uint16_t>(std::lround(fov_deg_ * 100));
   for (int s = 0; s < config_.sectors; ++s) {
     const std::uint32_t* h = &histogram_[static_cast<std::size_t>(s * D)];
+    const std::uint32_t* sum = &sums_[static_cast<std::size_t>(s * D)];
     const double needed = std::max<double>(
         config_.min_pixels, config_.min_share * band_pixels_[static_cast<std::size_t>(s)]);
     std::uint32_t reached = 0;
@@ -90,8 +96,9 @@ const protocol::Obstacles& ObstacleSectors::measure(ImageView<const std::int16_t
     }
     std::uint16_t mm = protocol::kUnknownDepth;
     if (nearest > 0) {
-      // The bin holds disparities d .. d + 1: its centre.
-      const double z = triangulator_.depth(nearest + 0.5);
+      // The mean disparity of the pixels in that bin (d .. d + 1).
+      const double d = static_cast<double>(sum[nearest]) / h[nearest] / vision::kDisparityScale;
+      const double z = triangulator_.depth(d);
       if (std::isfinite(z) && z > 0 && z <= config_.max_depth_m) {
         mm = static_cast<std::uint16_t>(std::lround(std::max(z, config_.min_depth_m) * 1000));
       }

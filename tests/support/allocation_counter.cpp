@@ -1,15 +1,18 @@
 // Replaces the global operator new/delete of the test program with versions that count.
 #include "allocation_counter.hpp"
 
+#include <atomic>
 #include <cstdlib>
 #include <new>
 
 namespace {
 thread_local bool counting = false;
 thread_local std::size_t allocations = 0;
+std::atomic<std::size_t> all_allocations{0};
 
 void* allocate(std::size_t size, std::size_t alignment) {
   if (counting) ++allocations;
+  all_allocations.fetch_add(1, std::memory_order_relaxed);
   if (size == 0) size = 1;
   void* p = nullptr;
   if (alignment <= alignof(std::max_align_t)) {
@@ -33,6 +36,9 @@ AllocationCounter::~AllocationCounter() {
 }
 std::size_t AllocationCounter::count() const {
   return allocations;
+}
+std::size_t allocations_in_all_threads() {
+  return all_allocations.load();
 }
 }  // namespace epipole::test
 

@@ -16,4 +16,8 @@ class AllocationCounter {
   std::size_t count() const;
 };
 
+// Every operator new call of the whole program so far, in any thread (for code that runs on
+// threads of its own: compare two readings taken while nothing else runs).
+std::size_t allocations_in_all_threads();
+
 }  // namespace epipole::test

@@ -26,8 +26,9 @@ struct ObstacleConfig {
 };
 
 // The nearest depth per angular sector of the rectified left view, from a disparity image
-// (x16, vision::kInvalidDisparity where unknown): per sector, the largest disparity that enough
-// pixels of the sector's band reach, converted to depth (Z, metres) with Q. Sectors go left to
+// (x16, vision::kInvalidDisparity where unknown): per sector, the largest integer disparity
+// that enough pixels of the sector's band reach, refined to the mean disparity of the pixels of
+// that integer bin and converted to depth (Z, metres) with Q. Sectors go left to
 // right and split the view's horizontal field of view evenly by angle (pinhole, from the
 // rectified camera's fx and cx).
 //
@@ -53,7 +54,8 @@ class ObstacleSectors {
   double fov_deg_ = 0;
   double first_edge_deg_ = 0;
   std::vector<std::uint8_t> sector_of_column_;
-  std::vector<std::uint32_t> histogram_;  // sectors x max_disparity
+  std::vector<std::uint32_t> histogram_;  // sectors x max_disparity: pixel counts
+  std::vector<std::uint32_t> sums_;       // and the sums of their disparities x16
   std::vector<std::uint32_t> band_pixels_;
   protocol::Obstacles result_;
 };

@@ -1,0 +1,158 @@
+// The board file: every key read, every bad value an error naming the file and the key.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/board_config.hpp"
+#include "sim_rig.hpp"
+
+namespace epipole::firmware {
+namespace {
+
+using test::SimRig;
+
+// The error message of parsing `text` as the board file, or "" when it parses.
+std::string error_of(const SimRig& rig, const std::string& text) {
+  try {
+    parse_board_config(text, rig.dir.path() / "board.yaml");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(BoardConfig, ReadsEveryKey) {
+  SimRig rig;
+  const BoardConfig c = rig.parse(
+      "pairing: {tolerance_us: 1500}\n"
+      "obstacles: {sectors: 36, band: [0.1, 0.9], min_depth_m: 0.5, max_depth_m: 12}\n"
+      "threads: {count: 3, affinity: [0, 1], realtime_priority: 10, lock_memory: true}\n"
+      "detector: {cascade: face.bin, scale_factor: 1.2, min_neighbors: 4, min_size: 40}\n"
+      "memory_budget_mb: 8\n"
+      "snapshot_directory: snaps\n");
+  EXPECT_EQ(c.name, "test-sim");
+  EXPECT_EQ(c.width(), 160);
+  EXPECT_EQ(c.height(), 96);
+  EXPECT_EQ(c.cameras.backend, "sim");
+  EXPECT_EQ(c.cameras.left.device, "left");
+  EXPECT_EQ(c.cameras.right.device, "right");
+  EXPECT_EQ(c.cameras.left.trigger, hal::TriggerMode::external);
+  EXPECT_EQ(c.cameras.timeout, 100'000'000);
+  EXPECT_EQ(c.trigger.line.rate_hz, 30.0);
+  EXPECT_EQ(c.pairing.tolerance, 1'500'000);
+  EXPECT_EQ(c.pairing.trigger_period, 33'333'333);
+  EXPECT_EQ(c.serial.backend, "none");
+  EXPECT_EQ(c.calibration, rig.dir.path() / "rig.yaml");
+  EXPECT_EQ(c.stereo.max_disparity, 32);
+  EXPECT_FALSE(c.stages.sparse);
+  EXPECT_TRUE(c.stages.disparity);
+  EXPECT_EQ(c.obstacles.sectors, 36);
+  EXPECT_EQ(c.obstacles.band_top, 0.1);
+  EXPECT_EQ(c.obstacles.max_depth_m, 12.0);
+  EXPECT_EQ(c.threads.count, 3);
+  EXPECT_EQ(c.threads.affinity, (std::vector<int>{0, 1}));
+  EXPECT_EQ(c.threads.realtime_priority, 10);
+  EXPECT_TRUE(c.threads.lock_memory);
+  EXPECT_EQ(c.detector.cascade, rig.dir.path() / "face.bin");
+  EXPECT_EQ(c.detector.min_neighbors, 4);
+  EXPECT_EQ(*c.memory_budget_bytes, 8u * 1024 * 1024);
+  EXPECT_EQ(c.snapshot_directory, rig.dir.path() / "snaps");
+  ASSERT_NE(c.sim_scene(), nullptr);
+  EXPECT_EQ(c.sim_scene()->synthesize_disparity, 8);
+}
+
+TEST(BoardConfig, ExpandsEnvironmentVariablesInPaths) {
+  SimRig rig;
+  ::setenv("EPIPOLE_TEST_FOLDER", "/some/where", 1);
+  const BoardConfig c = rig.parse("snapshot_directory: ${EPIPOLE_TEST_FOLDER}/snaps\n");
+  EXPECT_EQ(c.snapshot_directory, "/some/where/snaps");
+  ::unsetenv("EPIPOLE_TEST_FOLDER");
+  EXPECT_NE(error_of(rig, rig.yaml("snapshot_directory: ${EPIPOLE_TEST_FOLDER}/snaps\n"))
+                .find("environment variable EPIPOLE_TEST_FOLDER is not set"),
+            std::string::npos);
+}
+
+struct BadCase {
+  const char* what;
+  std::string from;  // replaced in the rig's file ...
+  std::string to;    // ... by this (or appended when `from` is empty)
+  const char* expected;
+};
+
+TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
+  SimRig rig;
+  const BadCase cases[] = {
+      {"unknown key", "", "colour: blue\n", "unknown key 'colour'"},
+      {"newer version", "version: 1", "version: 2", "version: 2 is not a board file version"},
+      {"no size", ", width: 160", "", "missing key 'cameras.width'"},
+      {"bad format", "trigger: external,", "trigger: external, format: rgb24,",
+       "cameras.format: 'rgb24' is not one of"},
+      {"bad trigger mode", "trigger: external", "trigger: sometimes",
+       "cameras.trigger: 'sometimes' is not one of free_running, external"},
+      {"unknown backend", "backend: sim, left", "backend: gige, left",
+       "cameras.backend: 'gige' is not one of sim, v4l2, libcamera"},
+      {"impossible rate", "rate_hz: 30", "rate_hz: -5", "trigger.rate_hz: -5 is outside"},
+      {"disparity not /16", "max_disparity: 32", "max_disparity: 40",
+       "stereo.max_disparity: 40 is not a multiple of 16"},
+      {"disparity too wide", "max_disparity: 32", "max_disparity: 256",
+       "stereo.max_disparity: 256 is not smaller than the width 160"},
+      {"tolerance", "", "pairing: {tolerance_us: 20000}\n",
+       "pairing.tolerance_us: 20000 us is not below half the trigger period"},
+      {"termios without device", "serial: {backend: none}", "serial: {backend: termios}",
+       "serial.device: a termios serial port needs a device"},
+      {"bad baud", "serial: {backend: none}",
+       "serial: {backend: termios, device: /dev/ttyS0, baud: 12345}",
+       "serial.baud: 12345 is not a baud rate termios supports"},
+      {"bad protocol", "serial: {backend: none}", "serial: {backend: none, protocol: nmea}",
+       "serial.protocol: 'nmea' is not one of epipole, mavlink"},
+      {"unknown scene", "",
+       "sim: {scene: nowhere, scenes: {a: {synthesize: x.png, disparity: 1}}}\n",
+       "sim.scene: 'nowhere' is not a scene of this board (a)"},
+      {"glob without files", "synthesize: unused.png, disparity: 8",
+       "left: nothing-here-*.png, right: nothing-there-*.png",
+       "sim.scenes.test.left: no file matches"},
+      {"band", "", "obstacles: {band: [0.8, 0.2]}\n",
+       "obstacles.band: expected [top, bottom] with 0 <= top < bottom <= 1"},
+      {"affinity", "", "threads: {affinity: [0.5]}\n", "threads.affinity: 0.5 is not a CPU number"},
+      {"boolean", "sparse: false", "sparse: maybe", "stages.sparse: expected true or false"},
+      {"not a map", "", "stereo: 12\n", "stereo: expected a map of keys"},
+      {"malformed", "", "cameras: [\n", "malformed YAML"},
+  };
+  // The rig's file (yaml()) has one `sim:` and `stereo:` key; cases that add their own drop
+  // the rig's first.
+  for (const BadCase& c : cases) {
+    std::string text = rig.yaml();
+    if (c.from.empty()) {
+      for (const char* key : {"sim:", "stereo:", "obstacles:", "threads:", "pairing:"}) {
+        if (c.to.rfind(key, 0) != 0) continue;
+        const std::size_t at = text.find(std::string("\n") + key);
+        if (at != std::string::npos) text.erase(at + 1, text.find('\n', at + 1) - at);
+      }
+      text += c.to;
+    } else {
+      const std::size_t at = text.find(c.from);
+      ASSERT_NE(at, std::string::npos) << c.what;
+      text.replace(at, c.from.size(), c.to);
+    }
+    const std::string error = error_of(rig, text);
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.what << ": got '" << error << "'";
+    EXPECT_NE(error.find("board.yaml"), std::string::npos) << c.what << ": " << error;
+  }
+}
+
+TEST(BoardConfig, AFolderMeansItsBoardFile) {
+  SimRig rig;
+  std::ofstream(rig.dir.path() / "board.yaml") << rig.yaml();
+  EXPECT_EQ(load_board_config(rig.dir.path()).name, "test-sim");
+  try {
+    load_board_config(rig.dir.path() / "missing");
+    FAIL() << "a missing board file must be an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace epipole::firmware

@@ -1,0 +1,74 @@
+// Fixed memory: over more than a thousand frame pairs of the simulated board, in the steady
+// state, the firmware allocates nothing in any of its threads (frame loop, stereo workers, the
+// link's thread).
+#include <gtest/gtest.h>
+
+#include <atomic>
+
+#include "allocation_counter.hpp"
+#include "epipole/firmware/firmware.hpp"
+#include "sim_rig.hpp"
+
+namespace epipole::firmware {
+namespace {
+
+// Reads the program's allocation count at two frames of the run.
+struct Sampler final : FrameObserver {
+  std::uint32_t first, last;
+  std::size_t at_first = 0, at_last = 0;
+  Sampler(std::uint32_t a, std::uint32_t b) : first(a), last(b) {}
+  void on_frame(const FrameResult& r) override {
+    if (r.frame == first) at_first = test::allocations_in_all_threads();
+    if (r.frame == last) at_last = test::allocations_in_all_threads();
+  }
+};
+
+TEST(FirmwareAllocations, CounterSeesAllocationsOfOtherThreads) {
+  const std::size_t before = test::allocations_in_all_threads();
+  std::thread([] { auto p = std::make_unique<int>(1); }).join();
+  EXPECT_GE(test::allocations_in_all_threads(), before + 1)
+      << "the counter must see other threads, or the test below proves nothing";
+}
+
+class SteadyState : public testing::TestWithParam<BoardConfig::LinkProtocol> {};
+
+TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
+  // Small images keep a thousand frames quick under qemu too; every stage and the link run.
+  test::SimRig rig(128, 64, 6);
+  BoardConfig config = rig.parse("threads: {count: 2}\n");
+  config.stereo.max_disparity = 16;
+  config.serial.backend = "pty";
+  config.serial.protocol = GetParam();
+  config.serial.port.baud = 4'000'000;
+  Firmware fw(config, rig.images(3));
+  hal::TermiosSerialPort robot({fw.board().serial_peer(), 115200});
+  std::atomic<bool> reading{true};
+  std::thread reader([&] {  // the robot reads, so the link never fills up
+    std::array<std::byte, 4096> buffer{};
+    while (reading) robot.read(buffer, 10'000'000);
+  });
+  Sampler sampler(20, 1020);
+  fw.frame_loop().set_observer(&sampler);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = fw.run(1030, stop);
+  reading = false;
+  reader.join();
+  ASSERT_EQ(s.frames, 1030u);
+  EXPECT_GT(s.health_messages, 30u);
+  EXPECT_GT(s.link.messages_sent, 1000u);
+  EXPECT_GT(sampler.at_first, 0u);
+  EXPECT_EQ(sampler.at_last - sampler.at_first, 0u)
+      << "operator new calls between frames 20 and 1020";
+}
+
+INSTANTIATE_TEST_SUITE_P(Protocols, SteadyState,
+                         testing::Values(BoardConfig::LinkProtocol::epipole,
+                                         BoardConfig::LinkProtocol::mavlink),
+                         [](const auto& param_info) {
+                           return param_info.param == BoardConfig::LinkProtocol::epipole
+                                      ? "epipole"
+                                      : "mavlink";
+                         });
+
+}  // namespace
+}  // namespace epipole::firmware

@@ -1,0 +1,194 @@
+// The serial link on a real kernel pseudo-terminal: what the frame loop publishes arrives whole
+// and in order at the robot's end, the byte budget drops what does not fit, commands come back.
+#include "epipole/firmware/link.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include "epipole/hal/pty_serial.hpp"
+
+namespace epipole::firmware {
+namespace {
+
+using protocol::DecodedMessage;
+
+// The robot's end of the link.
+struct Robot {
+  hal::TermiosSerialPort port;
+  protocol::FrameDecoder decoder;
+  explicit Robot(const std::string& peer) : port({peer, 115200}) {}
+
+  // Everything that arrives within `quiet` of silence.
+  std::vector<DecodedMessage> receive(hal::Nanoseconds quiet = 300'000'000) {
+    std::vector<DecodedMessage> out;
+    std::array<std::byte, 1024> buffer{};
+    for (;;) {
+      const hal::IoResult r = port.read(buffer, quiet);
+      if (r.status != hal::IoStatus::ok) return out;
+      for (std::size_t i = 0; i < r.bytes; ++i) {
+        if (auto m = decoder.push(static_cast<std::uint8_t>(buffer[i]))) out.push_back(*m);
+      }
+    }
+  }
+  void send(const protocol::Message& m, std::uint16_t sequence) {
+    std::array<std::uint8_t, protocol::kMaxFrameSize> frame{};
+    const std::size_t n = protocol::encode_frame(m, sequence, frame);
+    ASSERT_EQ(port.write(std::as_bytes(std::span(frame.data(), n)), 1'000'000'000).status,
+              hal::IoStatus::ok);
+  }
+};
+
+protocol::Obstacles obstacles(std::uint32_t frame) {
+  protocol::Obstacles o;
+  o.frame = frame;
+  o.count = 72;
+  o.field_of_view_centideg = 9000;
+  for (std::size_t i = 0; i < 72; ++i) o.nearest_mm[i] = static_cast<std::uint16_t>(i * 10 + frame);
+  return o;
+}
+
+TEST(Link, PublishedMessagesArriveWholeAndInOrder) {
+  hal::PtySerialPort pty({});
+  hal::VirtualClock clock;
+  Link link(&pty, clock, {});
+  Robot robot(pty.peer_path());
+  link.start();
+  for (std::uint32_t i = 0; i < 20; ++i) {
+    EXPECT_TRUE(link.publish(obstacles(i)));
+    clock.advance(50'000'000);  // 20 frames a second: well within 115200 baud
+  }
+  const auto received = robot.receive();
+  link.stop();
+  ASSERT_EQ(received.size(), 20u);
+  for (std::uint32_t i = 0; i < 20; ++i) {
+    EXPECT_EQ(received[i].sequence, i);
+    EXPECT_EQ(std::get<protocol::Obstacles>(received[i].message), obstacles(i));
+  }
+  EXPECT_EQ(robot.decoder.stats().bad_crc + robot.decoder.stats().bad_cobs, 0u);
+  const LinkCounters c = link.counters();
+  EXPECT_EQ(c.messages_sent, 20u);
+  EXPECT_EQ(c.messages_dropped, 0u);
+}
+
+TEST(Link, DropsWhatExceedsTheByteBudget) {
+  hal::PtySerialPort pty({});
+  hal::VirtualClock clock;
+  LinkConfig config;
+  config.baud = 9600;  // 960 bytes a second; a burst of 0.25 s is 240 bytes
+  Link link(&pty, clock, config);
+  Robot robot(pty.peer_path());
+  link.start();
+  int accepted = 0;
+  for (std::uint32_t i = 0; i < 10; ++i) accepted += link.publish(obstacles(i)) ? 1 : 0;
+  EXPECT_EQ(accepted, 1) << "one 160-byte message fits a 240-byte budget, two do not";
+  clock.advance(1'000'000'000);  // a second later the budget is full again (capped at 240)
+  EXPECT_TRUE(link.publish(obstacles(10)));
+  EXPECT_FALSE(link.publish(obstacles(11)));
+  const auto received = robot.receive();
+  link.stop();
+  ASSERT_EQ(received.size(), 2u);
+  EXPECT_EQ(std::get<protocol::Obstacles>(received[1].message).frame, 10u);
+  EXPECT_EQ(link.counters().messages_dropped, 10u);
+}
+
+TEST(Link, CommandsFromTheRobotReachTheFrameLoop) {
+  hal::PtySerialPort pty({});
+  hal::VirtualClock clock;
+  Link link(&pty, clock, {});
+  Robot robot(pty.peer_path());
+  link.start();
+  robot.send(protocol::SetStages{0x2B}, 7);
+  // Garbage in between is counted and skipped.
+  const std::uint8_t garbage[] = {0x13, 0x37, 0x00, 0xFF, 0xFE, 0x00};
+  ASSERT_EQ(robot.port.write(std::as_bytes(std::span(garbage)), 1'000'000'000).status,
+            hal::IoStatus::ok);
+  robot.send(protocol::Snapshot{}, 8);
+  std::vector<Command> commands;
+  for (int i = 0; i < 200 && commands.size() < 2; ++i) {
+    Command c;
+    while (link.next_command(c)) commands.push_back(c);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  link.stop();
+  ASSERT_EQ(commands.size(), 2u);
+  EXPECT_EQ(commands[0].sequence, 7);
+  EXPECT_EQ(std::get<protocol::SetStages>(commands[0].message).enabled_mask, 0x2B);
+  EXPECT_EQ(commands[1].sequence, 8);
+  EXPECT_TRUE(std::holds_alternative<protocol::Snapshot>(commands[1].message));
+  EXPECT_EQ(link.counters().commands, 2u);
+  EXPECT_GE(link.counters().rejected_frames, 1u);
+}
+
+TEST(Link, StopFinishesWhatWasQueued) {
+  hal::PtySerialPort pty({});
+  hal::VirtualClock clock;
+  LinkConfig config;
+  config.baud = 4'000'000;
+  Link link(&pty, clock, config);
+  Robot robot(pty.peer_path());
+  std::vector<DecodedMessage> received;
+  std::thread reader([&] { received = robot.receive(500'000'000); });
+  link.start();
+  for (std::uint32_t i = 0; i < 60; ++i) ASSERT_TRUE(link.publish(obstacles(i))) << i;
+  link.stop();
+  reader.join();
+  EXPECT_EQ(received.size(), 60u);
+  EXPECT_EQ(robot.decoder.stats().bad_cobs + robot.decoder.stats().bad_crc +
+                robot.decoder.stats().bad_body,
+            0u)
+      << "no half-sent frame";
+}
+
+TEST(Link, MavlinkModeSendsMavlinkOnly) {
+  hal::PtySerialPort pty({});
+  hal::VirtualClock clock;
+  LinkConfig config;
+  config.protocol = LinkProtocol::mavlink;
+  Link link(&pty, clock, config);
+  Robot robot(pty.peer_path());
+  link.start();
+  EXPECT_FALSE(link.publish(obstacles(1))) << "no Epipole frames on a MAVLink link";
+  EXPECT_TRUE(link.publish_heartbeat());
+  mavlink::ObstacleDistance od;
+  od.distances_cm.fill(mavlink::kUnknownDistance);
+  od.distances_cm[3] = 250;
+  od.increment_deg = 5;
+  od.max_distance_cm = 2000;
+  EXPECT_TRUE(link.publish_obstacle_distance(od));
+  std::array<std::uint8_t, 1024> bytes{};
+  std::size_t size = 0;
+  std::array<std::byte, 512> buffer{};
+  for (;;) {
+    const hal::IoResult r = robot.port.read(buffer, 300'000'000);
+    if (r.status != hal::IoStatus::ok) break;
+    for (std::size_t i = 0; i < r.bytes && size < bytes.size(); ++i) {
+      bytes[size++] = static_cast<std::uint8_t>(buffer[i]);
+    }
+  }
+  link.stop();
+  const auto heartbeat = mavlink::parse_frame(std::span(bytes.data(), size));
+  ASSERT_TRUE(heartbeat);
+  EXPECT_EQ(heartbeat->message_id, mavlink::kHeartbeatId);
+  const std::size_t next = mavlink::kHeaderSize + heartbeat->length + mavlink::kChecksumSize;
+  const auto distance = mavlink::parse_frame(std::span(bytes.data() + next, size - next));
+  ASSERT_TRUE(distance);
+  EXPECT_EQ(distance->message_id, mavlink::kObstacleDistanceId);
+  EXPECT_EQ(distance->sequence, heartbeat->sequence + 1);
+}
+
+TEST(Link, WithoutAPortNothingIsSent) {
+  hal::VirtualClock clock;
+  Link link(nullptr, clock, {});
+  link.start();
+  EXPECT_TRUE(link.publish(obstacles(0)));
+  Command c;
+  EXPECT_FALSE(link.next_command(c));
+  link.stop();
+  EXPECT_EQ(link.counters().messages_sent, 0u);
+}
+
+}  // namespace
+}  // namespace epipole::firmware

@@ -1,0 +1,112 @@
+#pragma once
+
+// A small simulated board for firmware tests that run everywhere (no data files): textured
+// images with a known constant disparity, an ideal rectified rig, and the board file around
+// them in a temporary folder.
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "epipole/calib/calibration.hpp"
+#include "epipole/firmware/board.hpp"
+#include "epipole/firmware/board_config.hpp"
+#include "epipole/hal/sim.hpp"
+#include "random_image.hpp"
+
+namespace epipole::test {
+
+// A temporary folder, removed with everything in it when the object goes.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "epipole-test-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+    path_ = pattern;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// An ideal rectified rig: focal length f pixels, baseline b metres, centred principal points.
+inline calib::StereoCalibration ideal_rig(int width, int height, double f, double b) {
+  calib::StereoCalibration c;
+  c.width = width;
+  c.height = height;
+  const double cx = (width - 1) / 2.0;
+  const double cy = (height - 1) / 2.0;
+  for (calib::CameraCalibration* cam : {&c.left, &c.right}) {
+    cam->camera.intrinsics = {f, f, cx, cy};
+    cam->camera.distortion = {0, 0, 0, 0, 0};
+    cam->projection << f, 0, cx, 0, 0, f, cy, 0, 0, 0, 1, 0;
+  }
+  c.left.id = "left";
+  c.right.id = "right";
+  c.T << -b, 0, 0;
+  c.right.projection(0, 3) = -f * b;
+  c.Q << 1, 0, 0, -cx, 0, 1, 0, -cy, 0, 0, 0, f, 0, 0, 1 / b, 0;
+  c.date = "2026-01-01T00:00:00Z";
+  c.source = "tests/firmware/sim_rig.hpp";
+  return c;
+}
+
+struct SimRig {
+  static constexpr double kFocal = 100.0;
+  static constexpr double kBaseline = 0.1;
+
+  TempDir dir;
+  int width;
+  int height;
+  int disparity;
+  firmware::BoardConfig config;
+
+  // The pair: textured left image, right view at `disparity`, `images` of them (different
+  // textures).
+  firmware::SceneImages images(int count = 2) const {
+    firmware::SceneImages s;
+    for (int i = 0; i < count; ++i) {
+      GrayImage left(width, height);
+      fill(left.view(), Pattern::blobs, static_cast<std::uint32_t>(11 + i));
+      s.right.push_back(hal::synthesize_right(left.view(), disparity));
+      s.left.push_back(std::move(left));
+    }
+    return s;
+  }
+  double depth() const { return kFocal * kBaseline / disparity; }
+
+  // The board file's text; `extra` is appended (more top-level keys).
+  std::string yaml(const std::string& extra = "") const {
+    return "version: 1\nname: test-sim\n"
+           "cameras: {backend: sim, left: left, right: right, width: " +
+           std::to_string(width) + ", height: " + std::to_string(height) +
+           ", trigger: external, timeout_ms: 100}\n"
+           "trigger: {backend: sim, line: sim, rate_hz: 30}\n"
+           "serial: {backend: none}\n"
+           "calibration: rig.yaml\n"
+           "stereo: {max_disparity: 32}\n"
+           "corners: {max_corners: 500}\n"
+           "stages: {sparse: false, detect: false}\n"
+           "sim: {charge_compute: false, scenes: {test: {synthesize: unused.png, disparity: " +
+           std::to_string(disparity) + "}}}\n" + extra;
+  }
+  firmware::BoardConfig parse(const std::string& extra = "") const {
+    return firmware::parse_board_config(yaml(extra), dir.path() / "board.yaml");
+  }
+
+  SimRig(int w = 160, int h = 96, int d = 8, const std::string& extra = "")
+      : width(w), height(h), disparity(d) {
+    calib::save_calibration(dir.path() / "rig.yaml", ideal_rig(w, h, kFocal, kBaseline));
+    config = parse(extra);
+  }
+};
+
+}  // namespace epipole::test
