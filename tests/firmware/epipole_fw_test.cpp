@@ -1,0 +1,199 @@
+// epipole-fw as a process, as the service manager runs it: one-line errors, SIGTERM, the
+// notification socket and its watchdog, the link's stream complete after a stop.
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "epipole/core/image_io.hpp"
+#include "epipole/firmware/protocol/codec.hpp"
+#include "epipole/hal/serial_port.hpp"
+#include "sim_rig.hpp"
+
+namespace epipole::firmware {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Process {
+  pid_t pid = -1;
+  int output = -1;  // stderr and stdout
+};
+
+Process start(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
+  int pipe_fds[2];
+  if (::pipe(pipe_fds) != 0) throw std::runtime_error("pipe");
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::dup2(pipe_fds[1], 1);
+    ::dup2(pipe_fds[1], 2);
+    ::close(pipe_fds[0]);
+    for (const std::string& e : env) ::putenv(const_cast<char*>(e.c_str()));
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(EPIPOLE_FW));
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(EPIPOLE_FW, argv.data());
+    ::_exit(127);
+  }
+  ::close(pipe_fds[1]);
+  return {pid, pipe_fds[0]};
+}
+
+// Waits for the process and returns its exit code and output.
+std::pair<int, std::string> finish(const Process& p) {
+  std::string out;
+  char buffer[4096];
+  ssize_t n = 0;
+  while ((n = ::read(p.output, buffer, sizeof buffer)) > 0)
+    out.append(buffer, static_cast<std::size_t>(n));
+  ::close(p.output);
+  int status = 0;
+  ::waitpid(p.pid, &status, 0);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), out};
+}
+
+// A board folder with image files and a link at a known path.
+struct BoardFolder {
+  test::SimRig rig;
+  std::filesystem::path link;
+  BoardFolder() {
+    const firmware::SceneImages images = rig.images(2);
+    for (int i = 0; i < 2; ++i) {
+      save_image(rig.dir.path() / ("left" + std::to_string(i) + ".png"),
+                 GrayView(images.left[static_cast<std::size_t>(i)].view()));
+      save_image(rig.dir.path() / ("right" + std::to_string(i) + ".png"),
+                 GrayView(images.right[static_cast<std::size_t>(i)].view()));
+    }
+    link = rig.dir.path() / "link";
+    std::string text = rig.yaml();
+    text.replace(text.find("serial: {backend: none}"), 23,
+                 "serial: {backend: pty, device: " + link.string() + "}");
+    text.replace(text.find("synthesize: unused.png, disparity: 8"), 36,
+                 "left: left*.png, right: right*.png");
+    text.replace(text.find("charge_compute: false"), 21, "charge_compute: true");
+    std::ofstream(rig.dir.path() / "board.yaml") << text;
+  }
+  std::string path() const { return rig.dir.path().string(); }
+};
+
+TEST(EpipoleFw, BadConfigurationIsOneLineAndExitCodeOne) {
+  BoardFolder board;
+  const auto [code, out] = finish(start({"--board", board.path() + "/nothing"}));
+  EXPECT_EQ(code, 1);
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  EXPECT_NE(out.find("nothing"), std::string::npos) << out;
+
+  std::ofstream(board.rig.dir.path() / "bad.yaml") << board.rig.yaml("colour: blue\n");
+  const auto [code2, out2] = finish(start({"--board", board.path() + "/bad.yaml"}));
+  EXPECT_EQ(code2, 1);
+  EXPECT_NE(out2.find("bad.yaml: unknown key 'colour'"), std::string::npos) << out2;
+
+  const auto [code3, out3] = finish(start({"--board", board.path(), "--scene", "elsewhere"}));
+  EXPECT_EQ(code3, 1);
+  EXPECT_NE(out3.find("'elsewhere' is not a scene of this board"), std::string::npos) << out3;
+
+  const auto [code4, out4] = finish(start({"--frames", "x"}));
+  EXPECT_NE(code4, 0);
+}
+
+TEST(EpipoleFw, RunsTheGivenNumberOfFrames) {
+  BoardFolder board;
+  const auto [code, out] = finish(start({"--board", board.path(), "--frames", "25"}));
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("stopped after 25 pairs"), std::string::npos) << out;
+}
+
+TEST(EpipoleFw, StopsCleanlyOnSigtermWithTheLinkComplete) {
+  BoardFolder board;
+  const Process p = start({"--board", board.path()});
+  // The robot's end: wait for the firmware to make it, then read everything.
+  const auto deadline = Clock::now() + std::chrono::seconds(20);
+  while (!std::filesystem::exists(board.link) && Clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(std::filesystem::exists(board.link)) << finish(p).second;
+  hal::TermiosSerialPort robot({board.link.string(), 115200});
+  protocol::FrameDecoder decoder;
+  std::array<std::byte, 4096> buffer{};
+  const auto read_for = [&](std::chrono::milliseconds span) {
+    const auto until = Clock::now() + span;
+    while (Clock::now() < until) {
+      const hal::IoResult r = robot.read(buffer, 50'000'000);
+      if (r.status == hal::IoStatus::hung_up) return;
+      for (std::size_t i = 0; i < r.bytes; ++i) decoder.push(static_cast<std::uint8_t>(buffer[i]));
+    }
+  };
+  read_for(std::chrono::milliseconds(1500));
+  const auto signalled = Clock::now();
+  ::kill(p.pid, SIGTERM);
+  read_for(std::chrono::milliseconds(3000));  // until the firmware closes its end
+  const auto [code, out] = finish(p);
+  const double stop_seconds = std::chrono::duration<double>(Clock::now() - signalled).count();
+  std::printf("epipole-fw stopped %.3f s after SIGTERM (the read above waits for the hang-up)\n",
+              stop_seconds);
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("stopped after"), std::string::npos) << out;
+  const protocol::DecoderStats& s = decoder.stats();
+  EXPECT_GT(s.frames, 10u);
+  EXPECT_EQ(s.bad_cobs + s.bad_crc + s.bad_body + s.too_long, 0u) << "no half-sent message";
+}
+
+// A datagram socket standing in for systemd's notification socket.
+struct NotifySocket {
+  std::filesystem::path path;
+  int fd = -1;
+  explicit NotifySocket(const std::filesystem::path& p) : path(p) {
+    fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_un a{};
+    a.sun_family = AF_UNIX;
+    std::strncpy(a.sun_path, p.c_str(), sizeof a.sun_path - 1);
+    if (::bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) {
+      throw std::runtime_error("bind");
+    }
+  }
+  ~NotifySocket() { ::close(fd); }
+  std::vector<std::string> receive(std::chrono::milliseconds span) {
+    std::vector<std::string> out;
+    const auto until = Clock::now() + span;
+    char buffer[512];
+    while (Clock::now() < until) {
+      timeval tv{0, 50'000};
+      ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+      const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
+      if (n > 0) out.emplace_back(buffer, static_cast<std::size_t>(n));
+    }
+    return out;
+  }
+};
+
+TEST(EpipoleFw, TellsTheServiceManagerItIsReadyAndAlive) {
+  BoardFolder board;
+  NotifySocket notify(board.rig.dir.path() / "notify");
+  const std::string socket_env = "NOTIFY_SOCKET=" + notify.path.string();
+  const Process p = start({"--board", board.path()}, {socket_env, "WATCHDOG_USEC=200000"});
+  const std::vector<std::string> early = notify.receive(std::chrono::milliseconds(1500));
+  ::kill(p.pid, SIGTERM);
+  const std::vector<std::string> late = notify.receive(std::chrono::milliseconds(1000));
+  const auto [code, out] = finish(p);
+  EXPECT_EQ(code, 0) << out;
+  const auto count = [&](const std::vector<std::string>& v, const std::string& what) {
+    return std::count(v.begin(), v.end(), what);
+  };
+  EXPECT_EQ(count(early, "READY=1"), 1);
+  EXPECT_GE(count(early, "WATCHDOG=1"), 3) << "pings at half the 200 ms interval, or faster";
+  EXPECT_EQ(count(late, "STOPPING=1"), 1);
+}
+
+}  // namespace
+}  // namespace epipole::firmware
