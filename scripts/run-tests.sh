@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every test: installs what is missing, fetches the data sets, builds the host, host-asan,
 # aarch64 and armhf presets and runs all their tests (the cross-built ones under qemu-user),
-# then builds the libFuzzer targets (fuzz preset) and runs each from its seed corpus.
+# then builds the libFuzzer targets (fuzz preset) and runs each from its seed corpus. The cross
+# presets also build the board's .deb and check its contents (scripts/check-package.sh).
 # This is the README's test command and what CI runs.
 #
 #   EPIPOLE_PRESETS="host aarch64"   run a subset of the presets
@@ -27,6 +28,10 @@ for preset in $presets; do
   cmake --build --preset "$preset"
   echo "=== $preset: test"
   ctest --preset "$preset" --output-junit "junit-$preset.xml"
+  case $preset in
+    aarch64) ./scripts/check-package.sh build/aarch64 arm64 ;;
+    armhf) ./scripts/check-package.sh build/armhf armhf ;;
+  esac
 done
 
 echo "run-tests: all presets passed ($presets) in $((SECONDS - start)) s"

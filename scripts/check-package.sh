@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Builds the .deb of a configured build folder with cpack and checks what is in it: the
+# architecture, the dependencies, the firmware binary for that architecture (and that it runs:
+# under qemu-user for a cross build), the unit, the udev rules, the board files, the maintainer
+# scripts and the conffile.
+#
+#   scripts/check-package.sh BUILD_DIR DEBIAN_ARCH      e.g. build/aarch64 arm64
+set -euo pipefail
+build=$1
+arch=$2
+case $arch in
+  arm64) machine=AArch64 qemu="qemu-aarch64 -L /usr/aarch64-linux-gnu" ;;
+  armhf) machine=ARM qemu="qemu-arm -L /usr/arm-linux-gnueabihf" ;;
+  amd64) machine=X86-64 qemu="" ;;
+  *) echo "check-package: unknown architecture $arch" >&2; exit 2 ;;
+esac
+
+fail() {
+  echo "check-package: $*" >&2
+  exit 1
+}
+
+(cd "$build" && rm -f epipole_*.deb && cpack -G DEB >/dev/null)
+deb=$(ls "$build"/epipole_*_"$arch".deb 2>/dev/null | head -1)
+[[ -n $deb ]] || fail "cpack made no epipole_*_$arch.deb in $build"
+
+[[ $(dpkg-deb -f "$deb" Architecture) == "$arch" ]] || fail "$deb: architecture is not $arch"
+dpkg-deb -f "$deb" Depends | grep -q 'libstdc++6' || fail "$deb: no dependency on libstdc++6"
+
+contents=$(dpkg-deb -c "$deb" | awk '{print $6}')
+for f in ./usr/bin/epipole-fw ./usr/lib/systemd/system/epipole.service \
+  ./usr/lib/udev/rules.d/60-epipole.rules ./etc/epipole/board.yaml \
+  ./usr/share/epipole/board/sim/board.yaml ./usr/share/epipole/board/raspberrypi5-ov9281/board.yaml \
+  ./usr/share/epipole/board/usb-stereo/board.yaml ./usr/share/doc/epipole/README.md; do
+  grep -qxF "$f" <<<"$contents" || fail "$deb: $f is missing"
+done
+
+control=$(mktemp -d)
+trap 'rm -rf "$control"' EXIT
+dpkg-deb -e "$deb" "$control/DEBIAN"
+for f in postinst prerm postrm conffiles; do
+  [[ -f $control/DEBIAN/$f ]] || fail "$deb: control file $f is missing"
+done
+grep -qx /etc/epipole/board.yaml "$control/DEBIAN/conffiles" || fail "$deb: board.yaml is no conffile"
+sh -n "$control/DEBIAN/postinst" || fail "$deb: postinst is not valid sh"
+
+dpkg-deb -x "$deb" "$control/root"
+fw="$control/root/usr/bin/epipole-fw"
+readelf -h "$fw" | grep -q "Machine:.*$machine" || fail "$deb: epipole-fw is not an $machine binary"
+grep -q '^Type=notify' "$control/root/usr/lib/systemd/system/epipole.service" ||
+  fail "$deb: the unit is not Type=notify"
+version=$($qemu "$fw" --version) || fail "$deb: epipole-fw --version did not run"
+echo "check-package: $deb ok ($(du -k "$deb" | cut -f1) KiB; $version)"
