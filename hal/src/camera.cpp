@@ -52,6 +52,8 @@ const char* to_string(AcquireStatus status) {
       return "timeout";
     case AcquireStatus::device_lost:
       return "device lost";
+    case AcquireStatus::corrupt:
+      return "corrupt frame";
   }
   return "?";
 }

@@ -67,6 +67,10 @@ AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {
     case AcquireStatus::ok:
       timeouts_in_a_row_ = 0;
       return r;
+    case AcquireStatus::corrupt:
+      ++counters_.corrupt;
+      timeouts_in_a_row_ = 0;
+      return r;
     case AcquireStatus::timeout:
       ++counters_.timeouts;
       if (config_.timeouts_before_reopen == 0 ||

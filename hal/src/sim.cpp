@@ -73,6 +73,7 @@ void SimTrigger::emit_until(Nanoseconds until) {
   if (!running_) return;
   while (start_ + static_cast<Nanoseconds>(next_emit_) * period_ <= until) {
     const TriggerEdge edge{next_emit_, start_ + static_cast<Nanoseconds>(next_emit_) * period_};
+    if (record_ != nullptr) record_->add(edge);
     for (int i = 0; i < camera_count_; ++i) cameras_[i]->on_trigger(edge);
     ++next_emit_;
   }
@@ -187,6 +188,8 @@ void SimCamera::on_trigger(const TriggerEdge& edge) {
   }
   p.corrupt = find_fault(SimFaultKind::corrupt_pixels, s) != nullptr ||
               (rates_.corrupt_pixels > 0.0 && chance(rates_.seed, s, 7) < rates_.corrupt_pixels);
+  p.damaged = find_fault(SimFaultKind::damaged, s) != nullptr ||
+              (rates_.damaged > 0.0 && chance(rates_.seed, s, 8) < rates_.damaged);
   p.disconnect = find_fault(SimFaultKind::disconnect, s) != nullptr;
 
   if (queue_size_ == queue_.size()) {
@@ -225,6 +228,7 @@ AcquireResult SimCamera::acquire(Nanoseconds timeout) {
     queue_size_ = 0;
     return {AcquireStatus::device_lost, {}};
   }
+  if (p.damaged) return {AcquireStatus::corrupt, {}};  // the driver requeued the buffer
   const auto free = std::find(held_.begin(), held_.end(), 0);
   if (free == held_.end()) {
     ++overruns_;  // every buffer is lent out: the frame is lost

@@ -91,13 +91,25 @@ ClockId timestamp_clock(std::uint32_t buffer_flags) {
              : ClockId::other;
 }
 
+std::size_t plane_bytes(PixelFormat format, int width, int height, std::size_t bytes_per_line) {
+  return bytes_per_line * static_cast<std::size_t>(height - 1) +
+         static_cast<std::size_t>(width) * bytes_per_pixel(format);
+}
+
+AcquireStatus buffer_status(std::uint32_t buffer_flags, std::size_t bytes_used, std::size_t length,
+                            std::size_t needed) {
+  const std::size_t bytes = std::min(bytes_used == 0 ? length : bytes_used, length);
+  return (buffer_flags & V4L2_BUF_FLAG_ERROR) != 0 || bytes < needed ? AcquireStatus::corrupt
+                                                                     : AcquireStatus::ok;
+}
+
 GrayView gray_view(PixelFormat format, const std::uint8_t* data, std::size_t bytes, int width,
                    int height, std::size_t bytes_per_line, MutableGrayView scratch) {
   require(width > 0 && height > 0 && data != nullptr, "V4L2 buffer: empty");
   const std::size_t row_bytes = static_cast<std::size_t>(width) * bytes_per_pixel(format);
   require(bytes_per_line >= row_bytes, "V4L2 buffer: bytes per line ", bytes_per_line, " < the ",
           row_bytes, " of a ", width, "-pixel ", to_string(format), " row");
-  const std::size_t need = bytes_per_line * static_cast<std::size_t>(height - 1) + row_bytes;
+  const std::size_t need = plane_bytes(format, width, height, bytes_per_line);
   require(bytes >= need, "V4L2 buffer: ", bytes, " bytes, ", to_string(format), " ", width, "x",
           height, " needs ", need);
   if (is_zero_copy(format)) {
@@ -344,11 +356,10 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
   const std::size_t used = multiplanar_ ? planes[0].bytesused : buf.bytesused;
   const Buffer& mapped = buffers_[buf.index];
   const std::size_t bytes = std::min(used == 0 ? mapped.length : used, mapped.length);
-  const std::size_t need = bytes_per_line_ * static_cast<std::size_t>(config_.height - 1) +
-                           static_cast<std::size_t>(config_.width) * bytes_per_pixel(format_);
-  if ((buf.flags & V4L2_BUF_FLAG_ERROR) != 0 || bytes < need) {
-    (void)xioctl(fd_, VIDIOC_QBUF, &buf);  // a damaged frame: give it back, report nothing
-    return {AcquireStatus::timeout, {}};
+  const std::size_t need = plane_bytes(format_, config_.width, config_.height, bytes_per_line_);
+  if (buffer_status(buf.flags, used, mapped.length, need) == AcquireStatus::corrupt) {
+    (void)xioctl(fd_, VIDIOC_QBUF, &buf);  // a damaged frame: give it back at once
+    return {AcquireStatus::corrupt, {}};
   }
   MutableGrayView scratch;
   if (!scratch_.empty()) scratch = scratch_[buf.index].view();

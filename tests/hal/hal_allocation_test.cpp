@@ -28,9 +28,20 @@ TEST(HalAllocations, AcquireReleaseAndPairingNeverAllocate) {
   board.trigger.connect(r);
   r.inject({.kind = SimFaultKind::drop, .sequence = 20, .count = 2});
   r.inject({.kind = SimFaultKind::corrupt_pixels, .sequence = 30});
+  r.inject({.kind = SimFaultKind::damaged, .sequence = 35});
   l.inject({.kind = SimFaultKind::disconnect, .sequence = 40});
+  for (SimCamera* camera : {&l, &r}) {
+    camera->inject({.kind = SimFaultKind::wrong_sequence, .sequence = 50, .value = 51});
+  }
+  TriggerRecord record;
+  board.trigger.record_to(&record);
   RecoveringCamera rl(l, board.clock);
-  StereoGrabber grabber(rl, r, board.clock, {.tolerance = 1'000'000, .trigger_period = 0});
+  StereoGrabber grabber(rl, r, board.clock,
+                        {.tolerance = 1'000'000,
+                         .trigger_period = 0,
+                         .edge_delay = board.timing.exposure_delay,
+                         .edge_tolerance = 1'000'000},
+                        &record);
   board.trigger.start();
   l.start();
   r.start();
@@ -45,6 +56,8 @@ TEST(HalAllocations, AcquireReleaseAndPairingNeverAllocate) {
   EXPECT_EQ(counter.count(), 0u);
   EXPECT_GT(pairs, 100);
   EXPECT_EQ(rl.counters().reopens, 1u);
+  EXPECT_EQ(grabber.pairer().counters().corrupt_right, 1u);
+  EXPECT_EQ(grabber.pairer().counters().off_trigger_left, 1u);
 }
 
 }  // namespace

@@ -53,6 +53,8 @@ enum class AcquireStatus {
   ok,           // a frame
   timeout,      // no frame before the timeout
   device_lost,  // the device is gone (or stalled past recovery): reopen()
+  corrupt,      // a frame came but the driver flagged it damaged or it was short: its buffer
+                // went straight back; the device still streams
 };
 
 struct AcquireResult {

@@ -25,6 +25,12 @@ std::optional<PixelFormat> choose_format(PixelFormat requested,
                                          std::span<const std::uint32_t> offered_fourccs);
 // The clock a buffer's timestamp is on, from its V4L2_BUF_FLAG_TIMESTAMP_* flags.
 ClockId timestamp_clock(std::uint32_t buffer_flags);
+// The bytes one plane of the geometry needs: bytes_per_line * (height - 1) + one row.
+std::size_t plane_bytes(PixelFormat format, int width, int height, std::size_t bytes_per_line);
+// What a dequeued buffer is: ok, or corrupt when the driver flagged it (V4L2_BUF_FLAG_ERROR)
+// or it holds fewer than `needed` bytes (bytesused 0 means the whole mapped length).
+AcquireStatus buffer_status(std::uint32_t buffer_flags, std::size_t bytes_used, std::size_t length,
+                            std::size_t needed);
 
 // The gray view of one captured plane: for zero-copy formats a view into `data` itself; Y10
 // and Y16 (little-endian 16-bit samples, 10 or 16 significant bits) are scaled to 8 bits and
