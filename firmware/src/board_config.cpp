@@ -256,10 +256,21 @@ class BoardReader {
   }
 
   void read_pairing(const YAML::Node& root, BoardConfig& c) {
-    const YAML::Node n = section(root, "pairing", {"tolerance_us"});
+    const YAML::Node n =
+        section(root, "pairing", {"tolerance_us", "edge_delay_us", "edge_tolerance_us"});
     double tolerance_us = 2000;
     number(n, "pairing", "tolerance_us", tolerance_us, 1, 1e6);
     c.pairing.tolerance = static_cast<hal::Nanoseconds>(tolerance_us * 1000);
+    if (n.IsDefined()) {
+      if (const YAML::Node d = f_.optional_child(n, "pairing", "edge_delay_us"); d.IsDefined()) {
+        const double us = f_.number(d, "pairing.edge_delay_us");
+        if (us < -1e6 || us > 1e6) f_.fail("pairing.edge_delay_us", "must be within +-1 s");
+        c.pairing_edge_delay = static_cast<hal::Nanoseconds>(us * 1000);
+      }
+    }
+    double edge_tolerance_us = 2000;
+    number(n, "pairing", "edge_tolerance_us", edge_tolerance_us, 1, 1e6);
+    c.pairing.edge_tolerance = static_cast<hal::Nanoseconds>(edge_tolerance_us * 1000);
   }
 
   void read_serial(const YAML::Node& root, BoardConfig& c) {
@@ -453,6 +464,11 @@ void validate(const BoardConfig& c, const std::string& file) {
     fail("pairing.tolerance_us",
          cat(c.pairing.tolerance / 1000, " us is not below half the trigger period (",
              c.pairing.trigger_period / 1000, " us): frames of neighbouring triggers could pair"));
+  }
+  if (c.trigger.backend != "none" && c.pairing.trigger_period > 0 &&
+      2 * c.pairing.edge_tolerance >= c.pairing.trigger_period) {
+    fail("pairing.edge_tolerance_us",
+         cat(c.pairing.edge_tolerance / 1000, " us is not below half the trigger period"));
   }
   if (c.stages.disparity && c.stereo.max_disparity >= c.width()) {
     fail("stereo.max_disparity",

@@ -26,6 +26,29 @@ constexpr StageMask kKnownStages = kAlwaysOn | stage_bit(Stage::rectify) |
                                    stage_bit(Stage::corners) | stage_bit(Stage::disparity) |
                                    stage_bit(Stage::sparse) | stage_bit(Stage::detect);
 
+std::unique_ptr<TriggerWatch> make_trigger_watch(const BoardConfig& config, Board& board) {
+  if (board.trigger() == nullptr) return nullptr;
+  const auto period = static_cast<hal::Nanoseconds>(1e9 / config.trigger.line.rate_hz);
+  return std::make_unique<TriggerWatch>(
+      *board.trigger(), board.sim() != nullptr ? &board.sim()->trigger : nullptr, period);
+}
+
+// Pairs are checked against the trigger's own edges when the delay from edge to frame
+// timestamp is known: the board file gives it, the simulated board knows its cameras'.
+bool check_trigger(const BoardConfig& config, Board& board) {
+  return config.pairing_edge_delay.has_value() || board.sim() != nullptr;
+}
+
+hal::PairingConfig pairing_config(const BoardConfig& config, Board& board) {
+  hal::PairingConfig p = config.pairing;
+  if (config.pairing_edge_delay) {
+    p.edge_delay = *config.pairing_edge_delay;
+  } else if (board.sim() != nullptr) {
+    p.edge_delay = board.sim()->timing.exposure_delay;
+  }
+  return p;
+}
+
 }  // namespace
 
 FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline, Link& link)
@@ -33,15 +56,12 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
       board_(board),
       pipeline_(pipeline),
       link_(link),
-      grabber_(board.left(), board.right(), board.clock(), config.pairing),
+      trigger_(make_trigger_watch(config, board)),
+      grabber_(board.left(), board.right(), board.clock(), pairing_config(config, board),
+               trigger_ && check_trigger(config, board) ? &trigger_->record() : nullptr),
       health_(board.clock().now()),
       snapshots_(config.snapshot_directory, config.width(), config.height()),
-      stages_(stage_mask(config.stages)) {
-  if (board.trigger() != nullptr) {
-    const auto period = static_cast<hal::Nanoseconds>(1e9 / config.trigger.line.rate_hz);
-    trigger_ = std::make_unique<TriggerRecord>(*board.trigger(), board.sim() == nullptr, period);
-  }
-}
+      stages_(stage_mask(config.stages)) {}
 
 FrameLoop::~FrameLoop() {
   finish();
@@ -74,8 +94,10 @@ FaultCounts FrameLoop::faults() {
   const auto& r = board_.right_recovery().counters();
   f.unpaired_frames = p.unpaired_left + p.unpaired_right;
   f.dropped_pairs =
-      summary_.stale + std::max(p.unpaired_left + p.mismatched_left + p.out_of_order_left,
-                                p.unpaired_right + p.mismatched_right + p.out_of_order_right);
+      summary_.stale + std::max(p.unpaired_left + p.mismatched_left + p.out_of_order_left +
+                                    p.off_trigger_left + p.corrupt_left,
+                                p.unpaired_right + p.mismatched_right + p.out_of_order_right +
+                                    p.off_trigger_right + p.corrupt_right);
   f.camera_timeouts = l.timeouts + r.timeouts;
   f.camera_reopens = l.reopens + r.reopens;
   if (trigger_) f.trigger_losses = trigger_->losses();
@@ -202,8 +224,9 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
     const hal::StereoPair& pair = got.pair;
     hal::Nanoseconds trigger_ns = pair.left.timestamp;
     if (trigger_) {
-      if (board_.sim() != nullptr) trigger_->poll();
-      if (const auto edge = trigger_->find(pair.left.sequence)) trigger_ns = edge->timestamp;
+      if (const auto edge = trigger_->record().find(pair.left.sequence)) {
+        trigger_ns = edge->timestamp;
+      }
     }
     const hal::Nanoseconds captured = clock.now() - trigger_ns;
     const hal::Nanoseconds t0 = steady_now();

@@ -52,8 +52,71 @@ const char* to_string(AcquireStatus status) {
       return "timeout";
     case AcquireStatus::device_lost:
       return "device lost";
+    case AcquireStatus::corrupt:
+      return "corrupt frame";
   }
   return "?";
+}
+
+bool is_zero_copy(PixelFormat format) {
+  return format == PixelFormat::grey || format == PixelFormat::nv12 || format == PixelFormat::yu12;
+}
+
+std::size_t bytes_per_pixel(PixelFormat format) {
+  return format == PixelFormat::y10 || format == PixelFormat::y16 || format == PixelFormat::yuyv
+             ? 2
+             : 1;
+}
+
+std::size_t plane_bytes(PixelFormat format, int width, int height, std::size_t bytes_per_line) {
+  return bytes_per_line * static_cast<std::size_t>(height - 1) +
+         static_cast<std::size_t>(width) * bytes_per_pixel(format);
+}
+
+GrayView convert_plane(const std::uint8_t* data, std::size_t bytes, int width, int height,
+                       std::size_t stride, std::size_t row_bytes, RowConversion convert,
+                       MutableGrayView scratch) {
+  require(width > 0 && height > 0 && data != nullptr, "camera buffer: empty");
+  require(stride >= row_bytes, "camera buffer: ", stride, " bytes per line < the ", row_bytes,
+          " of a ", width, "-pixel row");
+  const std::size_t need = stride * static_cast<std::size_t>(height - 1) + row_bytes;
+  require(bytes >= need, "camera buffer: ", bytes, " bytes, ", width, "x", height, " needs ", need);
+  if (convert == nullptr) return {data, width, height, static_cast<std::ptrdiff_t>(stride)};
+  require(scratch.width() == width && scratch.height() == height,
+          "camera buffer: the conversion buffer is ", scratch.width(), "x", scratch.height(),
+          ", not ", width, "x", height);
+  for (int y = 0; y < height; ++y) {
+    convert(data + static_cast<std::size_t>(y) * stride, scratch.row(y), width);
+  }
+  return scratch;
+}
+
+namespace {
+
+void luma_of_yuyv(const std::uint8_t* in, std::uint8_t* out, int width) {
+  for (int x = 0; x < width; ++x) out[x] = in[2 * x];
+}
+
+// Little-endian 16-bit samples with `bits` significant bits, to their 8 high bits.
+template <int bits>
+void high_bits_of_le16(const std::uint8_t* in, std::uint8_t* out, int width) {
+  constexpr unsigned mask = (1u << bits) - 1;
+  for (int x = 0; x < width; ++x) {
+    const unsigned sample = (in[2 * x] | (unsigned{in[2 * x + 1]} << 8)) & mask;
+    out[x] = static_cast<std::uint8_t>(sample >> (bits - 8));
+  }
+}
+
+}  // namespace
+
+GrayView gray_view(PixelFormat format, const std::uint8_t* data, std::size_t bytes, int width,
+                   int height, std::size_t bytes_per_line, MutableGrayView scratch) {
+  RowConversion convert = nullptr;
+  if (format == PixelFormat::yuyv) convert = luma_of_yuyv;
+  if (format == PixelFormat::y10) convert = high_bits_of_le16<10>;
+  if (format == PixelFormat::y16) convert = high_bits_of_le16<16>;
+  return convert_plane(data, bytes, width, height, bytes_per_line,
+                       static_cast<std::size_t>(width) * bytes_per_pixel(format), convert, scratch);
 }
 
 void validate(const CameraConfig& config) {

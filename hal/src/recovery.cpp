@@ -67,6 +67,10 @@ AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {
     case AcquireStatus::ok:
       timeouts_in_a_row_ = 0;
       return r;
+    case AcquireStatus::corrupt:
+      ++counters_.corrupt;
+      timeouts_in_a_row_ = 0;
+      return r;
     case AcquireStatus::timeout:
       if (timeout <= 0) return r;  // a poll that found nothing waiting is no fault
       ++counters_.timeouts;

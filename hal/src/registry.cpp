@@ -4,6 +4,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/hal/gpiod_trigger.hpp"
+#include "epipole/hal/libcamera_camera.hpp"
 #include "epipole/hal/pty_serial.hpp"
 #include "epipole/hal/sim.hpp"
 #include "epipole/hal/v4l2_camera.hpp"
@@ -71,7 +72,7 @@ BackendRegistry make_builtin() {
   r.add_camera("v4l2", [](const CameraConfig& config, const BackendContext&) {
     return std::unique_ptr<CameraSource>(std::make_unique<V4l2Camera>(config));
   });
-  r.add_unavailable_camera("libcamera", "libcamera was not found when this binary was built");
+  register_libcamera(r);
   r.add_trigger("sim", [](const TriggerConfig& config, const BackendContext& context) {
     require(context.sim != nullptr, "trigger ", config.line,
             ": backend 'sim' needs the simulated board");

@@ -53,6 +53,7 @@ void SimTrigger::start() {
   start_ = clock_.now();
   next_emit_ = 0;
   next_report_ = 0;
+  next_record_ = 0;
   running_ = true;
 }
 
@@ -75,6 +76,17 @@ void SimTrigger::emit_until(Nanoseconds until) {
     const TriggerEdge edge{next_emit_, start_ + static_cast<Nanoseconds>(next_emit_) * period_};
     for (int i = 0; i < camera_count_; ++i) cameras_[i]->on_trigger(edge);
     ++next_emit_;
+  }
+  // The cameras are told of edges ahead of time (they schedule their frames); the record, like
+  // a real line's, only gets an edge once the clock has passed it, so that it holds the recent
+  // edges and not the coming ones.
+  const Nanoseconds now = clock_.now();
+  while (next_record_ < next_emit_ &&
+         start_ + static_cast<Nanoseconds>(next_record_) * period_ <= now) {
+    if (record_ != nullptr) {
+      record_->add({next_record_, start_ + static_cast<Nanoseconds>(next_record_) * period_});
+    }
+    ++next_record_;
   }
 }
 
@@ -187,6 +199,8 @@ void SimCamera::on_trigger(const TriggerEdge& edge) {
   }
   p.corrupt = find_fault(SimFaultKind::corrupt_pixels, s) != nullptr ||
               (rates_.corrupt_pixels > 0.0 && chance(rates_.seed, s, 7) < rates_.corrupt_pixels);
+  p.damaged = find_fault(SimFaultKind::damaged, s) != nullptr ||
+              (rates_.damaged > 0.0 && chance(rates_.seed, s, 8) < rates_.damaged);
   p.disconnect = find_fault(SimFaultKind::disconnect, s) != nullptr;
 
   if (queue_size_ == queue_.size()) {
@@ -218,6 +232,7 @@ AcquireResult SimCamera::acquire(Nanoseconds timeout) {
   queue_head_ = (queue_head_ + 1) % queue_.size();
   --queue_size_;
   clock_.sleep_until(p.ready);
+  pull_edges(clock_.now());  // the trigger's record catches up with the clock
   if (p.disconnect) {
     disconnected_ = true;
     const SimFault* f = find_fault(SimFaultKind::disconnect, p.true_sequence);
@@ -225,6 +240,7 @@ AcquireResult SimCamera::acquire(Nanoseconds timeout) {
     queue_size_ = 0;
     return {AcquireStatus::device_lost, {}};
   }
+  if (p.damaged) return {AcquireStatus::corrupt, {}};  // the driver requeued the buffer
   const auto free = std::find(held_.begin(), held_.end(), 0);
   if (free == held_.end()) {
     ++overruns_;  // every buffer is lent out: the frame is lost

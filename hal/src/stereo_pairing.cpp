@@ -6,14 +6,34 @@
 
 namespace epipole::hal {
 
-StereoPairer::StereoPairer(CameraSource& left, CameraSource& right, PairingConfig config)
-    : left_(left), right_(right), config_(config) {
+StereoPairer::StereoPairer(CameraSource& left, CameraSource& right, PairingConfig config,
+                           const TriggerRecord* trigger)
+    : left_(left), right_(right), config_(config), trigger_(trigger) {
   require(config_.tolerance >= 0, "stereo pairing (", left_.name(), ", ", right_.name(),
           "): timestamp tolerance ", config_.tolerance, " ns is negative");
   require(config_.trigger_period == 0 || 2 * config_.tolerance < config_.trigger_period,
           "stereo pairing (", left_.name(), ", ", right_.name(), "): timestamp tolerance ",
           config_.tolerance, " ns is not below half the trigger period ", config_.trigger_period,
           " ns, so frames of neighbouring triggers could pair");
+  if (trigger_ != nullptr) {
+    require(config_.edge_tolerance >= 0, "stereo pairing (", left_.name(), ", ", right_.name(),
+            "): edge tolerance ", config_.edge_tolerance, " ns is negative");
+    require(config_.trigger_period == 0 || 2 * config_.edge_tolerance < config_.trigger_period,
+            "stereo pairing (", left_.name(), ", ", right_.name(), "): edge tolerance ",
+            config_.edge_tolerance, " ns is not below half the trigger period ",
+            config_.trigger_period, " ns, so a frame could fit two trigger edges");
+  }
+}
+
+bool StereoPairer::on_trigger(const Frame& left, const Frame& right) const {
+  if (trigger_ == nullptr) return true;
+  const std::optional<TriggerEdge> edge = trigger_->find(left.sequence);
+  if (!edge) return false;
+  const Nanoseconds expected = edge->timestamp + config_.edge_delay;
+  auto fits = [&](Nanoseconds t) {
+    return (t > expected ? t - expected : expected - t) <= config_.edge_tolerance;
+  };
+  return fits(left.timestamp) && fits(right.timestamp);
 }
 
 void StereoPairer::drop_front(Side side, std::uint64_t& counter) {
@@ -61,6 +81,11 @@ void StereoPairer::match() {
         drop_front(Side::right, counters_.mismatched_right);
         continue;
       }
+      if (!on_trigger(l, r)) {
+        drop_front(Side::left, counters_.off_trigger_left);
+        drop_front(Side::right, counters_.off_trigger_right);
+        continue;
+      }
       pair_ = {l, r};
       left_q_.head = (left_q_.head + 1) % kCapacity;
       --left_q_.size;
@@ -93,11 +118,15 @@ void StereoPairer::reset(Side side) {
   q.has_last = false;
 }
 
+void StereoPairer::count_corrupt(Side side) {
+  ++(side == Side::left ? counters_.corrupt_left : counters_.corrupt_right);
+}
+
 // ----------------------------------------------------------------------------------------------
 
 StereoGrabber::StereoGrabber(CameraSource& left, CameraSource& right, Clock& clock,
-                             PairingConfig config)
-    : left_(left), right_(right), clock_(clock), pairer_(left, right, config) {}
+                             PairingConfig config, const TriggerRecord* trigger)
+    : left_(left), right_(right), clock_(clock), pairer_(left, right, config, trigger) {}
 
 PairResult StereoGrabber::next(Nanoseconds timeout) {
   const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
@@ -115,6 +144,8 @@ PairResult StereoGrabber::next(Nanoseconds timeout) {
     } else if (r.status == AcquireStatus::device_lost) {
       pairer_.reset(side);
       return {PairStatus::device_lost, {}, side};
+    } else if (r.status == AcquireStatus::corrupt) {
+      pairer_.count_corrupt(side);  // the camera took its buffer back; wait for the next frame
     } else {
       return {PairStatus::timeout, {}, side};
     }

@@ -37,12 +37,6 @@ int xioctl(int fd, unsigned long request, void* arg) {
   return r;
 }
 
-std::size_t bytes_per_pixel(PixelFormat format) {
-  return format == PixelFormat::y10 || format == PixelFormat::y16 || format == PixelFormat::yuyv
-             ? 2
-             : 1;
-}
-
 std::string fourcc_name(std::uint32_t fourcc) {
   std::string s(4, ' ');
   for (int i = 0; i < 4; ++i) {
@@ -68,10 +62,6 @@ std::optional<PixelFormat> pixel_format_of_fourcc(std::uint32_t fourcc) {
   return std::nullopt;
 }
 
-bool is_zero_copy(PixelFormat format) {
-  return format == PixelFormat::grey || format == PixelFormat::nv12 || format == PixelFormat::yu12;
-}
-
 std::optional<PixelFormat> choose_format(PixelFormat requested,
                                          std::span<const std::uint32_t> offered_fourccs) {
   auto offered = [&](PixelFormat f) {
@@ -91,36 +81,11 @@ ClockId timestamp_clock(std::uint32_t buffer_flags) {
              : ClockId::other;
 }
 
-GrayView gray_view(PixelFormat format, const std::uint8_t* data, std::size_t bytes, int width,
-                   int height, std::size_t bytes_per_line, MutableGrayView scratch) {
-  require(width > 0 && height > 0 && data != nullptr, "V4L2 buffer: empty");
-  const std::size_t row_bytes = static_cast<std::size_t>(width) * bytes_per_pixel(format);
-  require(bytes_per_line >= row_bytes, "V4L2 buffer: bytes per line ", bytes_per_line, " < the ",
-          row_bytes, " of a ", width, "-pixel ", to_string(format), " row");
-  const std::size_t need = bytes_per_line * static_cast<std::size_t>(height - 1) + row_bytes;
-  require(bytes >= need, "V4L2 buffer: ", bytes, " bytes, ", to_string(format), " ", width, "x",
-          height, " needs ", need);
-  if (is_zero_copy(format)) {
-    return {data, width, height, static_cast<std::ptrdiff_t>(bytes_per_line)};
-  }
-  require(scratch.width() == width && scratch.height() == height,
-          "V4L2 buffer: the conversion buffer is ", scratch.width(), "x", scratch.height(),
-          ", not ", width, "x", height);
-  for (int y = 0; y < height; ++y) {
-    const std::uint8_t* in = data + static_cast<std::size_t>(y) * bytes_per_line;
-    std::uint8_t* out = scratch.row(y);
-    if (format == PixelFormat::yuyv) {
-      for (int x = 0; x < width; ++x) out[x] = in[2 * x];
-    } else {
-      const int shift = format == PixelFormat::y10 ? 2 : 8;
-      const unsigned mask = format == PixelFormat::y10 ? 0x3ffu : 0xffffu;
-      for (int x = 0; x < width; ++x) {
-        const unsigned sample = (in[2 * x] | (unsigned{in[2 * x + 1]} << 8)) & mask;
-        out[x] = static_cast<std::uint8_t>(sample >> shift);
-      }
-    }
-  }
-  return scratch;
+AcquireStatus buffer_status(std::uint32_t buffer_flags, std::size_t bytes_used, std::size_t length,
+                            std::size_t needed) {
+  const std::size_t bytes = std::min(bytes_used == 0 ? length : bytes_used, length);
+  return (buffer_flags & V4L2_BUF_FLAG_ERROR) != 0 || bytes < needed ? AcquireStatus::corrupt
+                                                                     : AcquireStatus::ok;
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -344,11 +309,10 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
   const std::size_t used = multiplanar_ ? planes[0].bytesused : buf.bytesused;
   const Buffer& mapped = buffers_[buf.index];
   const std::size_t bytes = std::min(used == 0 ? mapped.length : used, mapped.length);
-  const std::size_t need = bytes_per_line_ * static_cast<std::size_t>(config_.height - 1) +
-                           static_cast<std::size_t>(config_.width) * bytes_per_pixel(format_);
-  if ((buf.flags & V4L2_BUF_FLAG_ERROR) != 0 || bytes < need) {
-    (void)xioctl(fd_, VIDIOC_QBUF, &buf);  // a damaged frame: give it back, report nothing
-    return {AcquireStatus::timeout, {}};
+  const std::size_t need = plane_bytes(format_, config_.width, config_.height, bytes_per_line_);
+  if (buffer_status(buf.flags, used, mapped.length, need) == AcquireStatus::corrupt) {
+    (void)xioctl(fd_, VIDIOC_QBUF, &buf);  // a damaged frame: give it back at once
+    return {AcquireStatus::corrupt, {}};
   }
   MutableGrayView scratch;
   if (!scratch_.empty()) scratch = scratch_[buf.index].view();

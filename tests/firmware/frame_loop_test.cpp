@@ -110,6 +110,7 @@ TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
   config.trigger.line.pulse_width = 100'000;
   config.pairing.trigger_period = 1'000'000;
   config.pairing.tolerance = 200'000;
+  config.pairing.edge_tolerance = 200'000;
   config.sim.charge_compute = true;
   Firmware fw(config, rig.images());
   Recorder recorder;

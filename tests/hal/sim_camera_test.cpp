@@ -201,6 +201,24 @@ TEST(SimCamera, CorruptAndWrongSequenceFaults) {
   }
 }
 
+TEST(SimCamera, DamagedFramesAreReportedCorruptWithoutABuffer) {
+  Rig rig;
+  rig.left.inject({.kind = SimFaultKind::damaged, .sequence = 1});
+  std::vector<AcquireStatus> statuses;
+  for (int i = 0; i < 3; ++i) {
+    const AcquireResult r = rig.left.acquire(100 * kMs);
+    statuses.push_back(r.status);
+    EXPECT_TRUE(r.status != AcquireStatus::corrupt || !r.frame.valid());
+    if (r.status != AcquireStatus::ok) continue;
+    EXPECT_EQ(rig.left.true_sequence(r.frame), i == 0 ? 0u : 2u);
+    rig.left.release(r.frame);
+  }
+  EXPECT_EQ(statuses, (std::vector<AcquireStatus>{AcquireStatus::ok, AcquireStatus::corrupt,
+                                                  AcquireStatus::ok}));
+  EXPECT_EQ(rig.left.delivered(), 2u);
+  EXPECT_STREQ(to_string(AcquireStatus::corrupt), "corrupt frame");
+}
+
 TEST(SimCamera, DisconnectUntilReopen) {
   Rig rig;
   rig.left.inject({.kind = SimFaultKind::disconnect, .sequence = 3, .value = 1});

@@ -42,6 +42,19 @@ TEST(V4l2Formats, TimestampFlags) {
   EXPECT_EQ(timestamp_clock(V4L2_BUF_FLAG_TIMESTAMP_UNKNOWN), ClockId::other);
 }
 
+TEST(V4l2Buffers, ErrorFlaggedAndShortBuffersAreCorrupt) {
+  const std::size_t need = plane_bytes(PixelFormat::y16, 6, 4, 16);
+  EXPECT_EQ(need, 16u * 3 + 12);
+  const std::uint32_t done = V4L2_BUF_FLAG_DONE | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+  EXPECT_EQ(buffer_status(done, need, 4096, need), AcquireStatus::ok);
+  EXPECT_EQ(buffer_status(done, 0, 4096, need), AcquireStatus::ok) << "0: the whole buffer";
+  EXPECT_EQ(buffer_status(done | V4L2_BUF_FLAG_ERROR, need, 4096, need), AcquireStatus::corrupt);
+  EXPECT_EQ(buffer_status(done, need - 1, 4096, need), AcquireStatus::corrupt);
+  EXPECT_EQ(buffer_status(done, 0, need - 1, need), AcquireStatus::corrupt) << "mapped too small";
+  EXPECT_EQ(buffer_status(done, 8192, need - 1, need), AcquireStatus::corrupt)
+      << "bytesused beyond the mapping is clamped to it";
+}
+
 TEST(V4l2Convert, ZeroCopyFormatsViewTheBuffer) {
   const int w = 6, h = 4;
   const std::size_t bpl = 8;  // padded rows

@@ -37,6 +37,9 @@ struct BoardConfig {
   } trigger;
 
   hal::PairingConfig pairing;
+  // Frame timestamp minus trigger edge on this board (pairing.edge_delay_us); when known, every
+  // pair is checked against the trigger's own edge of its sequence.
+  std::optional<hal::Nanoseconds> pairing_edge_delay;
 
   enum class LinkProtocol { epipole, mavlink };
   struct Serial {

@@ -12,7 +12,7 @@
 #include "epipole/firmware/link.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/snapshot.hpp"
-#include "epipole/firmware/trigger_record.hpp"
+#include "epipole/firmware/trigger_watch.hpp"
 #include "epipole/hal/stereo_pairing.hpp"
 
 namespace epipole::firmware {
@@ -71,8 +71,8 @@ class FrameLoop {
   Board& board_;
   Pipeline& pipeline_;
   Link& link_;
+  std::unique_ptr<TriggerWatch> trigger_;  // before grabber_, which checks pairs against it
   hal::StereoGrabber grabber_;
-  std::unique_ptr<TriggerRecord> trigger_;
   HealthMonitor health_;
   SnapshotWriter snapshots_;
   StageMask stages_;

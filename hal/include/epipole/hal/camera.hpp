@@ -17,6 +17,28 @@ const char* to_string(PixelFormat format);
 // "grey", "y10", "y16", "yuyv", "nv12", "yu12" (case-insensitive); nullopt for anything else.
 std::optional<PixelFormat> parse_pixel_format(std::string_view name);
 
+// --- The gray plane of a captured buffer, for every backend ---
+
+// Whether the gray plane is the buffer itself (grey, nv12, yu12: the luma plane comes first).
+bool is_zero_copy(PixelFormat format);
+// Bytes per pixel of a row of the first plane: 2 for y10, y16 and yuyv, else 1.
+std::size_t bytes_per_pixel(PixelFormat format);
+// The bytes one plane of the geometry needs: bytes_per_line * (height - 1) + one row.
+std::size_t plane_bytes(PixelFormat format, int width, int height, std::size_t bytes_per_line);
+// The gray view of one captured plane: for zero-copy formats a view into `data` itself; y10
+// and y16 (little-endian 16-bit samples, 10 or 16 significant bits) are scaled to 8 bits and
+// yuyv's luma is taken, into `scratch` (width x height, sized once at start). Throws Error when
+// `bytes` is too small for the geometry (a truncated buffer).
+GrayView gray_view(PixelFormat format, const std::uint8_t* data, std::size_t bytes, int width,
+                   int height, std::size_t bytes_per_line, MutableGrayView scratch);
+// What every gray view shares: checks that `bytes` hold `height` rows of `row_bytes` bytes,
+// `stride` apart, then views `data` in place (convert == nullptr) or converts each row into
+// `scratch` (width x height). Throws Error for a truncated buffer or a wrong scratch size.
+using RowConversion = void (*)(const std::uint8_t* in, std::uint8_t* out, int width);
+GrayView convert_plane(const std::uint8_t* data, std::size_t bytes, int width, int height,
+                       std::size_t stride, std::size_t row_bytes, RowConversion convert,
+                       MutableGrayView scratch);
+
 // The clock a frame timestamp was taken on.
 enum class ClockId { monotonic, virtual_clock, other };
 
@@ -53,6 +75,8 @@ enum class AcquireStatus {
   ok,           // a frame
   timeout,      // no frame before the timeout
   device_lost,  // the device is gone (or stalled past recovery): reopen()
+  corrupt,      // a frame came but the driver flagged it damaged or it was short: its buffer
+                // went straight back; the device still streams
 };
 
 struct AcquireResult {

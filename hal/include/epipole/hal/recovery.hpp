@@ -34,6 +34,7 @@ class Backoff {
 // Counters for the health message.
 struct RecoveryCounters {
   std::uint64_t timeouts = 0;  // acquire (or read) timed out
+  std::uint64_t corrupt = 0;   // a camera delivered a damaged frame (not a timeout, not a loss)
   std::uint64_t losses = 0;    // the device went away (or too many timeouts in a row)
   std::uint64_t reopen_attempts = 0;
   std::uint64_t reopen_failures = 0;
@@ -48,7 +49,9 @@ struct RecoveryConfig {
 
 // A camera that reopens its device with exponential back-off when it is lost or keeps timing
 // out, without restarting anything else. While it is recovering, acquire() waits for the next
-// attempt (at most the timeout) and reports device_lost; once reopened, frames flow again.
+// attempt (at most the timeout) and reports device_lost; once reopened, frames flow again. A
+// corrupt frame is counted apart and passed on: the device still streams, so it ends a run of
+// timeouts and never makes it reopen.
 class RecoveringCamera final : public CameraSource {
  public:
   RecoveringCamera(CameraSource& camera, Clock& clock, RecoveryConfig config = {});

@@ -28,6 +28,9 @@ class SimTrigger final : public TriggerLine {
 
   // Connects a camera (at most 4); it is told of every edge from then on.
   void connect(SimCamera& camera);
+  // Every edge is also added to `record` (nullptr: none), as the firmware's trigger thread
+  // records the edges of a real line.
+  void record_to(TriggerRecord* record) { record_ = record; }
   // Emits every edge with timestamp <= until to the connected cameras.
   void emit_until(Nanoseconds until);
   Nanoseconds period() const { return period_; }
@@ -41,8 +44,10 @@ class SimTrigger final : public TriggerLine {
   bool running_ = false;
   std::uint32_t next_emit_ = 0;    // the next edge to give the cameras
   std::uint32_t next_report_ = 0;  // the next edge wait_edge() reports
+  std::uint32_t next_record_ = 0;  // the next edge added to the record
   SimCamera* cameras_[4] = {};
   int camera_count_ = 0;
+  TriggerRecord* record_ = nullptr;
 };
 
 // A fault injected into one simulated camera, keyed by trigger sequence.
@@ -51,7 +56,8 @@ enum class SimFaultKind {
   delay,           // the frame arrives `duration` late (and with it those queued behind it)
   stall,           // nothing arrives for `duration` from trigger `sequence`: frames then are lost
   disconnect,      // from trigger `sequence`: device_lost until reopen(); `count` reopens fail
-  corrupt_pixels,  // the frame's pixels are garbage
+  corrupt_pixels,  // the frame's pixels are garbage (nothing tells: like a bad sensor link)
+  damaged,         // the driver flags the frame damaged: acquire() reports corrupt, no frame
   wrong_sequence,  // the frame reports sequence `value` instead of its own
   skew,            // the frame's timestamp is off by `duration` (may be negative)
 };
@@ -69,6 +75,7 @@ struct SimFault {
 struct SimFaultRates {
   double drop = 0.0;
   double corrupt_pixels = 0.0;
+  double damaged = 0.0;
   double wrong_sequence = 0.0;  // reports a neighbour's sequence (duplicate or skip)
   double delay = 0.0;           // by up to max_delay
   Nanoseconds max_delay = 0;
@@ -120,6 +127,7 @@ class SimCamera final : public CameraSource {
     Nanoseconds timestamp = 0;
     Nanoseconds ready = 0;
     bool corrupt = false;
+    bool damaged = false;
     bool disconnect = false;
   };
   const SimFault* find_fault(SimFaultKind kind, std::uint32_t sequence) const;

@@ -6,6 +6,7 @@
 
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/clock.hpp"
+#include "epipole/hal/trigger.hpp"
 
 namespace epipole::hal {
 
@@ -17,30 +18,47 @@ struct StereoPair {
 };
 
 // Everything the pairer did with the frames given to it. Per side:
-// pushed = paired + unpaired + mismatched + out_of_order + (frames still waiting).
+// pushed = paired + unpaired + mismatched + out_of_order + off_trigger + (frames still waiting).
 struct PairingCounters {
   std::uint64_t pairs = 0;
   std::uint64_t pushed_left = 0, pushed_right = 0;
   std::uint64_t unpaired_left = 0, unpaired_right = 0;      // the other side never had that trigger
   std::uint64_t mismatched_left = 0, mismatched_right = 0;  // same sequence, |dt| > tolerance
   std::uint64_t out_of_order_left = 0, out_of_order_right = 0;  // sequence not increasing
+  // Same sequence and |dt| within the tolerance, but the trigger record has no edge of that
+  // sequence at the frames' time (both cameras garbled the sequence the same way).
+  std::uint64_t off_trigger_left = 0, off_trigger_right = 0;
+  // Damaged frames the cameras reported (AcquireStatus::corrupt); never pushed (StereoGrabber).
+  std::uint64_t corrupt_left = 0, corrupt_right = 0;
 };
 
 struct PairingConfig {
   Nanoseconds tolerance = 2'000'000;  // |t_left - t_right| allowed for one trigger
-  // The trigger period, when known: the tolerance must be below half of it, so that frames of
-  // neighbouring triggers can never pass the timestamp check. 0: not checked.
+  // The trigger period, when known: the tolerance (and the edge tolerance) must be below half
+  // of it, so that frames of neighbouring triggers can never pass a timestamp check. 0: not
+  // checked.
   Nanoseconds trigger_period = 0;
+  // With a trigger record: a pair of sequence s is accepted only when the record holds edge s
+  // and both frame timestamps lie within edge_tolerance of (edge s + edge_delay). edge_delay is
+  // the board's frame timestamp minus its trigger edge (exposure start or end, as the driver
+  // stamps it).
+  Nanoseconds edge_delay = 0;
+  Nanoseconds edge_tolerance = 2'000'000;
 };
 
 // Pairs left and right frames by trigger sequence. A left and a right frame become a pair only
-// when their sequences are equal AND their timestamps lie within the tolerance; a frame whose
-// sequence does not increase on its side is refused; a frame for which the other side has
-// moved past its sequence is dropped. Dropped frames go back to their camera at once and are
-// counted. Fixed memory; never allocates.
+// when their sequences are equal AND their timestamps lie within the tolerance AND, when a
+// trigger record is given, the trigger's own edge of that sequence lies where their timestamps
+// say; a frame whose sequence does not increase on its side is refused; a frame for which the
+// other side has moved past its sequence is dropped. Dropped frames go back to their camera at
+// once and are counted. Fixed memory; never allocates.
 class StereoPairer {
  public:
-  StereoPairer(CameraSource& left, CameraSource& right, PairingConfig config);
+  // `trigger`: the edges of the trigger line (optional; it must outlive the pairer). Without it,
+  // a sequence garbled identically on both cameras still pairs (the frames are of one trigger,
+  // as the timestamps prove, but carry the wrong number).
+  StereoPairer(CameraSource& left, CameraSource& right, PairingConfig config,
+               const TriggerRecord* trigger = nullptr);
 
   // Hands a frame of one side to the pairer (which owns it from now on). Returns true when
   // a pair became ready.
@@ -51,6 +69,8 @@ class StereoPairer {
   void release(const StereoPair& pair);
   // Drops what waits on one side (e.g. its camera was reopened); counted as unpaired.
   void reset(Side side);
+  // Counts a damaged frame a camera reported (it never reaches the pairer).
+  void count_corrupt(Side side);
   std::size_t waiting(Side side) const { return queue(side).size; }
   const PairingCounters& counters() const { return counters_; }
   const PairingConfig& config() const { return config_; }
@@ -68,11 +88,13 @@ class StereoPairer {
   const Queue& queue(Side side) const { return side == Side::left ? left_q_ : right_q_; }
   CameraSource& camera(Side side) { return side == Side::left ? left_ : right_; }
   void drop_front(Side side, std::uint64_t& counter);
+  bool on_trigger(const Frame& left, const Frame& right) const;
   void match();
 
   CameraSource& left_;
   CameraSource& right_;
   PairingConfig config_;
+  const TriggerRecord* trigger_;
   Queue left_q_, right_q_;
   StereoPair pair_{};
   bool ready_ = false;
@@ -88,10 +110,12 @@ struct PairResult {
 };
 
 // Acquires from two cameras and pairs their frames: next() returns the next pair, or timeout
-// when none came before the timeout, or device_lost naming the side that is gone.
+// when none came before the timeout, or device_lost naming the side that is gone. A corrupt
+// frame is counted (corrupt_left/right) and the wait goes on.
 class StereoGrabber {
  public:
-  StereoGrabber(CameraSource& left, CameraSource& right, Clock& clock, PairingConfig config);
+  StereoGrabber(CameraSource& left, CameraSource& right, Clock& clock, PairingConfig config,
+                const TriggerRecord* trigger = nullptr);
   PairResult next(Nanoseconds timeout);
   void release(const StereoPair& pair) { pairer_.release(pair); }
   StereoPairer& pairer() { return pairer_; }

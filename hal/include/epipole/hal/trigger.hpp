@@ -1,6 +1,10 @@
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
+#include <mutex>
+#include <optional>
 #include <string>
 
 #include "epipole/hal/clock.hpp"
@@ -45,6 +49,29 @@ class TriggerLine {
   virtual void start() = 0;
   virtual void stop() = 0;
   virtual EdgeResult wait_edge(Nanoseconds timeout) = 0;
+};
+
+// The recent edges of a trigger line: written by whoever waits on the line (the master's timer,
+// a slave's edge events, the simulated board's trigger) and read by the stereo pairer, which
+// checks every pair against the trigger's own sequence and time. Holds the last kCapacity
+// edges in fixed memory; add() and find() never allocate and may run on different threads.
+class TriggerRecord {
+ public:
+  static constexpr std::size_t kCapacity = 64;
+  void add(const TriggerEdge& edge);
+  // The edge of that sequence, while it is among the last kCapacity.
+  std::optional<TriggerEdge> find(std::uint32_t sequence) const;
+  std::uint64_t added() const;
+  void clear();
+
+ private:
+  struct Slot {
+    TriggerEdge edge;
+    bool valid = false;
+  };
+  mutable std::mutex mutex_;
+  std::array<Slot, kCapacity> slots_{};
+  std::uint64_t added_ = 0;
 };
 
 }  // namespace epipole::hal

@@ -11,13 +11,12 @@
 
 namespace epipole::hal {
 
-// --- The device-independent logic of the V4L2 backend (tested without a device) ---
+// --- The device-independent logic of the V4L2 backend (tested without a device; the gray
+// view of a buffer is gray_view() in camera.hpp) ---
 
 // The V4L2 fourcc of a pixel format (V4L2_PIX_FMT_GREY, _Y10, _Y16, _YUYV, _NV12, _YUV420).
 std::uint32_t fourcc_of(PixelFormat format);
 std::optional<PixelFormat> pixel_format_of_fourcc(std::uint32_t fourcc);
-// Whether the gray plane is the buffer itself (GREY, NV12, YU12: the luma plane comes first).
-bool is_zero_copy(PixelFormat format);
 // The format to ask for: the requested one when the device offers it, else the best offered
 // one (zero-copy formats first: grey, nv12, yu12, then y16, y10, yuyv); nullopt when the device
 // offers none of them.
@@ -25,13 +24,10 @@ std::optional<PixelFormat> choose_format(PixelFormat requested,
                                          std::span<const std::uint32_t> offered_fourccs);
 // The clock a buffer's timestamp is on, from its V4L2_BUF_FLAG_TIMESTAMP_* flags.
 ClockId timestamp_clock(std::uint32_t buffer_flags);
-
-// The gray view of one captured plane: for zero-copy formats a view into `data` itself; Y10
-// and Y16 (little-endian 16-bit samples, 10 or 16 significant bits) are scaled to 8 bits and
-// YUYV's luma is taken, into `scratch` (width x height, sized once at start). Throws Error when
-// `bytes` is too small for the geometry (a truncated buffer).
-GrayView gray_view(PixelFormat format, const std::uint8_t* data, std::size_t bytes, int width,
-                   int height, std::size_t bytes_per_line, MutableGrayView scratch);
+// What a dequeued buffer is: ok, or corrupt when the driver flagged it (V4L2_BUF_FLAG_ERROR)
+// or it holds fewer than `needed` bytes (bytesused 0 means the whole mapped length).
+AcquireStatus buffer_status(std::uint32_t buffer_flags, std::size_t bytes_used, std::size_t length,
+                            std::size_t needed);
 
 // --- The backend ---
 

@@ -1,0 +1,44 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <thread>
+
+#include "epipole/hal/sim.hpp"
+#include "epipole/hal/trigger.hpp"
+
+namespace epipole::firmware {
+
+// Keeps the record of the board's trigger edges (hal::TriggerRecord) that the stereo pairer
+// checks pairs against and that gives every result its trigger time. On hardware a thread of
+// its own waits on the line — a master fires its pulses as it waits, a slave is told of each
+// edge by the kernel; on the simulated board the trigger writes its edges into the record as the
+// virtual clock passes them. Fixed memory.
+class TriggerWatch {
+ public:
+  // `sim`: the simulated board's trigger, or null on hardware.
+  TriggerWatch(hal::TriggerLine& line, hal::SimTrigger* sim, hal::Nanoseconds period);
+  ~TriggerWatch();
+  TriggerWatch(const TriggerWatch&) = delete;
+  TriggerWatch& operator=(const TriggerWatch&) = delete;
+
+  void start();
+  void stop();
+
+  const hal::TriggerRecord& record() const { return record_; }
+  // Times the line went quiet for more than three periods, or reported itself lost.
+  std::uint64_t losses() const { return losses_.load(); }
+
+ private:
+  void run();
+
+  hal::TriggerLine& line_;
+  hal::SimTrigger* sim_;
+  hal::Nanoseconds period_;
+  hal::TriggerRecord record_;
+  std::atomic<std::uint64_t> losses_{0};
+  std::atomic<bool> stopping_{false};
+  std::thread thread_;
+};
+
+}  // namespace epipole::firmware
