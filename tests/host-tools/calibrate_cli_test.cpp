@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 
+#include "epipole/calib/calibration.hpp"
 #include "epipole/core/image_io.hpp"
 #include "run_tool.hpp"
 #include "test_data.hpp"
@@ -259,3 +260,18 @@ TEST(CalibrateCli, CorruptCalibrationFilesAreOneLineErrors) {
 }
 
 }  // namespace
+
+// board/sim/chessboard-rig.yaml is this calibration, made by the same command: a change of the
+// calibration code that moves the result must regenerate it (the command is in the file).
+TEST(CalibrateCli, TheSimulatedBoardsRigIsThisCalibration) {
+  const Calibration& c = calibration();
+  ASSERT_EQ(c.result.exit_code, 0) << c.result.out;
+  const auto fresh = epipole::calib::load_calibration(c.rig);
+  const auto committed = epipole::calib::load_calibration(fs::path(EPIPOLE_SOURCE_DIR) / "board" /
+                                                          "sim" / "chessboard-rig.yaml");
+  EXPECT_TRUE(fresh.Q.isApprox(committed.Q, 1e-6)) << fresh.Q << "\n" << committed.Q;
+  EXPECT_TRUE(fresh.left.camera_matrix().isApprox(committed.left.camera_matrix(), 1e-6));
+  EXPECT_TRUE(fresh.right.camera_matrix().isApprox(committed.right.camera_matrix(), 1e-6));
+  EXPECT_TRUE(fresh.T.isApprox(committed.T, 1e-6));
+  EXPECT_TRUE(fresh.left.rectification.isApprox(committed.left.rectification, 1e-6));
+}

@@ -1,0 +1,172 @@
+// `epipole sim`, the README's main job: the firmware on the simulated board over the real data,
+// with its pictures, the decoded serial stream and the summary.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "epipole/core/image_io.hpp"
+#include "run_tool.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using epipole::test::run_tool;
+
+constexpr int kFrames = 20;
+
+fs::path out_dir() {
+  return fs::path(::testing::TempDir()) / "epipole-sim-cli";
+}
+
+// One run of every scene, shared by the tests.
+const epipole::test::ToolResult& sim_run() {
+  static const epipole::test::ToolResult r = [] {
+    epipole::test::data_file("samples/aloeGT.png");  // fails the test with a hint when missing
+    fs::remove_all(out_dir());
+    return run_tool("sim --board '" + std::string(EPIPOLE_SOURCE_DIR) + "/board/sim' --frames " +
+                    std::to_string(kFrames) + " --out '" + out_dir().string() + "'");
+  }();
+  return r;
+}
+
+int scene_lines(const std::string& out) {
+  int n = 0;
+  for (std::size_t at = out.find("sim: scene "); at != std::string::npos;
+       at = out.find("sim: scene ", at + 1)) {
+    ++n;
+  }
+  return n;
+}
+
+nlohmann::json summary() {
+  std::ifstream in(out_dir() / "summary.json");
+  return nlohmann::json::parse(in);
+}
+
+TEST(SimCli, RunsEverySceneOfTheSimulatedBoard) {
+  const auto& r = sim_run();
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const nlohmann::json s = summary();
+  ASSERT_EQ(s["scenes"].size(), 3u) << s.dump(2);
+  std::vector<std::string> names;
+  for (const auto& scene : s["scenes"]) {
+    names.push_back(scene["scene"]);
+    EXPECT_EQ(scene["frames"], kFrames) << scene.dump(2);
+    EXPECT_EQ(scene["timeouts"], 0) << scene.dump(2);
+    EXPECT_EQ(scene["messages_dropped"], 0) << scene.dump(2);
+    EXPECT_EQ(scene["calibration"], "yes");
+    // What the robot's end of the link received and decoded.
+    EXPECT_EQ(scene["received"]["frame"], kFrames) << scene.dump(2);
+    EXPECT_EQ(scene["received"]["obstacles"], kFrames) << scene.dump(2);
+    EXPECT_GE(scene["received"]["health"].get<int>(), 1) << scene.dump(2);
+    const auto& d = scene["decoder"];
+    EXPECT_EQ(d["bad_cobs"].get<int>() + d["bad_crc"].get<int>() + d["bad_body"].get<int>() +
+                  d["lost"].get<int>(),
+              0)
+        << d.dump();
+    EXPECT_GT(scene["last_health"]["fps_centi"].get<int>(), 0);
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"chessboard", "aloe", "faces"}));
+  EXPECT_EQ(scene_lines(r.out), 3) << r.out;
+}
+
+TEST(SimCli, WritesThePicturesAndTheStream) {
+  ASSERT_EQ(sim_run().exit_code, 0) << sim_run().out;
+  for (const char* scene : {"chessboard", "aloe", "faces"}) {
+    const fs::path dir = out_dir() / scene;
+    const epipole::GrayImage pair = epipole::load_gray(dir / "frame0-rectified-pair.png");
+    EXPECT_EQ(pair.width(), 1280) << scene;
+    EXPECT_EQ(pair.height(), 480) << scene;
+    EXPECT_EQ(epipole::load_gray(dir / "frame0-disparity.png").height(), 480 + 40)
+        << "the legend under the picture";
+    EXPECT_TRUE(fs::exists(dir / "frame0-corners.png")) << scene;
+    EXPECT_GT(fs::file_size(dir / "serial.bin"), 1000u) << scene;
+    // Every line of the decoded stream is JSON; the last one the decoder's counts.
+    std::ifstream lines(dir / "serial.jsonl");
+    std::string line, last;
+    int count = 0;
+    while (std::getline(lines, line)) {
+      last = line;
+      EXPECT_TRUE(nlohmann::json::accept(line)) << line;
+      ++count;
+    }
+    EXPECT_GT(count, 2 * kFrames) << scene;
+    EXPECT_EQ(nlohmann::json::parse(last)["type"], "decoder");
+  }
+}
+
+// The firmware's disparity of the Aloe scene against the data set's ground truth, fitted into
+// the simulated cameras' 640x480 the way the scene is (one scale, centred).
+TEST(SimCli, AloeDisparityAgreesWithTheGroundTruth) {
+  ASSERT_EQ(sim_run().exit_code, 0) << sim_run().out;
+  const auto ours = epipole::load_gray16(out_dir() / "aloe" / "frame0-disparity16.png");
+  const auto truth = epipole::load_gray(epipole::test::data_file("samples/aloeGT.png"));
+  const double scale = std::min(640.0 / truth.width(), 480.0 / truth.height());
+  const int w = static_cast<int>(std::lround(truth.width() * scale));
+  const int h = static_cast<int>(std::lround(truth.height() * scale));
+  const int x0 = (640 - w) / 2;
+  const int y0 = (480 - h) / 2;
+  int known = 0, valid = 0, bad2 = 0;
+  for (int v = y0; v < y0 + h; ++v) {
+    for (int u = x0; u < x0 + w; ++u) {
+      const int sx = std::clamp(static_cast<int>((u - x0 + 0.5) / scale), 0, truth.width() - 1);
+      const int sy = std::clamp(static_cast<int>((v - y0 + 0.5) / scale), 0, truth.height() - 1);
+      const int gt = truth.view()(sx, sy);
+      if (gt == 0) continue;
+      ++known;
+      const int d16 = ours.view()(u, v);
+      if (d16 == 0) {
+        ++bad2;
+        continue;
+      }
+      ++valid;
+      if (std::abs(d16 / 16.0 - gt * scale) > 2.0) ++bad2;
+    }
+  }
+  const double bad2_share = static_cast<double>(bad2) / known;
+  const double density = static_cast<double>(valid) / known;
+  std::printf("aloe scene, 640x480: bad2 %.1f %%, density %.1f %% (%d known pixels)\n",
+              100 * bad2_share, 100 * density, known);
+  EXPECT_GT(known, 100'000);
+  EXPECT_LT(bad2_share, 0.35);
+  EXPECT_GT(density, 0.6);
+}
+
+// The faces scene's right view is its left view shifted by 32 pixels.
+TEST(SimCli, FacesSceneHasItsKnownDisparity) {
+  ASSERT_EQ(sim_run().exit_code, 0) << sim_run().out;
+  const auto ours = epipole::load_gray16(out_dir() / "faces" / "frame0-disparity16.png");
+  std::vector<int> values;
+  for (int y = 0; y < ours.height(); ++y) {
+    for (int x = 0; x < ours.width(); ++x) {
+      if (ours.view()(x, y) != 0) values.push_back(ours.view()(x, y));
+    }
+  }
+  ASSERT_GT(values.size(), 100'000u);
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  EXPECT_NEAR(values[values.size() / 2] / 16.0, 32.0, 0.25);
+}
+
+TEST(SimCli, BadArgumentsAreOneLineErrors) {
+  const auto r = run_tool("sim --board /nowhere --out '" + out_dir().string() + "-bad'");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(epipole::test::line_count(r.out), 1) << r.out;
+  const auto r2 = run_tool("sim --board '" + std::string(EPIPOLE_SOURCE_DIR) +
+                           "/board/raspberrypi5-ov9281' --out '" + out_dir().string() + "-bad'");
+  EXPECT_EQ(r2.exit_code, 1);
+  EXPECT_NE(r2.out.find("not a simulated board"), std::string::npos) << r2.out;
+  const auto r3 = run_tool("sim --board '" + std::string(EPIPOLE_SOURCE_DIR) +
+                           "/board/sim' --scene moon --out '" + out_dir().string() + "-bad'");
+  EXPECT_EQ(r3.exit_code, 1);
+  EXPECT_NE(r3.out.find("'moon' is not a scene"), std::string::npos) << r3.out;
+}
+
+}  // namespace
