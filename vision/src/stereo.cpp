@@ -7,6 +7,7 @@
 #include "epipole/core/error.hpp"
 #include "kernel_set.hpp"
 #include "stereo_census.hpp"
+#include "stereo_winner.hpp"
 
 namespace epipole::vision {
 
@@ -24,32 +25,6 @@ void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint8_
     if (rows[kCensusRadiusY + o.dy][xa] > rows[kCensusRadiusY - o.dy][xc]) bits |= 1u << b;
   }
   for (int p = 0; p < kCensusPlanes; ++p) planes[p][x] = static_cast<std::uint8_t>(bits >> (8 * p));
-}
-
-int subpixel(int d, int disparities, int below, int at, int above) {
-  if (d <= 0 || d >= disparities - 1) return d * kDisparityScale;
-  const int denom = std::max(below + above - 2 * at, 1);
-  return d * kDisparityScale + ((below - above) * kDisparityScale + denom) / (2 * denom);
-}
-
-void store_winner(const WtaRow& wta, int x, int best, const std::uint16_t* s, int D) {
-  if (best < 0 || best > x) {
-    wta.disparity[x] = kInvalidDisparity;
-    wta.best[x] = -1;
-    return;
-  }
-  const int below = best > 0 ? s[best - 1] : 0;
-  const int above = best < D - 1 ? s[best + 1] : 0;
-  wta.disparity[x] = static_cast<std::int16_t>(subpixel(best, D, below, s[best], above));
-  wta.best[x] = static_cast<std::int16_t>(best);
-}
-
-std::uint32_t uniqueness_ratio(int uniqueness) {
-  return static_cast<std::uint32_t>(65536 * 100 / (100 - uniqueness));
-}
-
-int uniqueness_limit(int min_cost, std::uint32_t ratio) {
-  return static_cast<int>((static_cast<std::uint64_t>(min_cost) * ratio) >> 16);
 }
 
 void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* const* planes) {
@@ -295,15 +270,15 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path)
   padded_.assign(padded, kInvalidDisparity);
   disparity_ = ImageView<std::int16_t>(padded_.data() + W + 3, W, H, W + 2);
   if (config.speckle_size > 0) {
-    visited_.assign(padded, 0);
-    region_.assign(uw * static_cast<std::size_t>(H), 0);
+    runs_.assign(uw * static_cast<std::size_t>(H), 0);  // at most one run per pixel
+    labels_.assign(2 * uw, 0);
   }
 }
 
 StereoMatcher::~StereoMatcher() = default;
 
 std::size_t StereoMatcher::working_set_bytes() const {
-  std::size_t n = bytes_of(padded_) + bytes_of(visited_) + bytes_of(region_);
+  std::size_t n = bytes_of(padded_) + bytes_of(runs_) + bytes_of(labels_);
   for (const auto& w : workers_) n += w->bytes();
   return n;
 }
@@ -442,41 +417,69 @@ void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView r
 }
 
 void StereoMatcher::remove_speckles() {
-  // Regions grow 4-connected between valid neighbours at most speckle_range pixels apart. The
-  // disparity buffer has a border of one invalid pixel all round, so neighbours need no bounds
-  // checks; region_ holds the buffer indices of the current region.
-  const std::ptrdiff_t stride = config_.width + 2;
-  std::int16_t* const disp = padded_.data();
+  // Regions are 4-connected between valid neighbours at most speckle_range pixels apart. Each
+  // row is cut into runs of such horizontal neighbours; a run joins the runs above it where a
+  // pixel and the one above it are neighbours (union-find on runs, sizes at the roots); then
+  // the same runs, found again, are invalidated where their region is small.
+  const int W = config_.width;
+  const int H = config_.height;
   const int range = config_.speckle_range * kDisparityScale;
-  std::fill(visited_.begin(), visited_.end(), std::uint8_t{0});
-  const std::ptrdiff_t steps[4] = {-1, 1, -stride, stride};
-  for (int y = 0; y < config_.height; ++y) {
-    const std::ptrdiff_t row = (y + 1) * stride + 1;
-    for (std::ptrdiff_t start = row; start < row + config_.width; ++start) {
-      if (visited_[static_cast<std::size_t>(start)] != 0 || disp[start] == kInvalidDisparity) {
+  const auto near = [range](int a, int b) { return std::abs(a - b) <= range; };
+  // Calls run(begin, end) for each run of row d, in order.
+  const auto for_each_run = [&](const std::int16_t* d, auto&& run) {
+    for (int x = 0; x < W;) {
+      if (d[x] == kInvalidDisparity) {
+        ++x;
         continue;
       }
-      visited_[static_cast<std::size_t>(start)] = 1;
-      region_[0] = static_cast<std::uint32_t>(start);
-      std::size_t count = 1;
-      for (std::size_t i = 0; i < count; ++i) {
-        const std::ptrdiff_t p = region_[i];
-        const int v = disp[p];
-        for (const std::ptrdiff_t step : steps) {
-          const std::ptrdiff_t q = p + step;
-          const int u = disp[q];
-          if (visited_[static_cast<std::size_t>(q)] != 0 || u == kInvalidDisparity ||
-              std::abs(u - v) > range) {
-            continue;
-          }
-          visited_[static_cast<std::size_t>(q)] = 1;
-          region_[count++] = static_cast<std::uint32_t>(q);
-        }
-      }
-      if (count < static_cast<std::size_t>(config_.speckle_size)) {
-        for (std::size_t i = 0; i < count; ++i) disp[region_[i]] = kInvalidDisparity;
+      const int begin = x;
+      for (++x; x < W && d[x] != kInvalidDisparity && near(d[x], d[x - 1]);) ++x;
+      run(begin, x);
+    }
+  };
+  std::int32_t* const node = runs_.data();
+  const auto find = [node](std::int32_t i) {
+    while (node[i] >= 0) {
+      if (node[node[i]] >= 0) node[i] = node[node[i]];
+      i = node[i];
+    }
+    return i;
+  };
+  std::int32_t count = 0;
+  std::uint32_t* labels = labels_.data();
+  std::uint32_t* above = labels_.data() + W;
+  for (int y = 0; y < H; ++y) {
+    const std::int16_t* d = disparity_.row(y);
+    for_each_run(d, [&](int begin, int end) {
+      node[count] = begin - end;
+      std::fill(labels + begin, labels + end, static_cast<std::uint32_t>(count));
+      ++count;
+    });
+    if (y > 0) {
+      const std::int16_t* u = disparity_.row(y - 1);
+      std::uint32_t last_a = 0xFFFFFFFF;
+      std::uint32_t last_b = 0xFFFFFFFF;
+      for (int x = 0; x < W; ++x) {
+        if (d[x] == kInvalidDisparity || u[x] == kInvalidDisparity || !near(d[x], u[x])) continue;
+        if (labels[x] == last_a && above[x] == last_b) continue;  // the same two runs again
+        last_a = labels[x];
+        last_b = above[x];
+        const std::int32_t a = find(static_cast<std::int32_t>(last_a));
+        const std::int32_t b = find(static_cast<std::int32_t>(last_b));
+        if (a == b) continue;
+        const auto [big, small] = node[a] <= node[b] ? std::pair{a, b} : std::pair{b, a};
+        node[big] += node[small];
+        node[small] = big;
       }
     }
+    std::swap(labels, above);
+  }
+  std::int32_t i = 0;
+  for (int y = 0; y < H; ++y) {
+    std::int16_t* d = disparity_.row(y);
+    for_each_run(d, [&](int begin, int end) {
+      if (-node[find(i++)] < config_.speckle_size) std::fill(d + begin, d + end, kInvalidDisparity);
+    });
   }
 }
 

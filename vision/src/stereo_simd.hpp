@@ -9,6 +9,7 @@
 
 #include "epipole/vision/stereo.hpp"
 #include "stereo_census.hpp"
+#include "stereo_winner.hpp"
 
 namespace epipole::vision::kernels {
 
@@ -137,9 +138,9 @@ class WtaPixels {
     // Unique when every sum below the limit is at best - 1 .. best + 1: the count of sums
     // below it (each lane counts down by the all-ones mask) equals the count among those three.
     const int limit = std::min(uniqueness_limit(min_cost, ratio_), static_cast<int>(kNoCost));
-    std::uint32_t near = 0;
-    for (int d = std::max(best - 1, 0); d <= std::min(best + 1, D - 1); ++d)
-      near += s[d] < limit ? 1u : 0u;
+    const std::uint32_t near = (best > 0 && s[best - 1] < limit ? 1u : 0u) +
+                               (s[best] < limit ? 1u : 0u) +
+                               (best < D - 1 && s[best + 1] < limit ? 1u : 0u);
     const H l = V::splath(static_cast<std::uint16_t>(limit));
     H count = V::splath(0);
     for (int d = 0; d < D; d += 16) count = V::subh(count, V::gth(l, V::loadh(s + d)));

@@ -71,8 +71,10 @@ class StereoMatcher {
   std::vector<std::unique_ptr<Worker>> workers_;
   std::vector<std::int16_t> padded_;   // the output with a border of one invalid pixel
   ImageView<std::int16_t> disparity_;  // the output: padded_ without its border
-  std::vector<std::uint8_t> visited_;  // speckle filter
-  std::vector<std::uint32_t> region_;  // speckle filter: pixels of the region being grown
+  // Speckle filter: union-find over the runs of the rows (a root holds minus its region's size,
+  // another run its parent) and the run of each pixel of two rows.
+  std::vector<std::int32_t> runs_;
+  std::vector<std::uint32_t> labels_;
 };
 
 namespace kernels {
@@ -158,16 +160,5 @@ void wta_row_ref(const std::uint16_t* sums, int width, int disparities, const Wt
 
 // One pixel of the census (clamped columns), shared by every path for the border columns.
 void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint8_t* const* planes);
-// Uniqueness, shared by every path: a disparity (other than best +-1) whose cost is below
-// uniqueness_limit(min_cost, uniqueness_ratio(u)) ~ min_cost * 100 / (100 - u) makes the pixel
-// ambiguous. ratio = 2^16 * 100 / (100 - u), fixed point, so no division per pixel.
-std::uint32_t uniqueness_ratio(int uniqueness);
-int uniqueness_limit(int min_cost, std::uint32_t ratio);
-// The winner of pixel x (best < 0: none) with its sub-pixel position from its D sums s, shared
-// by every path.
-void store_winner(const WtaRow& wta, int x, int best, const std::uint16_t* s, int D);
-// Parabolic sub-pixel position, shared by every path: d*16 + offset from the three costs.
-int subpixel(int d, int disparities, int below, int at, int above);
-
 }  // namespace kernels
 }  // namespace epipole::vision
