@@ -99,6 +99,7 @@ TEST(StereoKernels, CostEqualsReference) {
       }
       U8 ref(n * D, 0);
       kernels::cost_row_ref(l, r, width, D, ref.data());
+      EXPECT_EQ(ref[1], 31) << "d = 1 at x = 0 is beyond the left border";
       for (const SimdPath path : simd_paths()) {
         U8 out(n * D, 1);
         kernels::stereo_kernels(path).cost(l, r, width, D, out.data());
@@ -207,7 +208,8 @@ TEST(StereoKernels, SgmEqualsReference) {
   }
 }
 
-// Box of radius 0: the winner take all alone, on sums of every range.
+// A block-matching row of radius 0 with no row entering or leaving: the winner take all
+// alone, on sums of every range.
 TEST(StereoKernels, WtaEqualsReference) {
   for (const int width : {17, 40}) {
     for (const int D : {16, 32}) {
@@ -220,8 +222,9 @@ TEST(StereoKernels, WtaEqualsReference) {
           kernels::box_wta_ref(columns.data(), width, D, 0, ref_sums.data(), ref.row(uniqueness));
           for (const SimdPath path : simd_paths()) {
             WtaOut out(n, D);
-            kernels::stereo_kernels(path).box_wta(columns.data(), width, D, 0, sums.data(),
-                                                  out.row(uniqueness));
+            U16 unchanged = columns;
+            kernels::stereo_kernels(path).bm({nullptr, nullptr, unchanged.data(), width, D, 0,
+                                              sums.data(), out.row(uniqueness)});
             expect_same_wta(out, ref,
                             cat(to_string(path), " width ", width, " D ", D, " max ", max,
                                 " uniqueness ", uniqueness));
@@ -250,12 +253,37 @@ TEST(StereoKernels, BoxEqualsReference) {
             ASSERT_EQ(out, ref) << to_string(path);
           }
         }
-        for (const int radius : {1, 3, 10}) {
-          WtaOut ref(static_cast<std::size_t>(width), D), out(static_cast<std::size_t>(width), D);
-          U16 sums(n, 0);
-          kernels::box_wta_ref(base.data(), width, D, radius, sums.data(), ref.row(10));
-          k.box_wta(base.data(), width, D, radius, sums.data(), out.row(10));
-          expect_same_wta(out, ref, cat(to_string(path), " radius ", radius));
+      }
+    }
+  }
+}
+
+// One row of block matching in one pass against box_columns + box_wta of the reference: the
+// columns updated, the winners.
+TEST(StereoKernels, BmRowEqualsReference) {
+  for (const auto& [width, D] : {std::pair{17, 16}, std::pair{40, 32}, std::pair{65, 48}}) {
+    const auto n = static_cast<std::size_t>(width);
+    U16 base = random_u16(n * D, 900, 23);
+    for (auto& v : base) v = static_cast<std::uint16_t>(v + 100);  // a leaving row never wraps
+    const U8 entering = random_u8(n * D, 31, 24), leaving = random_u8(n * D, 31, 25);
+    for (const SimdPath path : simd_paths()) {
+      for (const int radius : {1, 3, 10}) {
+        for (const bool enters : {false, true}) {
+          for (const bool leaves : {false, true}) {
+            const auto run = [&](kernels::BmRowKernel* kernel, U16& columns, WtaOut& out) {
+              U16 sums(n * D, 3);
+              kernel({enters ? entering.data() : nullptr, leaves ? leaving.data() : nullptr,
+                      columns.data(), width, D, radius, sums.data(), out.row(10)});
+            };
+            U16 ref_columns = base, columns = base;
+            WtaOut ref(n, D), out(n, D);
+            run(kernels::bm_row_ref, ref_columns, ref);
+            run(kernels::stereo_kernels(path).bm, columns, out);
+            const std::string where = cat(to_string(path), " width ", width, " radius ", radius,
+                                          " enters ", enters, " leaves ", leaves);
+            ASSERT_EQ(columns, ref_columns) << where;
+            expect_same_wta(out, ref, where);
+          }
         }
       }
     }

@@ -40,7 +40,8 @@ void cost_row_ref(const std::uint8_t* const* left, const std::uint8_t* const* ri
       for (int p = 0; p < kCensusPlanes; ++p) {
         bits += std::popcount(static_cast<unsigned>(left[p][x] ^ right[p][k]));
       }
-      cost[static_cast<std::ptrdiff_t>(x) * disparities + d] = static_cast<std::uint8_t>(bits);
+      cost[static_cast<std::ptrdiff_t>(x) * disparities + d] =
+          static_cast<std::uint8_t>(d > x ? kMaxCensusCost : bits);
     }
   }
 }
@@ -158,6 +159,11 @@ void box_wta_ref(const std::uint16_t* columns, int width, int D, int radius, std
   wta_row_ref(sums, width, D, wta);
 }
 
+void bm_row_ref(const BmRow& r) {
+  box_columns_ref(r.columns, r.entering, r.leaving, r.width * r.disparities);
+  box_wta_ref(r.columns, r.width, r.disparities, r.radius, r.sums, r.wta);
+}
+
 StereoKernels stereo_kernels(SimdPath path) {
   switch (path) {
     case SimdPath::reference:
@@ -169,7 +175,7 @@ StereoKernels stereo_kernels(SimdPath path) {
       return avx2 != nullptr ? avx2() : stereo_kernels_neon();
     }
   }
-  return {census_row_ref, cost_row_ref, sgm_row_ref, box_columns_ref, box_wta_ref};
+  return {census_row_ref, cost_row_ref, sgm_row_ref, box_columns_ref, bm_row_ref};
 }
 
 }  // namespace kernels
@@ -317,7 +323,7 @@ void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView r
     reversed_in[p] = w.reversed_plane(p);
   }
 
-  // The census cost of row y into `cost`; disparities beyond the left border cost the most.
+  // The census of row y of both images (the right one reversed), then its cost into `cost`.
   const auto cost_row = [&](int y, std::uint8_t* cost) {
     const std::uint8_t* rows[7];
     for (const GrayView* image : {&left, &right}) {
@@ -330,11 +336,6 @@ void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView r
       std::reverse_copy(right_planes[p], right_planes[p] + W, w.reversed_plane(p));
     }
     k.cost(left_in, reversed_in, W, D, cost);
-    for (int x = 0; x < D - 1; ++x) {
-      std::fill(cost + static_cast<std::ptrdiff_t>(x) * D + x + 1,
-                cost + static_cast<std::ptrdiff_t>(x + 1) * D,
-                static_cast<std::uint8_t>(kernels::kMaxCensusCost));
-    }
   };
 
   // The winner take all of row y goes straight into the output; then the left-right check.
@@ -403,15 +404,13 @@ void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView r
     k.box_columns(w.columns.data(), ring_row(y), nullptr, static_cast<int>(wd));
   }
   for (int y = y0; y < y1; ++y) {
-    const std::uint8_t* add = nullptr;
-    const std::uint8_t* sub = nullptr;
+    kernels::BmRow row{nullptr, nullptr, w.columns.data(), W, D, r, w.sums.data(), wta_row(y)};
     if (y + r < H) {
       cost_row(y + r, ring_row(y + r));
-      add = ring_row(y + r);
+      row.entering = ring_row(y + r);
     }
-    if (y - r - 1 >= first) sub = ring_row(y - r - 1);
-    k.box_columns(w.columns.data(), add, sub, static_cast<int>(wd));
-    k.box_wta(w.columns.data(), W, D, r, w.sums.data(), wta_row(y));
+    if (y - r - 1 >= first) row.leaving = ring_row(y - r - 1);
+    k.bm(row);
     check_row(y);
   }
 }

@@ -41,6 +41,9 @@ void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* r
       };
       V::storeb(out + d, V::popcount4(half(0), half(1), half(2), half(3)));
     }
+    if (x < disparities - 1) {  // beyond the left border
+      std::fill(out + x + 1, out + disparities, static_cast<std::uint8_t>(kMaxCensusCost));
+    }
   }
 }
 
@@ -48,7 +51,7 @@ void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* r
 
 StereoKernels stereo_kernels_avx2() {
   return {census_row_simd<simd::Avx2X16>, cost_row_avx2, sgm_row_simd<simd::Avx2X16>,
-          box_columns_simd<simd::Avx2X16>, box_wta_simd<simd::Avx2X16>};
+          box_columns_simd<simd::Avx2X16>, bm_row_simd<simd::Avx2X16>};
 }
 
 }  // namespace epipole::vision::kernels

@@ -7,7 +7,7 @@ namespace epipole::vision::kernels {
 
 StereoKernels stereo_kernels_neon() {
   return {census_row_simd<simd::NeonX16>, cost_row_simd<simd::NeonX16>, sgm_row_simd<simd::NeonX16>,
-          box_columns_simd<simd::NeonX16>, box_wta_simd<simd::NeonX16>};
+          box_columns_simd<simd::NeonX16>, bm_row_simd<simd::NeonX16>};
 }
 
 }  // namespace epipole::vision::kernels

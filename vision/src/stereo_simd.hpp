@@ -65,23 +65,36 @@ void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* c
   }
 }
 
+// The costs of pixel x for the 16 disparities from d (left: its census bytes, splat); the
+// disparities beyond the left border (d > x) cost the most.
+template <typename V>
+inline typename V::B cost_block(const typename V::B* left, const std::uint8_t* const* right,
+                                std::ptrdiff_t k, int x, int d) {
+  using B = typename V::B;
+  const B c = V::popcount4(
+      V::xorb(left[0], V::loadb(right[0] + k + d)), V::xorb(left[1], V::loadb(right[1] + k + d)),
+      V::xorb(left[2], V::loadb(right[2] + k + d)), V::xorb(left[3], V::loadb(right[3] + k + d)));
+  if (x >= d + 15) return c;
+  const B beyond = V::gtb(V::addb(V::iotab(), V::splatb(static_cast<std::uint8_t>(d))),
+                          V::splatb(static_cast<std::uint8_t>(x)));
+  return V::maxb(c, V::andb(beyond, V::splatb(kMaxCensusCost)));
+}
+
+template <typename V>
+inline void splat_census(const std::uint8_t* const* left, int x, typename V::B* out) {
+  for (int p = 0; p < kCensusPlanes; ++p) out[p] = V::splatb(left[p][x]);
+}
+
 template <typename V>
 void cost_row_simd(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
                    int disparities, std::uint8_t* cost) {
   using B = typename V::B;
   for (int x = 0; x < width; ++x) {
-    const B l0 = V::splatb(left[0][x]);
-    const B l1 = V::splatb(left[1][x]);
-    const B l2 = V::splatb(left[2][x]);
-    const B l3 = V::splatb(left[3][x]);
+    B l[kCensusPlanes];
+    splat_census<V>(left, x, l);
     const std::ptrdiff_t k = width - 1 - x;
     std::uint8_t* out = cost + static_cast<std::ptrdiff_t>(x) * disparities;
-    for (int d = 0; d < disparities; d += 16) {
-      V::storeb(out + d, V::popcount4(V::xorb(l0, V::loadb(right[0] + k + d)),
-                                      V::xorb(l1, V::loadb(right[1] + k + d)),
-                                      V::xorb(l2, V::loadb(right[2] + k + d)),
-                                      V::xorb(l3, V::loadb(right[3] + k + d))));
-    }
+    for (int d = 0; d < disparities; d += 16) V::storeb(out + d, cost_block<V>(l, right, k, x, d));
   }
 }
 
@@ -277,32 +290,82 @@ void box_columns_simd(std::uint16_t* sums, const std::uint8_t* add, const std::u
   }
 }
 
-// The box of each x from the previous one (add the column entering, remove the one leaving) in
-// the first D values of sums, then its winner.
-template <typename V>
-void box_wta_simd(const std::uint16_t* columns, int width, int D, int radius, std::uint16_t* sums,
-                  const WtaRow& row) {
+// Block matching: one column for row y, 16 disparities from d (column += entering - leaving;
+// the pointers are the column's D values in each).
+template <typename V, bool kEnters, bool kLeaves>
+[[gnu::always_inline]] inline typename V::H bm_column(std::uint16_t* column,
+                                                      const std::uint8_t* entering,
+                                                      const std::uint8_t* leaving, int d) {
+  typename V::H v = V::loadh(column + d);
+  if constexpr (kEnters) v = V::addw(v, V::loadb(entering + d));
+  if constexpr (kLeaves) v = V::subh(v, V::widen(V::loadb(leaving + d)));
+  V::storeh(column + d, v);
+  return v;
+}
+
+// One row of block matching in one sweep: column x + r updated just before the box of x needs
+// it, the box of x from the box of x - 1, its winner.
+template <typename V, bool kEnters, bool kLeaves>
+void bm_row_sweep(const BmRow& r) {
   using H = typename V::H;
-  const auto column = [&](int x) { return columns + static_cast<std::ptrdiff_t>(x) * D; };
-  WtaPixels<V> wta(row, D);
+  const int W = r.width;
+  const int D = r.disparities;
+  const int R = r.radius;
+  std::uint16_t* const sums = r.sums;
+  const auto offset = [D](int c) { return static_cast<std::ptrdiff_t>(c) * D; };
+  // The entering and leaving costs of column c (null when there is no such row).
+  const auto entering_at = [&](int c) { return kEnters ? r.entering + offset(c) : nullptr; };
+  const auto leaving_at = [&](int c) { return kLeaves ? r.leaving + offset(c) : nullptr; };
+  // Column c, updated.
+  const auto update = [&](int c, int d) {
+    return bm_column<V, kEnters, kLeaves>(r.columns + offset(c), entering_at(c), leaving_at(c), d);
+  };
+  WtaPixels<V> wta(r.wta, D);
+  // x = 0: columns 0..R.
+  for (int c = 0; c < R; ++c) {
+    for (int d = 0; d < D; d += 16) update(c, d);
+  }
   wta.pixel(0, sums, [&](int d) {
-    H acc = V::splath(0);
-    for (int x = 0; x <= radius && x < width; ++x) acc = V::addh(acc, V::loadh(column(x) + d));
+    H acc = update(R, d);
+    for (int c = 0; c < R; ++c) acc = V::addh(acc, V::loadh(r.columns + offset(c) + d));
     V::storeh(sums + d, acc);
     return acc;
   });
-  std::uint16_t* const zero = sums + D;  // D zeros, for columns outside the image
+  // Column x + R enters, column x - R - 1 leaves (zeros before the first column).
+  std::uint16_t* const zero = sums + D;
   std::fill_n(zero, D, std::uint16_t{0});
-  for (int x = 1; x < width; ++x) {
-    const std::uint16_t* a = x + radius < width ? column(x + radius) : zero;
-    const std::uint16_t* b = x - radius - 1 >= 0 ? column(x - radius - 1) : zero;
+  for (int x = 1; x < W - R; ++x) {
+    const std::uint16_t* leaves = x - R - 1 >= 0 ? r.columns + offset(x - R - 1) : zero;
+    std::uint16_t* column = r.columns + offset(x + R);
+    const std::uint8_t* entering = entering_at(x + R);
+    const std::uint8_t* leaving = leaving_at(x + R);
     wta.pixel(x, sums, [&](int d) {
-      const H acc = V::subh(V::addh(V::loadh(sums + d), V::loadh(a + d)), V::loadh(b + d));
+      const H acc = V::subh(
+          V::addh(V::loadh(sums + d), bm_column<V, kEnters, kLeaves>(column, entering, leaving, d)),
+          V::loadh(leaves + d));
       V::storeh(sums + d, acc);
       return acc;
     });
   }
-  wta.finish(width);
+  // The last R pixels: no column enters.
+  for (int x = std::max(W - R, 1); x < W; ++x) {
+    const std::uint16_t* leaves = x - R - 1 >= 0 ? r.columns + offset(x - R - 1) : zero;
+    wta.pixel(x, sums, [&](int d) {
+      const H acc = V::subh(V::loadh(sums + d), V::loadh(leaves + d));
+      V::storeh(sums + d, acc);
+      return acc;
+    });
+  }
+  wta.finish(W);
+}
+
+template <typename V>
+void bm_row_simd(const BmRow& r) {
+  if (r.entering != nullptr) {
+    r.leaving != nullptr ? bm_row_sweep<V, true, true>(r) : bm_row_sweep<V, true, false>(r);
+  } else {
+    r.leaving != nullptr ? bm_row_sweep<V, false, true>(r) : bm_row_sweep<V, false, false>(r);
+  }
 }
 
 }  // namespace epipole::vision::kernels

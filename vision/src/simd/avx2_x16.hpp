@@ -25,6 +25,14 @@ struct Avx2X16 {
   static B subb(B a, B b) { return _mm_sub_epi8(a, b); }
   static B addsb(B a, B b) { return _mm_adds_epu8(a, b); }
   static B xorb(B a, B b) { return _mm_xor_si128(a, b); }
+  static B andb(B a, B b) { return _mm_and_si128(a, b); }
+  static B maxb(B a, B b) { return _mm_max_epu8(a, b); }
+  // Unsigned a > b: a - b saturates to 0 iff a <= b.
+  static B gtb(B a, B b) {
+    return _mm_xor_si128(_mm_cmpeq_epi8(_mm_subs_epu8(a, b), _mm_setzero_si128()),
+                         _mm_set1_epi8(-1));
+  }
+  static B iotab() { return _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15); }
   // acc with `bit` set in the lanes where a > c (unsigned: a - c saturates to 0 iff a <= c).
   static B set_if_greater(B acc, B a, B c, B bit) {
     const B not_greater = _mm_cmpeq_epi8(_mm_subs_epu8(a, c), _mm_setzero_si128());

@@ -24,6 +24,14 @@ struct NeonX16 {
   static B subb(B a, B b) { return vsubq_u8(a, b); }    // wrapping
   static B addsb(B a, B b) { return vqaddq_u8(a, b); }  // saturating
   static B xorb(B a, B b) { return veorq_u8(a, b); }
+  static B andb(B a, B b) { return vandq_u8(a, b); }
+  static B maxb(B a, B b) { return vmaxq_u8(a, b); }
+  static B gtb(B a, B b) { return vcgtq_u8(a, b); }
+  static B iotab() {
+    static constexpr std::uint8_t kIota[16] = {0, 1, 2,  3,  4,  5,  6,  7,
+                                               8, 9, 10, 11, 12, 13, 14, 15};
+    return vld1q_u8(kIota);
+  }
   // acc with `bit` set in the lanes where a > c.
   static B set_if_greater(B acc, B a, B c, B bit) {
     return vorrq_u8(acc, vandq_u8(vcgtq_u8(a, c), bit));

@@ -87,8 +87,9 @@ namespace kernels {
 using CensusRowKernel = void(const std::uint8_t* const* rows, int width,
                              std::uint8_t* const* planes);
 // Matching cost of one row: cost[x * D + d] = Hamming distance (0..31) between the left census
-// at x and the right census at x - d. The right census comes reversed: right[p][k] is plane p of
-// right pixel width - 1 - k, for k < width + D (the caller pads k >= width).
+// at x and the right census at x - d, and 31 (kMaxCensusCost) where d > x (beyond the left
+// border). The right census comes reversed: right[p][k] is plane p of right pixel
+// width - 1 - k, for k < width + D (the caller pads k >= width).
 using CostRowKernel = void(const std::uint8_t* const* left, const std::uint8_t* const* right,
                            int width, int disparities, std::uint8_t* cost);
 
@@ -130,20 +131,32 @@ struct SgmRow {
 };
 using SgmRowKernel = void(const SgmRow& row);
 
-// Box filter steps (fast mode): sums[i] += add[i] - sub[i] over n values (add or sub may be
-// null); then the horizontal box of radius r over a row of per-x columns of D values, and its
-// winner take all. sums: width * D values of scratch (width >= 2).
+// Box filter step (fast mode): sums[i] += add[i] - sub[i] over n values (add or sub may be
+// null).
 using BoxColumnsKernel = void(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub,
                               int n);
-using BoxWtaKernel = void(const std::uint16_t* columns, int width, int disparities, int radius,
-                          std::uint16_t* sums, const WtaRow& wta);
+
+// One row of block matching in one pass (what box_columns + box_wta_ref do one after the
+// other): the column sums are updated with the cost row entering the box and the one leaving
+// it (either may be null), and the box and its winner are taken.
+struct BmRow {
+  const std::uint8_t* entering;
+  const std::uint8_t* leaving;
+  std::uint16_t* columns;  // width * D
+  int width;
+  int disparities;
+  int radius;
+  std::uint16_t* sums;  // width * D values of scratch (width >= 2)
+  WtaRow wta;
+};
+using BmRowKernel = void(const BmRow& row);
 
 struct StereoKernels {
   CensusRowKernel* census;
   CostRowKernel* cost;
   SgmRowKernel* sgm;
   BoxColumnsKernel* box_columns;
-  BoxWtaKernel* box_wta;
+  BmRowKernel* bm;
 };
 
 StereoKernels stereo_kernels(SimdPath path);
@@ -153,6 +166,9 @@ void cost_row_ref(const std::uint8_t* const* left, const std::uint8_t* const* ri
                   int disparities, std::uint8_t* cost);
 void sgm_row_ref(const SgmRow& row);
 void box_columns_ref(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub, int n);
+void bm_row_ref(const BmRow& row);
+// The horizontal box of radius r over a row of per-x columns of D values into sums
+// [x * D + d], and its winner take all.
 void box_wta_ref(const std::uint16_t* columns, int width, int disparities, int radius,
                  std::uint16_t* sums, const WtaRow& wta);
 // The definition of the winner take all over a whole row of sums [x * D + d].
