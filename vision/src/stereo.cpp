@@ -181,6 +181,18 @@ StereoKernels stereo_kernels(SimdPath path) {
 }  // namespace kernels
 
 namespace {
+// dst[n - 1 - i] = src[i], eight bytes at a time.
+void reverse_bytes(const std::uint8_t* src, int n, std::uint8_t* dst) {
+  int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    std::uint64_t v;
+    std::memcpy(&v, src + i, 8);
+    v = __builtin_bswap64(v);
+    std::memcpy(dst + n - 8 - i, &v, 8);
+  }
+  for (; i < n; ++i) dst[n - 1 - i] = src[i];
+}
+
 constexpr int kWarmupRows = 24;  // SGM: rows aggregated above a stripe before it is output
 std::size_t bytes_of(const auto& v) {
   return v.size() * sizeof(v[0]);
@@ -332,9 +344,7 @@ void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView r
       }
       k.census(rows, W, image == &left ? left_planes : right_planes);
     }
-    for (int p = 0; p < kPlanes; ++p) {
-      std::reverse_copy(right_planes[p], right_planes[p] + W, w.reversed_plane(p));
-    }
+    for (int p = 0; p < kPlanes; ++p) reverse_bytes(right_planes[p], W, w.reversed_plane(p));
     k.cost(left_in, reversed_in, W, D, cost);
   };
 
@@ -346,11 +356,12 @@ void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView r
   const auto check_row = [&](int y) {
     if (config_.lr_max_diff < 0) return;
     std::int16_t* out = disparity_.row(y);
+    const std::int16_t* best = w.best.data();
+    const std::int16_t* right_best = w.right_best.data();
     for (int x = 0; x < W; ++x) {
-      const int b = w.best[static_cast<std::size_t>(x)];
-      if (b < 0) continue;
-      const int r = w.right_best[static_cast<std::size_t>(x - b)];
-      if (std::abs(r - b) > config_.lr_max_diff) out[x] = kInvalidDisparity;
+      const int b = best[x];  // -1: no winner, and out[x] is invalid already
+      const int r = right_best[b >= 0 ? x - b : x];
+      out[x] = b >= 0 && std::abs(r - b) > config_.lr_max_diff ? kInvalidDisparity : out[x];
     }
   };
 
