@@ -215,7 +215,8 @@ void add_disparity_command(CLI::App& app, const GlobalOptions& global) {
       ->capture_default_str();
   cmd->add_option("--p1", options->p1, "sgm: penalty for a disparity step of 1")
       ->capture_default_str();
-  cmd->add_option("--p2", options->p2, "sgm: penalty for larger steps")->capture_default_str();
+  cmd->add_option("--p2", options->p2, "sgm: penalty for larger steps (P1..224)")
+      ->capture_default_str();
   cmd->add_option("--uniqueness", options->uniqueness, "Uniqueness ratio, percent (0..99)")
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Row stripes on this many threads (1..64)")

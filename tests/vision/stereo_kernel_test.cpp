@@ -357,6 +357,11 @@ TEST(StereoMatcher, BadInputIsAClearError) {
               StereoMatcher m({.width = 640, .height = 48, .max_disparity = 272});
             }).find("multiple of 16"),
             std::string::npos);
+  EXPECT_NE(message([] {
+              StereoMatcher m({.width = 640, .height = 48, .p1 = 11, .p2 = 225});
+            }).find("P2 225 must satisfy 1 <= P1 <= P2 <= 224"),
+            std::string::npos)
+      << "8-bit path values need max cost + P2 <= 255";
   GrayImage a(64, 32), b(64, 31);
   std::fill_n(a.view().row(0), a.stride() * 32, std::uint8_t{0});
   std::fill_n(b.view().row(0), b.stride() * 31, std::uint8_t{0});
