@@ -46,5 +46,13 @@ for method in sgm bm; do
     --color "$out/aloe-disparity-$method-color.png")"
 done
 
+echo "demo: sparse matches of left01/right01 in 3-D: $("$tool" match "$samples/left01.jpg" \
+  "$samples/right01.jpg" --calib "$out/rig.yaml" --detector harris --max-disparity 128 \
+  --draw "$out/left01-matches.png")"
+"$tool" match "$samples/left01.jpg" "$samples/right01.jpg" --calib "$out/rig.yaml" \
+  --detector harris --max-disparity 128 --json >"$out/left01-points.json"
+echo "demo: Aloe sparse matches: $("$tool" match "$samples/aloeL.jpg" "$samples/aloeR.jpg" \
+  --max-disparity 256 --draw "$out/aloe-matches.png")"
+
 echo "demo: pictures and JSON in $out/"
 ls "$out"
