@@ -34,7 +34,8 @@ namespace {
 constexpr int kBits = SparseStereoMatcher::kDescriptorBytes * 8;
 constexpr int kBoxRadius = 2;
 constexpr int kSadRadius = 3;
-constexpr int kSadSearch = 2;  // sub-pixel: SAD at d - 2 .. d + 2
+constexpr int kSadSearch = 2;       // sub-pixel: SAD at d - 2 .. d + 2
+constexpr int kNoSad = 0x7FFFFFFF;  // a window outside the image
 
 template <typename T>
 std::size_t bytes_of(const std::vector<T>& v) {
@@ -237,7 +238,7 @@ float SparseStereoMatcher::refine(GrayView left, GrayView right, int xl, int yl,
   for (int k = -kSadSearch; k <= kSadSearch; ++k) {
     const int x = xl - (d + k);  // the right window's centre
     if (x - kSadRadius < 0 || x + kSadRadius >= config_.width || d + k < 0) {
-      sad[k + kSadSearch] = 0x7FFFFFFF;
+      sad[k + kSadSearch] = kNoSad;
       continue;
     }
     int s = 0;
@@ -252,7 +253,11 @@ float SparseStereoMatcher::refine(GrayView left, GrayView right, int xl, int yl,
   for (int k = 1; k <= 2 * kSadSearch; ++k) {
     if (sad[k] < sad[m]) m = k;
   }
-  if (m == 0 || m == 2 * kSadSearch) return static_cast<float>(d);
+  // No parabola at either end of the search or next to a window outside the image: the
+  // corners' own difference.
+  if (m == 0 || m == 2 * kSadSearch || sad[m - 1] == kNoSad || sad[m + 1] == kNoSad) {
+    return static_cast<float>(d);
+  }
   const int below = sad[m - 1];
   const int at = sad[m];
   const int above = sad[m + 1];
