@@ -12,6 +12,7 @@ struct GlobalOptions {
 // Each subcommand lives in its own file and registers itself on the app.
 void add_features_command(CLI::App& app, const GlobalOptions& global);
 void add_disparity_command(CLI::App& app, const GlobalOptions& global);
+void add_match_command(CLI::App& app, const GlobalOptions& global);
 void add_calibrate_command(CLI::App& app, const GlobalOptions& global);
 void add_rectify_command(CLI::App& app, const GlobalOptions& global);
 void add_link_command(CLI::App& app, const GlobalOptions& global);

@@ -7,17 +7,15 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <string>
 
 #include "commands.hpp"
-#include "epipole/calib/calibration.hpp"
 #include "epipole/core/draw.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
-#include "epipole/firmware/stereo_rectification.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "pictures.hpp"
+#include "stereo_input.hpp"
 
 namespace epipole::tools {
 
@@ -40,24 +38,10 @@ struct DisparityOptions {
 };
 
 void run_disparity(const DisparityOptions& options, const GlobalOptions& global) {
-  GrayImage left = load_gray(options.left);
-  GrayImage right = load_gray(options.right);
-  require(same_size(left.view(), right.view()), "the left image ", options.left, " is ",
-          left.width(), "x", left.height(), " but the right image ", options.right, " is ",
-          right.width(), "x", right.height(), ": a stereo pair must have one size");
   const SimdPath path = parse_simd_path(global.kernels);
-  GrayView left_view = left.view();
-  GrayView right_view = right.view();
-  std::optional<firmware::StereoRectifiers> rectifiers;
-  if (!options.calib.empty()) {
-    const calib::StereoCalibration calibration = calib::load_calibration(options.calib);
-    require(calibration.width == left.width() && calibration.height == left.height(),
-            "the images are ", left.width(), "x", left.height(), " but ", options.calib,
-            " is a calibration for ", calibration.width, "x", calibration.height);
-    rectifiers.emplace(firmware::make_stereo_rectifiers(calibration, path));
-    left_view = rectifiers->left.rectify(left_view);
-    right_view = rectifiers->right.rectify(right_view);
-  }
+  const StereoInput input = load_stereo_input(options.left, options.right, options.calib, path);
+  const GrayView left_view = input.left;
+  const GrayView right_view = input.right;
 
   vision::StereoConfig config;
   config.width = left_view.width();
@@ -108,7 +92,7 @@ void run_disparity(const DisparityOptions& options, const GlobalOptions& global)
                                 {"max_disparity", config.max_disparity},
                                 {"kernels", to_string(matcher.simd_path())},
                                 {"threads", config.threads},
-                                {"rectified", rectifiers.has_value()},
+                                {"rectified", input.rectifiers.has_value()},
                                 {"density", density},
                                 {"min_disparity", lowest / 16.0},
                                 {"max_disparity_found", highest / 16.0},
@@ -147,7 +131,8 @@ void add_disparity_command(CLI::App& app, const GlobalOptions& global) {
       ->capture_default_str();
   cmd->add_option("--p1", options->p1, "sgm: penalty for a disparity step of 1")
       ->capture_default_str();
-  cmd->add_option("--p2", options->p2, "sgm: penalty for larger steps")->capture_default_str();
+  cmd->add_option("--p2", options->p2, "sgm: penalty for larger steps (P1..224)")
+      ->capture_default_str();
   cmd->add_option("--uniqueness", options->uniqueness, "Uniqueness ratio, percent (0..99)")
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Row stripes on this many threads (1..64)")

@@ -1,6 +1,7 @@
 // Dense disparity at 640x480 (Aloe resized with INTER_AREA), one thread unless the name says
-// otherwise: quality mode beside cv::StereoSGBM, fast mode beside cv::StereoBM, with the same
-// disparity range. Arguments: width/height/disparities.
+// otherwise (the 2-thread runs report wall time and the process's CPU time): quality mode beside
+// cv::StereoSGBM, fast mode beside cv::StereoBM, with the same disparity range. Arguments:
+// width/height/disparities.
 #include <benchmark/benchmark.h>
 
 #include <opencv2/calib3d.hpp>
@@ -96,6 +97,12 @@ BENCHMARK_CAPTURE(stereo_ours, avx2, StereoMethod::sgm, SimdPath::avx2, 1)
 BENCHMARK_CAPTURE(stereo_ours, avx2_2threads, StereoMethod::sgm, SimdPath::avx2, 2)
     ->Name("stereo_sgm/avx2_2threads")
     ->Apply(stereo_sizes)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+BENCHMARK_CAPTURE(stereo_ours, neon_2threads, StereoMethod::sgm, SimdPath::neon, 2)
+    ->Name("stereo_sgm/neon_2threads")
+    ->Apply(stereo_sizes)
+    ->MeasureProcessCPUTime()
     ->UseRealTime();
 BENCHMARK(sgbm_opencv)->Name("stereo_sgm/opencv")->Apply(stereo_sizes);
 BENCHMARK_CAPTURE(stereo_ours, ref, StereoMethod::bm, SimdPath::reference, 1)
@@ -110,6 +117,12 @@ BENCHMARK_CAPTURE(stereo_ours, avx2, StereoMethod::bm, SimdPath::avx2, 1)
 BENCHMARK_CAPTURE(stereo_ours, avx2_2threads, StereoMethod::bm, SimdPath::avx2, 2)
     ->Name("stereo_bm/avx2_2threads")
     ->Apply(stereo_sizes)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+BENCHMARK_CAPTURE(stereo_ours, neon_2threads, StereoMethod::bm, SimdPath::neon, 2)
+    ->Name("stereo_bm/neon_2threads")
+    ->Apply(stereo_sizes)
+    ->MeasureProcessCPUTime()
     ->UseRealTime();
 BENCHMARK(bm_opencv)->Name("stereo_bm/opencv")->Apply(stereo_sizes);
 

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <unistd.h>
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -33,7 +34,9 @@ fs::path samples() {
 }
 
 fs::path work_dir() {
-  const fs::path dir = fs::path(::testing::TempDir()) / "epipole-calibrate-cli";
+  // One folder per test process: ctest may run this program's tests side by side.
+  const fs::path dir =
+      fs::path(::testing::TempDir()) / ("epipole-calibrate-cli-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   return dir;
 }

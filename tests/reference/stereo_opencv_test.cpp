@@ -3,6 +3,7 @@
 // most SGBM's bad2, fast mode at most StereoBM's.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <opencv2/calib3d.hpp>
@@ -56,8 +57,10 @@ void print(const std::string& name, const Scores& s) {
               name.c_str(), 100 * s.bad1, 100 * s.bad2, 100 * s.density, s.mean_error);
 }
 
-cv::Mat ours(const cv::Mat& left, const cv::Mat& right, StereoMethod method, int disparities) {
+cv::Mat ours(const cv::Mat& left, const cv::Mat& right, StereoMethod method, int disparities,
+             int threads = 1) {
   StereoConfig config;
+  config.threads = threads;
   config.width = left.cols;
   config.height = left.rows;
   config.max_disparity = disparities;
@@ -127,6 +130,36 @@ void compare(int width, int height, int disparities) {
   print("OpenCV StereoBM", cv_bm);
   EXPECT_LE(sgm.bad2, cv_sgbm.bad2);
   EXPECT_LE(bm.bad2, cv_bm.bad2);
+}
+
+// Quality mode on 2 threads: the second stripe starts its vertical paths kWarmupRows above its
+// first row, so its first rows differ a little from one thread's; this measures by how much.
+TEST(StereoOpenCV, QualityModeOnTwoThreads) {
+  const Aloe a = aloe(640, 480);
+  const cv::Mat one = ours(a.left, a.right, StereoMethod::sgm, 112, 1);
+  const cv::Mat two = ours(a.left, a.right, StereoMethod::sgm, 112, 2);
+  int differ = 0, first_row = a.left.rows, last_row = -1;
+  for (int y = 0; y < one.rows; ++y) {
+    for (int x = 0; x < one.cols; ++x) {
+      if (one.at<std::int16_t>(y, x) == two.at<std::int16_t>(y, x)) continue;
+      ++differ;
+      first_row = std::min(first_row, y);
+      last_row = std::max(last_row, y);
+    }
+  }
+  const Scores s1 = score(one, a.truth);
+  const Scores s2 = score(two, a.truth);
+  std::printf(
+      "Aloe 640x480, 112 disparities, sgm: 2 threads differ from 1 in %d pixels (%.2f %%), "
+      "rows %d..%d; bad2 %.2f %% vs %.2f %%\n",
+      differ, 100.0 * differ / (one.rows * one.cols), first_row, last_row, 100 * s1.bad2,
+      100 * s2.bad2);
+  EXPECT_LT(differ, one.rows * one.cols / 50);
+  EXPECT_NEAR(s1.bad2, s2.bad2, 0.002);
+  EXPECT_EQ(cv::countNonZero(ours(a.left, a.right, StereoMethod::bm, 112, 2) !=
+                             ours(a.left, a.right, StereoMethod::bm, 112, 1)),
+            0)
+      << "block matching does not depend on the thread count";
 }
 
 TEST(StereoOpenCV, AloeFullSize) {

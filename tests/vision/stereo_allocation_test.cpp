@@ -56,7 +56,7 @@ TEST(StereoAllocations, WorkingSetAt640x480) {
     const StereoMatcher bm(config);
     std::printf("640x480, %d disparities: sgm %zu bytes, bm %zu bytes\n", d,
                 sgm.working_set_bytes(), bm.working_set_bytes());
-    EXPECT_LT(sgm.working_set_bytes(), d == 64 ? 3'000'000u : 4'000'000u);
+    EXPECT_LT(sgm.working_set_bytes(), d == 64 ? 2'400'000u : 2'800'000u);
   }
 }
 

@@ -16,13 +16,16 @@ namespace {
 
 using U16 = std::vector<std::uint16_t>;
 
-U16 random_u16(std::size_t n, int max, std::uint32_t seed) {
+template <typename T>
+std::vector<T> random_values(std::size_t n, int max, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_int_distribution<int> dist(0, max);
-  U16 v(n);
-  for (auto& x : v) x = static_cast<std::uint16_t>(dist(rng));
+  std::vector<T> v(n);
+  for (auto& x : v) x = static_cast<T>(dist(rng));
   return v;
 }
+const auto random_u16 = random_values<std::uint16_t>;
+const auto random_u8 = random_values<std::uint8_t>;
 
 std::vector<SimdPath> simd_paths() {
   std::vector<SimdPath> paths;
@@ -31,6 +34,18 @@ std::vector<SimdPath> simd_paths() {
   }
   return paths;
 }
+
+using U8 = std::vector<std::uint8_t>;
+using I16 = std::vector<std::int16_t>;
+
+// The four byte planes of a census row, each `width` long, in one vector.
+struct Planes {
+  explicit Planes(std::size_t width, std::uint8_t fill) : data(4 * width, fill) {
+    for (int p = 0; p < 4; ++p) planes[p] = data.data() + p * width;
+  }
+  U8 data;
+  std::uint8_t* planes[4];
+};
 
 struct CensusCase {
   int width;
@@ -44,6 +59,7 @@ class StereoCensus : public ::testing::TestWithParam<CensusCase> {};
 TEST_P(StereoCensus, SimdEqualsReference) {
   const CensusCase c = GetParam();
   const auto ref = kernels::stereo_kernels(SimdPath::reference);
+  const auto n = static_cast<std::size_t>(c.width);
   for (const test::Pattern pattern :
        {test::Pattern::noise, test::Pattern::saturated, test::Pattern::blobs}) {
     test::BufferImage image(c.width, c.height, c.width + c.extra_stride, c.offset);
@@ -52,13 +68,12 @@ TEST_P(StereoCensus, SimdEqualsReference) {
     for (int y = 0; y < c.height; ++y) {
       const std::uint8_t* rows[7];
       for (int i = 0; i < 7; ++i) rows[i] = view.row(std::clamp(y - 3 + i, 0, c.height - 1));
-      U16 ref_lo(c.width, 1), ref_hi(c.width, 1);
-      ref.census(rows, c.width, ref_lo.data(), ref_hi.data());
+      Planes expected(n, 1);
+      ref.census(rows, c.width, expected.planes);
       for (const SimdPath path : simd_paths()) {
-        U16 lo(c.width, 2), hi(c.width, 2);
-        kernels::stereo_kernels(path).census(rows, c.width, lo.data(), hi.data());
-        ASSERT_EQ(lo, ref_lo) << to_string(path) << " row " << y;
-        ASSERT_EQ(hi, ref_hi) << to_string(path) << " row " << y;
+        Planes out(n, 2);
+        kernels::stereo_kernels(path).census(rows, c.width, out.planes);
+        ASSERT_EQ(out.data, expected.data) << to_string(path) << " row " << y;
       }
     }
   }
@@ -69,34 +84,62 @@ INSTANTIATE_TEST_SUITE_P(Sizes, StereoCensus,
                                            CensusCase{40, 11, 5, 3}, CensusCase{77, 10, 1, 7},
                                            CensusCase{129, 12, 0, 5}));
 
+// Census planes at odd offsets inside larger buffers, so loads are unaligned.
 TEST(StereoKernels, CostEqualsReference) {
   for (const int width : {17, 40, 65}) {
     for (const int D : {16, 32, 48}) {
       const auto n = static_cast<std::size_t>(width);
-      const U16 llo = random_u16(n, 0xFFFF, 1), lhi = random_u16(n, 0x7FFF, 2);
-      const U16 rlo = random_u16(n + D, 0xFFFF, 3), rhi = random_u16(n + D, 0x7FFF, 4);
-      U16 ref(n * D, 0);
-      kernels::cost_row_ref(llo.data(), lhi.data(), rlo.data(), rhi.data(), width, D, ref.data());
+      const U8 left = random_u8(4 * n + 3, 255, 1);
+      U8 right = random_u8(4 * (n + D) + 5, 255, 3);
+      const std::uint8_t* l[4];
+      const std::uint8_t* r[4];
+      for (std::size_t p = 0; p < 4; ++p) {
+        l[p] = left.data() + 3 + p * n;
+        r[p] = right.data() + 5 + p * (n + D);
+      }
+      U8 ref(n * D, 0);
+      kernels::cost_row_ref(l, r, width, D, ref.data());
+      EXPECT_EQ(ref[1], 31) << "d = 1 at x = 0 is beyond the left border";
       for (const SimdPath path : simd_paths()) {
-        U16 out(n * D, 1);
-        kernels::stereo_kernels(path).cost(llo.data(), lhi.data(), rlo.data(), rhi.data(), width, D,
-                                           out.data());
+        U8 out(n * D, 1);
+        kernels::stereo_kernels(path).cost(l, r, width, D, out.data());
         ASSERT_EQ(out, ref) << to_string(path) << " width " << width << " D " << D;
       }
     }
   }
 }
 
-// Three rows of aggregation: path state carried from row to row must agree too.
+// The outputs of a winner take all, filled with a value the kernels never write.
+struct WtaOut {
+  WtaOut(std::size_t width, int D)
+      : disparity(width, 99),
+        best(width, 99),
+        right_best(width, 99),
+        window(2 * (static_cast<std::size_t>(D) + 16), 7) {}
+  kernels::WtaRow row(int uniqueness) {
+    return {uniqueness, disparity.data(), best.data(), right_best.data(), window.data()};
+  }
+  I16 disparity, best, right_best;
+  U16 window;
+};
+
+void expect_same_wta(const WtaOut& out, const WtaOut& ref, const std::string& where) {
+  ASSERT_EQ(out.disparity, ref.disparity) << where;
+  ASSERT_EQ(out.best, ref.best) << where;
+  ASSERT_EQ(out.right_best, ref.right_best) << where;
+}
+
+// Three rows of aggregation: path state carried from row to row must agree too, and so must
+// each row's winners.
 TEST(StereoKernels, SgmEqualsReference) {
   for (const int width : {17, 33}) {
     for (const int D : {16, 48}) {
       const auto n = static_cast<std::size_t>(width);
-      const std::size_t stride = static_cast<std::size_t>(D) + 16;
+      const std::size_t stride = static_cast<std::size_t>(D) + 32;
       struct State {
-        U16 paths[2][3];
-        U16 mins[2][3];
-        U16 scratch;
+        U8 paths[2][3];
+        U8 mins[2][3];
+        U8 scratch;
         U16 sums;
       };
       const auto make_state = [&] {
@@ -105,20 +148,20 @@ TEST(StereoKernels, SgmEqualsReference) {
           for (auto& p : row) {
             p.assign((n + 2) * stride, 0);
             for (std::size_t x = 0; x < n; ++x) {
-              p[(x + 1) * stride + 7] = kernels::kSgmPad;
-              p[(x + 1) * stride + 8 + static_cast<std::size_t>(D)] = kernels::kSgmPad;
+              p[(x + 1) * stride + 15] = kernels::kSgmPad;
+              p[(x + 1) * stride + 16 + static_cast<std::size_t>(D)] = kernels::kSgmPad;
             }
           }
         }
         for (auto& row : s.mins) {
           for (auto& m : row) m.assign(n + 2, 0);
         }
-        s.scratch.assign(2 * stride, 0);
-        s.sums.assign(n * D, 0);
+        s.scratch.assign(2 * stride, 3);
+        s.sums.assign(n * D, 5);
         return s;
       };
-      const auto run = [&](kernels::SgmRowKernel* kernel, State& s, const U16& cost, int p1, int p2,
-                           int prev) {
+      const auto run = [&](kernels::SgmRowKernel* kernel, State& s, WtaOut& out, const U8& cost,
+                           int p1, int p2, int uniqueness, int prev) {
         kernels::SgmRow row{};
         row.cost = cost.data();
         row.width = width;
@@ -133,22 +176,30 @@ TEST(StereoKernels, SgmEqualsReference) {
         }
         row.scratch = s.scratch.data();
         row.sums = s.sums.data();
+        row.wta = out.row(uniqueness);
         kernel(row);
       };
       for (const SimdPath path : simd_paths()) {
-        for (const auto& [p1, p2] : {std::pair{11, 120}, std::pair{1, 1}, std::pair{30, 400}}) {
-          State ref = make_state();
-          State simd = make_state();
-          int prev = 0;
-          for (int y = 0; y < 3; ++y) {
-            const U16 cost = random_u16(n * D, 31, static_cast<std::uint32_t>(y + 10 * D));
-            run(kernels::sgm_row_ref, ref, cost, p1, p2, prev);
-            run(kernels::stereo_kernels(path).sgm, simd, cost, p1, p2, prev);
-            prev = 1 - prev;
-            ASSERT_EQ(simd.sums, ref.sums) << to_string(path) << " row " << y;
-            for (int k = 0; k < 3; ++k) {
-              ASSERT_EQ(simd.paths[prev][k], ref.paths[prev][k]) << to_string(path);
-              ASSERT_EQ(simd.mins[prev][k], ref.mins[prev][k]) << to_string(path);
+        for (const auto& [p1, p2] :
+             {std::pair{11, 120}, std::pair{1, 1}, std::pair{30, kernels::kMaxSgmP2}}) {
+          for (const int uniqueness : {0, 10}) {
+            State ref = make_state();
+            State simd = make_state();
+            int prev = 0;
+            for (int y = 0; y < 3; ++y) {
+              // Costs 0..31 as the census gives them; on the last row, the largest everywhere.
+              U8 cost = random_u8(n * D, 31, static_cast<std::uint32_t>(y + 10 * D));
+              if (y == 2) std::fill(cost.begin(), cost.begin() + D * 3, std::uint8_t{31});
+              WtaOut ref_out(n, D), out(n, D);
+              run(kernels::sgm_row_ref, ref, ref_out, cost, p1, p2, uniqueness, prev);
+              run(kernels::stereo_kernels(path).sgm, simd, out, cost, p1, p2, uniqueness, prev);
+              prev = 1 - prev;
+              const std::string where = cat(to_string(path), " row ", y, " p2 ", p2);
+              expect_same_wta(out, ref_out, where);
+              for (int k = 0; k < 3; ++k) {
+                ASSERT_EQ(simd.paths[prev][k], ref.paths[prev][k]) << where;
+                ASSERT_EQ(simd.mins[prev][k], ref.mins[prev][k]) << where;
+              }
             }
           }
         }
@@ -157,28 +208,26 @@ TEST(StereoKernels, SgmEqualsReference) {
   }
 }
 
+// A block-matching row of radius 0 with no row entering or leaving: the winner take all
+// alone, on sums of every range.
 TEST(StereoKernels, WtaEqualsReference) {
   for (const int width : {17, 40}) {
     for (const int D : {16, 32}) {
-      for (const int max : {3, 60, 2000}) {
+      for (const int max : {3, 60, 2000, kernels::kNoCost - 1}) {
         for (const int uniqueness : {0, 5, 15, 99}) {
           const auto n = static_cast<std::size_t>(width);
-          const U16 sums = random_u16(n * D, max, static_cast<std::uint32_t>(max + D));
-          U16 ref_sums = sums, ref_min(n + D, kernels::kNoCost), ref_disp(n + D, 0xFFFF);
-          std::vector<std::int16_t> ref_out(n, 7), ref_best(n, 7);
-          kernels::wta_row_ref(ref_sums.data(), width, D, uniqueness, ref_out.data(),
-                               ref_best.data(), ref_min.data(), ref_disp.data());
+          const U16 columns = random_u16(n * D, max, static_cast<std::uint32_t>(max + D));
+          WtaOut ref(n, D);
+          U16 ref_sums(n * D, 0), sums(n * D, 0);
+          kernels::box_wta_ref(columns.data(), width, D, 0, ref_sums.data(), ref.row(uniqueness));
           for (const SimdPath path : simd_paths()) {
-            U16 s = sums, m(n + D, kernels::kNoCost), d(n + D, 0xFFFF);
-            std::vector<std::int16_t> out(n, 9), best(n, 9);
-            kernels::stereo_kernels(path).wta(s.data(), width, D, uniqueness, out.data(),
-                                              best.data(), m.data(), d.data());
-            const std::string where = cat(to_string(path), " width ", width, " D ", D, " max ", max,
-                                          " uniqueness ", uniqueness);
-            ASSERT_EQ(out, ref_out) << where;
-            ASSERT_EQ(best, ref_best) << where;
-            ASSERT_EQ(m, ref_min) << where;
-            ASSERT_EQ(d, ref_disp) << where;
+            WtaOut out(n, D);
+            U16 unchanged = columns;
+            kernels::stereo_kernels(path).bm({nullptr, nullptr, unchanged.data(), width, D, 0,
+                                              sums.data(), out.row(uniqueness)});
+            expect_same_wta(out, ref,
+                            cat(to_string(path), " width ", width, " D ", D, " max ", max,
+                                " uniqueness ", uniqueness));
           }
         }
       }
@@ -190,8 +239,8 @@ TEST(StereoKernels, BoxEqualsReference) {
   for (const int width : {17, 40}) {
     for (const int D : {16, 32}) {
       const auto n = static_cast<std::size_t>(width) * D;
-      const U16 base = random_u16(n, 1000, 5), add = random_u16(n, 31, 6),
-                sub = random_u16(n, 31, 7);
+      const U16 base = random_u16(n, 1000, 5);
+      const U8 add = random_u8(n, 31, 6), sub = random_u8(n, 31, 7);
       for (const SimdPath path : simd_paths()) {
         const auto k = kernels::stereo_kernels(path);
         for (const bool with_add : {false, true}) {
@@ -204,11 +253,37 @@ TEST(StereoKernels, BoxEqualsReference) {
             ASSERT_EQ(out, ref) << to_string(path);
           }
         }
-        for (const int radius : {1, 3, 10}) {
-          U16 ref(n, 0), out(n, 1);
-          kernels::box_row_ref(base.data(), width, D, radius, ref.data());
-          k.box_row(base.data(), width, D, radius, out.data());
-          ASSERT_EQ(out, ref) << to_string(path) << " radius " << radius;
+      }
+    }
+  }
+}
+
+// One row of block matching in one pass against box_columns + box_wta of the reference: the
+// columns updated, the winners.
+TEST(StereoKernels, BmRowEqualsReference) {
+  for (const auto& [width, D] : {std::pair{17, 16}, std::pair{40, 32}, std::pair{65, 48}}) {
+    const auto n = static_cast<std::size_t>(width);
+    U16 base = random_u16(n * D, 900, 23);
+    for (auto& v : base) v = static_cast<std::uint16_t>(v + 100);  // a leaving row never wraps
+    const U8 entering = random_u8(n * D, 31, 24), leaving = random_u8(n * D, 31, 25);
+    for (const SimdPath path : simd_paths()) {
+      for (const int radius : {1, 3, 10}) {
+        for (const bool enters : {false, true}) {
+          for (const bool leaves : {false, true}) {
+            const auto run = [&](kernels::BmRowKernel* kernel, U16& columns, WtaOut& out) {
+              U16 sums(n * D, 3);
+              kernel({enters ? entering.data() : nullptr, leaves ? leaving.data() : nullptr,
+                      columns.data(), width, D, radius, sums.data(), out.row(10)});
+            };
+            U16 ref_columns = base, columns = base;
+            WtaOut ref(n, D), out(n, D);
+            run(kernels::bm_row_ref, ref_columns, ref);
+            run(kernels::stereo_kernels(path).bm, columns, out);
+            const std::string where = cat(to_string(path), " width ", width, " radius ", radius,
+                                          " enters ", enters, " leaves ", leaves);
+            ASSERT_EQ(columns, ref_columns) << where;
+            expect_same_wta(out, ref, where);
+          }
         }
       }
     }
@@ -282,6 +357,11 @@ TEST(StereoMatcher, BadInputIsAClearError) {
               StereoMatcher m({.width = 640, .height = 48, .max_disparity = 272});
             }).find("multiple of 16"),
             std::string::npos);
+  EXPECT_NE(message([] {
+              StereoMatcher m({.width = 640, .height = 48, .p1 = 11, .p2 = 225});
+            }).find("P2 225 must satisfy 1 <= P1 <= P2 <= 224"),
+            std::string::npos)
+      << "8-bit path values need max cost + P2 <= 255";
   GrayImage a(64, 32), b(64, 31);
   std::fill_n(a.view().row(0), a.stride() * 32, std::uint8_t{0});
   std::fill_n(b.view().row(0), b.stride() * 31, std::uint8_t{0});

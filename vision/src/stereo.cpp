@@ -7,6 +7,7 @@
 #include "epipole/core/error.hpp"
 #include "kernel_set.hpp"
 #include "stereo_census.hpp"
+#include "stereo_winner.hpp"
 
 namespace epipole::vision {
 
@@ -15,8 +16,7 @@ namespace kernels {
 StereoKernels stereo_kernels_neon();
 StereoKernels stereo_kernels_avx2();
 
-void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint16_t* lo,
-                  std::uint16_t* hi) {
+void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint8_t* const* planes) {
   std::uint32_t bits = 0;
   for (int b = 0; b < kCensusBits; ++b) {
     const CensusOffset o = kCensusOffsets[b];
@@ -24,96 +24,82 @@ void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint16
     const int xc = std::clamp(x - o.dx, 0, width - 1);
     if (rows[kCensusRadiusY + o.dy][xa] > rows[kCensusRadiusY - o.dy][xc]) bits |= 1u << b;
   }
-  lo[x] = static_cast<std::uint16_t>(bits & 0xFFFFu);
-  hi[x] = static_cast<std::uint16_t>(bits >> 16);
+  for (int p = 0; p < kCensusPlanes; ++p) planes[p][x] = static_cast<std::uint8_t>(bits >> (8 * p));
 }
 
-int subpixel(int d, int disparities, int below, int at, int above) {
-  if (d <= 0 || d >= disparities - 1) return d * kDisparityScale;
-  const int denom = std::max(below + above - 2 * at, 1);
-  return d * kDisparityScale + ((below - above) * kDisparityScale + denom) / (2 * denom);
+void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* const* planes) {
+  for (int x = 0; x < width; ++x) census_pixel(rows, width, x, planes);
 }
 
-std::uint32_t uniqueness_ratio(int uniqueness) {
-  return static_cast<std::uint32_t>(65536 * 100 / (100 - uniqueness));
-}
-
-int uniqueness_limit(int min_cost, std::uint32_t ratio) {
-  return static_cast<int>((static_cast<std::uint64_t>(min_cost) * ratio) >> 16);
-}
-
-void census_row_ref(const std::uint8_t* const* rows, int width, std::uint16_t* lo,
-                    std::uint16_t* hi) {
-  for (int x = 0; x < width; ++x) census_pixel(rows, width, x, lo, hi);
-}
-
-void cost_row_ref(const std::uint16_t* left_lo, const std::uint16_t* left_hi,
-                  const std::uint16_t* right_lo, const std::uint16_t* right_hi, int width,
-                  int disparities, std::uint16_t* cost) {
+void cost_row_ref(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
+                  int disparities, std::uint8_t* cost) {
   for (int x = 0; x < width; ++x) {
     for (int d = 0; d < disparities; ++d) {
       const int k = width - 1 - x + d;
-      const int bits = std::popcount(static_cast<unsigned>(left_lo[x] ^ right_lo[k])) +
-                       std::popcount(static_cast<unsigned>(left_hi[x] ^ right_hi[k]));
-      cost[static_cast<std::ptrdiff_t>(x) * disparities + d] = static_cast<std::uint16_t>(bits);
+      int bits = 0;
+      for (int p = 0; p < kCensusPlanes; ++p) {
+        bits += std::popcount(static_cast<unsigned>(left[p][x] ^ right[p][k]));
+      }
+      cost[static_cast<std::ptrdiff_t>(x) * disparities + d] =
+          static_cast<std::uint8_t>(d > x ? kMaxCensusCost : bits);
     }
+  }
+}
+
+void wta_row_ref(const std::uint16_t* sums, int width, int D, const WtaRow& wta) {
+  const std::uint32_t ratio = uniqueness_ratio(wta.uniqueness);
+  for (int x = 0; x < width; ++x) {
+    const std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
+    int best = 0;
+    for (int d = 0; d < D; ++d) {
+      if (s[d] < s[best]) best = d;
+    }
+    const int min_cost = s[best];
+    const int limit = uniqueness_limit(min_cost, ratio);
+    bool unique = true;
+    for (int d = 0; d < D; ++d) {
+      if (std::abs(d - best) > 1 && s[d] < limit) unique = false;
+    }
+    store_winner(wta, x, unique ? best : -1, s, D);
+  }
+  for (int xr = 0; xr < width; ++xr) {
+    int best = 0;
+    for (int d = 1; d < std::min(D, width - xr); ++d) {
+      if (sums[static_cast<std::ptrdiff_t>(xr + d) * D + d] <
+          sums[static_cast<std::ptrdiff_t>(xr + best) * D + best]) {
+        best = d;
+      }
+    }
+    wta.right_best[xr] = static_cast<std::int16_t>(best);
   }
 }
 
 namespace {
 // One path step: c + min(p[d], p[d-1] + P1, p[d+1] + P1, min_prev + P2) - min_prev.
-int sgm_step(int c, const std::uint16_t* p, int d, int p1, int p2, int min_prev) {
+int sgm_step(int c, const std::uint8_t* p, int d, int p1, int p2, int min_prev) {
   const int best = std::min({static_cast<int>(p[d]), p[d - 1] + p1, p[d + 1] + p1, min_prev + p2});
   return c + best - min_prev;
 }
-}  // namespace
 
-void sgm_row_ref(const SgmRow& r) {
+// One horizontal path over the row (dx = +1: left to right), its values added to sums.
+void sgm_horizontal_ref(const SgmRow& r, int dx) {
   const int D = r.disparities;
-  const std::ptrdiff_t stride = D + 16;
-  std::uint16_t* h[2] = {r.scratch + 8, r.scratch + stride + 8};
-  for (std::uint16_t* e : h) {
+  const std::ptrdiff_t stride = D + 32;
+  std::uint8_t* h[2] = {r.scratch + 16, r.scratch + stride + 16};
+  for (std::uint8_t* e : h) {
     e[-1] = kSgmPad;
     e[D] = kSgmPad;
   }
-  constexpr int kDx[3] = {0, -1, 1};
   for (int d = 0; d < D; ++d) h[0][d] = 0;
   int h_min = 0;
-  for (int x = 0; x < r.width; ++x) {
-    const std::uint16_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
+  for (int i = 0; i < r.width; ++i) {
+    const int x = dx > 0 ? i : r.width - 1 - i;
+    const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
     std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
-    int next_h_min = 0xFFFF;
+    int next_h_min = 0xFF;
     for (int d = 0; d < D; ++d) {
       const int v = sgm_step(c[d], h[0], d, r.p1, r.p2, h_min);
-      h[1][d] = static_cast<std::uint16_t>(v);
-      next_h_min = std::min(next_h_min, v);
-      s[d] = static_cast<std::uint16_t>(v);
-    }
-    for (int k = 0; k < 3; ++k) {
-      const std::uint16_t* p = r.prev[k] + (x + kDx[k] + 1) * stride + 8;
-      const int min_prev = r.prev_min[k][x + kDx[k] + 1];
-      std::uint16_t* q = r.cur[k] + (x + 1) * stride + 8;
-      int m = 0xFFFF;
-      for (int d = 0; d < D; ++d) {
-        const int v = sgm_step(c[d], p, d, r.p1, r.p2, min_prev);
-        q[d] = static_cast<std::uint16_t>(v);
-        m = std::min(m, v);
-        s[d] = static_cast<std::uint16_t>(s[d] + v);
-      }
-      r.cur_min[k][x + 1] = static_cast<std::uint16_t>(m);
-    }
-    h_min = next_h_min;
-    std::swap(h[0], h[1]);
-  }
-  for (int d = 0; d < D; ++d) h[0][d] = 0;
-  h_min = 0;
-  for (int x = r.width - 1; x >= 0; --x) {
-    const std::uint16_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
-    std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
-    int next_h_min = 0xFFFF;
-    for (int d = 0; d < D; ++d) {
-      const int v = sgm_step(c[d], h[0], d, r.p1, r.p2, h_min);
-      h[1][d] = static_cast<std::uint16_t>(v);
+      h[1][d] = static_cast<std::uint8_t>(v);
       next_h_min = std::min(next_h_min, v);
       s[d] = static_cast<std::uint16_t>(s[d] + v);
     }
@@ -121,40 +107,36 @@ void sgm_row_ref(const SgmRow& r) {
     std::swap(h[0], h[1]);
   }
 }
+}  // namespace
 
-void wta_row_ref(std::uint16_t* sums, int width, int D, int uniqueness, std::int16_t* disparity,
-                 std::int16_t* best_out, std::uint16_t* right_min, std::uint16_t* right_disp) {
-  for (int x = 0; x < width; ++x) {
-    const std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
-    int best = 0;
-    for (int d = 0; d < D; ++d) {
-      if (s[d] < s[best]) best = d;
-      const int k = width - 1 - x + d;
-      if (s[d] < right_min[k]) {
-        right_min[k] = s[d];
-        right_disp[k] = static_cast<std::uint16_t>(d);
+void sgm_row_ref(const SgmRow& r) {
+  const int D = r.disparities;
+  const std::ptrdiff_t stride = D + 32;
+  constexpr int kDx[3] = {0, -1, 1};
+  for (int x = 0; x < r.width; ++x) {
+    const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
+    std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
+    for (int d = 0; d < D; ++d) s[d] = 0;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint8_t* p = r.prev[k] + (x + kDx[k] + 1) * stride + 16;
+      const int min_prev = r.prev_min[k][x + kDx[k] + 1];
+      std::uint8_t* q = r.cur[k] + (x + 1) * stride + 16;
+      int m = 0xFF;
+      for (int d = 0; d < D; ++d) {
+        const int v = sgm_step(c[d], p, d, r.p1, r.p2, min_prev);
+        q[d] = static_cast<std::uint8_t>(v);
+        m = std::min(m, v);
+        s[d] = static_cast<std::uint16_t>(s[d] + v);
       }
-    }
-    const int min_cost = s[best];
-    const int limit = uniqueness_limit(min_cost, uniqueness_ratio(uniqueness));
-    bool unique = true;
-    for (int d = 0; d < D; ++d) {
-      if (std::abs(d - best) > 1 && s[d] < limit) unique = false;
-    }
-    if (!unique || best > x) {
-      disparity[x] = kInvalidDisparity;
-      best_out[x] = -1;
-    } else {
-      const int below = best > 0 ? s[best - 1] : 0;
-      const int above = best < D - 1 ? s[best + 1] : 0;
-      disparity[x] = static_cast<std::int16_t>(subpixel(best, D, below, min_cost, above));
-      best_out[x] = static_cast<std::int16_t>(best);
+      r.cur_min[k][x + 1] = static_cast<std::uint8_t>(m);
     }
   }
+  sgm_horizontal_ref(r, 1);
+  sgm_horizontal_ref(r, -1);
+  wta_row_ref(r.sums, r.width, D, r.wta);
 }
 
-void box_columns_ref(std::uint16_t* sums, const std::uint16_t* add, const std::uint16_t* sub,
-                     int n) {
+void box_columns_ref(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub, int n) {
   for (int i = 0; i < n; ++i) {
     int v = sums[i];
     if (add != nullptr) v += add[i];
@@ -163,7 +145,8 @@ void box_columns_ref(std::uint16_t* sums, const std::uint16_t* add, const std::u
   }
 }
 
-void box_row_ref(const std::uint16_t* columns, int width, int D, int radius, std::uint16_t* sums) {
+void box_wta_ref(const std::uint16_t* columns, int width, int D, int radius, std::uint16_t* sums,
+                 const WtaRow& wta) {
   for (int x = 0; x < width; ++x) {
     for (int d = 0; d < D; ++d) {
       int v = 0;
@@ -173,6 +156,12 @@ void box_row_ref(const std::uint16_t* columns, int width, int D, int radius, std
       sums[static_cast<std::ptrdiff_t>(x) * D + d] = static_cast<std::uint16_t>(v);
     }
   }
+  wta_row_ref(sums, width, D, wta);
+}
+
+void bm_row_ref(const BmRow& r) {
+  box_columns_ref(r.columns, r.entering, r.leaving, r.width * r.disparities);
+  box_wta_ref(r.columns, r.width, r.disparities, r.radius, r.sums, r.wta);
 }
 
 StereoKernels stereo_kernels(SimdPath path) {
@@ -186,12 +175,24 @@ StereoKernels stereo_kernels(SimdPath path) {
       return avx2 != nullptr ? avx2() : stereo_kernels_neon();
     }
   }
-  return {census_row_ref, cost_row_ref, sgm_row_ref, wta_row_ref, box_columns_ref, box_row_ref};
+  return {census_row_ref, cost_row_ref, sgm_row_ref, box_columns_ref, bm_row_ref};
 }
 
 }  // namespace kernels
 
 namespace {
+// dst[n - 1 - i] = src[i], eight bytes at a time.
+void reverse_bytes(const std::uint8_t* src, int n, std::uint8_t* dst) {
+  int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    std::uint64_t v;
+    std::memcpy(&v, src + i, 8);
+    v = __builtin_bswap64(v);
+    std::memcpy(dst + n - 8 - i, &v, 8);
+  }
+  for (; i < n; ++i) dst[n - 1 - i] = src[i];
+}
+
 constexpr int kWarmupRows = 24;  // SGM: rows aggregated above a stripe before it is output
 std::size_t bytes_of(const auto& v) {
   return v.size() * sizeof(v[0]);
@@ -199,24 +200,30 @@ std::size_t bytes_of(const auto& v) {
 }  // namespace
 
 struct StereoMatcher::Worker {
-  std::vector<std::uint16_t> left_lo, left_hi, right_lo, right_hi, rev_lo, rev_hi;
-  std::vector<std::uint16_t> cost;         // SGM: one row; BM: a ring of block_size + 1 rows
-  std::vector<std::uint16_t> paths[2][3];  // SGM: previous/current row of the 3 downward paths
-  std::vector<std::uint16_t> mins[2][3];
-  std::vector<std::uint16_t> scratch;  // SGM: the horizontal paths
+  std::vector<std::uint8_t> left_census, right_census, reversed;  // kCensusPlanes planes each
+  std::vector<std::uint8_t> cost;         // SGM: one row; BM: a ring of block_size + 1 rows
+  std::vector<std::uint8_t> paths[2][3];  // SGM: previous/current row of the 3 downward paths
+  std::vector<std::uint8_t> mins[2][3];
+  std::vector<std::uint8_t> scratch;   // SGM: the horizontal paths
   std::vector<std::uint16_t> columns;  // BM: vertical box sums
-  std::vector<std::uint16_t> sums;
-  std::vector<std::uint16_t> right_min, right_disp;
-  std::vector<std::int16_t> best;
+  std::vector<std::uint16_t> sums;     // the aggregated costs of a row
+  std::vector<std::uint16_t> window;   // winner take all: the right image's candidates
+  std::vector<std::int16_t> best, right_best;
 
   std::size_t bytes() const {
-    std::size_t n = bytes_of(left_lo) * 4 + bytes_of(rev_lo) * 2 + bytes_of(cost) +
-                    bytes_of(scratch) + bytes_of(columns) + bytes_of(sums) +
-                    bytes_of(right_min) * 2 + bytes_of(best);
+    std::size_t n = bytes_of(left_census) + bytes_of(right_census) + bytes_of(reversed) +
+                    bytes_of(cost) + bytes_of(scratch) + bytes_of(columns) + bytes_of(sums) +
+                    bytes_of(window) + bytes_of(best) + bytes_of(right_best);
     for (int i = 0; i < 2; ++i) {
       for (int k = 0; k < 3; ++k) n += bytes_of(paths[i][k]) + bytes_of(mins[i][k]);
     }
     return n;
+  }
+  std::uint8_t* left_plane(int p) { return left_census.data() + p * best.size(); }
+  std::uint8_t* right_plane(int p) { return right_census.data() + p * best.size(); }
+  std::uint8_t* reversed_plane(int p) {
+    return reversed.data() +
+           static_cast<std::size_t>(p) * (reversed.size() / kernels::kCensusPlanes);
   }
 };
 
@@ -230,9 +237,9 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path)
   require(W >= 16 && H >= 8 && W <= 65535 && H <= 65535, "image size ", W, "x", H,
           " is outside 16x8..65535x65535 for stereo matching");
   require(D < W, "disparity range ", D, " is not smaller than the image width ", W);
-  require(config.p1 >= 1 && config.p1 <= 1000 && config.p2 >= config.p1 && config.p2 <= 4000,
+  require(config.p1 >= 1 && config.p2 >= config.p1 && config.p2 <= kernels::kMaxSgmP2,
           "SGM penalties P1 ", config.p1, ", P2 ", config.p2,
-          " must satisfy 1 <= P1 <= P2 <= 4000");
+          " must satisfy 1 <= P1 <= P2 <= ", kernels::kMaxSgmP2);
   require(config.block_size >= 3 && config.block_size <= 21 && config.block_size % 2 == 1,
           "block size ", config.block_size, " must be odd, in 3..21");
   require(config.uniqueness >= 0 && config.uniqueness <= 99, "uniqueness ratio ", config.uniqueness,
@@ -243,27 +250,28 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path)
           " is not available on this CPU");
 
   const std::size_t wd = static_cast<std::size_t>(W) * static_cast<std::size_t>(D);
-  const std::size_t stride = static_cast<std::size_t>(D) + 16;
+  const std::size_t stride = static_cast<std::size_t>(D) + 32;
   const std::size_t uw = static_cast<std::size_t>(W);
+  const std::size_t ud = static_cast<std::size_t>(D);
+  constexpr std::size_t kPlanes = kernels::kCensusPlanes;
   for (int t = 0; t < pool_.threads(); ++t) {
     auto w = std::make_unique<Worker>();
-    for (auto* v : {&w->left_lo, &w->left_hi, &w->right_lo, &w->right_hi}) v->assign(uw, 0);
-    w->rev_lo.assign(uw + static_cast<std::size_t>(D), 0);
-    w->rev_hi.assign(uw + static_cast<std::size_t>(D), 0);
+    w->left_census.assign(kPlanes * uw, 0);
+    w->right_census.assign(kPlanes * uw, 0);
+    w->reversed.assign(kPlanes * (uw + ud), 0);
     w->sums.assign(wd, 0);
-    w->right_min.assign(uw + static_cast<std::size_t>(D), kernels::kNoCost);
-    w->right_disp.assign(uw + static_cast<std::size_t>(D), 0xFFFF);
+    w->window.assign(2 * (ud + 16), 0);
     w->best.assign(uw, -1);
+    w->right_best.assign(uw, -1);
     if (config.method == StereoMethod::sgm) {
       w->cost.assign(wd, 0);
       w->scratch.assign(2 * stride, 0);
       for (auto& row : w->paths) {
         for (auto& p : row) {
           p.assign((uw + 2) * stride, 0);
-          for (int x = 0; x < W; ++x) {
-            p[(static_cast<std::size_t>(x) + 1) * stride + 7] = kernels::kSgmPad;
-            p[(static_cast<std::size_t>(x) + 1) * stride + 8 + static_cast<std::size_t>(D)] =
-                kernels::kSgmPad;
+          for (std::size_t x = 0; x < uw; ++x) {
+            p[(x + 1) * stride + 15] = kernels::kSgmPad;
+            p[(x + 1) * stride + 16 + ud] = kernels::kSgmPad;
           }
         }
       }
@@ -280,15 +288,15 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path)
   padded_.assign(padded, kInvalidDisparity);
   disparity_ = ImageView<std::int16_t>(padded_.data() + W + 3, W, H, W + 2);
   if (config.speckle_size > 0) {
-    visited_.assign(padded, 0);
-    region_.assign(uw * static_cast<std::size_t>(H), 0);
+    runs_.assign(uw * static_cast<std::size_t>(H), 0);  // at most one run per pixel
+    labels_.assign(2 * uw, 0);
   }
 }
 
 StereoMatcher::~StereoMatcher() = default;
 
 std::size_t StereoMatcher::working_set_bytes() const {
-  std::size_t n = bytes_of(padded_) + bytes_of(visited_) + bytes_of(region_);
+  std::size_t n = bytes_of(padded_) + bytes_of(runs_) + bytes_of(labels_);
   for (const auto& w : workers_) n += w->bytes();
   return n;
 }
@@ -315,59 +323,59 @@ void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView r
   const int stripes = pool_.threads();
   const int y0 = stripe * H / stripes;
   const int y1 = (stripe + 1) * H / stripes;
+  constexpr int kPlanes = kernels::kCensusPlanes;
+  std::uint8_t* left_planes[kPlanes];
+  std::uint8_t* right_planes[kPlanes];
+  const std::uint8_t* left_in[kPlanes];
+  const std::uint8_t* reversed_in[kPlanes];
+  for (int p = 0; p < kPlanes; ++p) {
+    left_planes[p] = w.left_plane(p);
+    right_planes[p] = w.right_plane(p);
+    left_in[p] = left_planes[p];
+    reversed_in[p] = w.reversed_plane(p);
+  }
 
-  // The census cost of row y into `cost`; disparities beyond the left border cost the most.
-  const auto cost_row = [&](int y, std::uint16_t* cost) {
+  // The census of row y of both images (the right one reversed), then its cost into `cost`.
+  const auto cost_row = [&](int y, std::uint8_t* cost) {
     const std::uint8_t* rows[7];
     for (const GrayView* image : {&left, &right}) {
       for (int i = 0; i < 7; ++i) {
         rows[i] = image->row(std::clamp(y - kernels::kCensusRadiusY + i, 0, H - 1));
       }
-      if (image == &left) {
-        k.census(rows, W, w.left_lo.data(), w.left_hi.data());
-      } else {
-        k.census(rows, W, w.right_lo.data(), w.right_hi.data());
-      }
+      k.census(rows, W, image == &left ? left_planes : right_planes);
     }
-    for (int x = 0; x < W; ++x) {
-      w.rev_lo[static_cast<std::size_t>(W - 1 - x)] = w.right_lo[static_cast<std::size_t>(x)];
-      w.rev_hi[static_cast<std::size_t>(W - 1 - x)] = w.right_hi[static_cast<std::size_t>(x)];
-    }
-    k.cost(w.left_lo.data(), w.left_hi.data(), w.rev_lo.data(), w.rev_hi.data(), W, D, cost);
-    for (int x = 0; x < D - 1; ++x) {
-      std::fill(cost + static_cast<std::ptrdiff_t>(x) * D + x + 1,
-                cost + static_cast<std::ptrdiff_t>(x + 1) * D,
-                static_cast<std::uint16_t>(kernels::kMaxCensusCost));
-    }
+    for (int p = 0; p < kPlanes; ++p) reverse_bytes(right_planes[p], W, w.reversed_plane(p));
+    k.cost(left_in, reversed_in, W, D, cost);
   };
 
-  // Winner take all and the left-right check of row y from w.sums.
-  const auto output_row = [&](int y) {
-    std::fill(w.right_min.begin(), w.right_min.end(), kernels::kNoCost);
-    std::fill(w.right_disp.begin(), w.right_disp.end(), 0xFFFF);
-    std::int16_t* out = disparity_.row(y);
-    k.wta(w.sums.data(), W, D, config_.uniqueness, out, w.best.data(), w.right_min.data(),
-          w.right_disp.data());
+  // The winner take all of row y goes straight into the output; then the left-right check.
+  const auto wta_row = [&](int y) {
+    return kernels::WtaRow{config_.uniqueness, disparity_.row(y), w.best.data(),
+                           w.right_best.data(), w.window.data()};
+  };
+  const auto check_row = [&](int y) {
     if (config_.lr_max_diff < 0) return;
+    std::int16_t* out = disparity_.row(y);
+    const std::int16_t* best = w.best.data();
+    const std::int16_t* right_best = w.right_best.data();
     for (int x = 0; x < W; ++x) {
-      const int b = w.best[static_cast<std::size_t>(x)];
-      if (b < 0) continue;
-      const int r = w.right_disp[static_cast<std::size_t>(W - 1 - (x - b))];
-      if (std::abs(r - b) > config_.lr_max_diff) out[x] = kInvalidDisparity;
+      const int b = best[x];  // -1: no winner, and out[x] is invalid already
+      const int r = right_best[b >= 0 ? x - b : x];
+      out[x] = b >= 0 && std::abs(r - b) > config_.lr_max_diff ? kInvalidDisparity : out[x];
     }
   };
 
   if (config_.method == StereoMethod::sgm) {
-    const std::size_t stride = static_cast<std::size_t>(D) + 16;
+    const std::size_t stride = static_cast<std::size_t>(D) + 32;
     int prev = 0;
     for (int dir = 0; dir < 3; ++dir) {
       auto& p = w.paths[prev][dir];
       for (int x = 0; x < W; ++x) {
-        std::fill_n(
-            p.begin() + static_cast<std::ptrdiff_t>((static_cast<std::size_t>(x) + 1) * stride + 8),
-            D, std::uint16_t{0});
+        std::fill_n(p.begin() + static_cast<std::ptrdiff_t>(
+                                    (static_cast<std::size_t>(x) + 1) * stride + 16),
+                    D, std::uint8_t{0});
       }
-      std::fill(w.mins[prev][dir].begin(), w.mins[prev][dir].end(), std::uint16_t{0});
+      std::fill(w.mins[prev][dir].begin(), w.mins[prev][dir].end(), std::uint8_t{0});
     }
     for (int y = std::max(0, y0 - kWarmupRows); y < y1; ++y) {
       cost_row(y, w.cost.data());
@@ -385,9 +393,13 @@ void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView r
       }
       row.scratch = w.scratch.data();
       row.sums = w.sums.data();
+      // Warm-up rows write their winners into the row that follows them in the output; it is
+      // overwritten before it is final (rows y0 - kWarmupRows .. y0 - 1 belong to the stripe
+      // above, which writes them itself).
+      row.wta = wta_row(y >= y0 ? y : y0);
       k.sgm(row);
       prev = 1 - prev;
-      if (y >= y0) output_row(y);
+      if (y >= y0) check_row(y);
     }
     return;
   }
@@ -403,55 +415,81 @@ void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView r
     k.box_columns(w.columns.data(), ring_row(y), nullptr, static_cast<int>(wd));
   }
   for (int y = y0; y < y1; ++y) {
-    const std::uint16_t* add = nullptr;
-    const std::uint16_t* sub = nullptr;
+    kernels::BmRow row{nullptr, nullptr, w.columns.data(), W, D, r, w.sums.data(), wta_row(y)};
     if (y + r < H) {
       cost_row(y + r, ring_row(y + r));
-      add = ring_row(y + r);
+      row.entering = ring_row(y + r);
     }
-    if (y - r - 1 >= first) sub = ring_row(y - r - 1);
-    k.box_columns(w.columns.data(), add, sub, static_cast<int>(wd));
-    k.box_row(w.columns.data(), W, D, r, w.sums.data());
-    output_row(y);
+    if (y - r - 1 >= first) row.leaving = ring_row(y - r - 1);
+    k.bm(row);
+    check_row(y);
   }
 }
 
 void StereoMatcher::remove_speckles() {
-  // Regions grow 4-connected between valid neighbours at most speckle_range pixels apart. The
-  // disparity buffer has a border of one invalid pixel all round, so neighbours need no bounds
-  // checks; region_ holds the buffer indices of the current region.
-  const std::ptrdiff_t stride = config_.width + 2;
-  std::int16_t* const disp = padded_.data();
+  // Regions are 4-connected between valid neighbours at most speckle_range pixels apart. Each
+  // row is cut into runs of such horizontal neighbours; a run joins the runs above it where a
+  // pixel and the one above it are neighbours (union-find on runs, sizes at the roots); then
+  // the same runs, found again, are invalidated where their region is small.
+  const int W = config_.width;
+  const int H = config_.height;
   const int range = config_.speckle_range * kDisparityScale;
-  std::fill(visited_.begin(), visited_.end(), std::uint8_t{0});
-  const std::ptrdiff_t steps[4] = {-1, 1, -stride, stride};
-  for (int y = 0; y < config_.height; ++y) {
-    const std::ptrdiff_t row = (y + 1) * stride + 1;
-    for (std::ptrdiff_t start = row; start < row + config_.width; ++start) {
-      if (visited_[static_cast<std::size_t>(start)] != 0 || disp[start] == kInvalidDisparity) {
+  const auto near = [range](int a, int b) { return std::abs(a - b) <= range; };
+  // Calls run(begin, end) for each run of row d, in order.
+  const auto for_each_run = [&](const std::int16_t* d, auto&& run) {
+    for (int x = 0; x < W;) {
+      if (d[x] == kInvalidDisparity) {
+        ++x;
         continue;
       }
-      visited_[static_cast<std::size_t>(start)] = 1;
-      region_[0] = static_cast<std::uint32_t>(start);
-      std::size_t count = 1;
-      for (std::size_t i = 0; i < count; ++i) {
-        const std::ptrdiff_t p = region_[i];
-        const int v = disp[p];
-        for (const std::ptrdiff_t step : steps) {
-          const std::ptrdiff_t q = p + step;
-          const int u = disp[q];
-          if (visited_[static_cast<std::size_t>(q)] != 0 || u == kInvalidDisparity ||
-              std::abs(u - v) > range) {
-            continue;
-          }
-          visited_[static_cast<std::size_t>(q)] = 1;
-          region_[count++] = static_cast<std::uint32_t>(q);
-        }
-      }
-      if (count < static_cast<std::size_t>(config_.speckle_size)) {
-        for (std::size_t i = 0; i < count; ++i) disp[region_[i]] = kInvalidDisparity;
+      const int begin = x;
+      for (++x; x < W && d[x] != kInvalidDisparity && near(d[x], d[x - 1]);) ++x;
+      run(begin, x);
+    }
+  };
+  std::int32_t* const node = runs_.data();
+  const auto find = [node](std::int32_t i) {
+    while (node[i] >= 0) {
+      if (node[node[i]] >= 0) node[i] = node[node[i]];
+      i = node[i];
+    }
+    return i;
+  };
+  std::int32_t count = 0;
+  std::uint32_t* labels = labels_.data();
+  std::uint32_t* above = labels_.data() + W;
+  for (int y = 0; y < H; ++y) {
+    const std::int16_t* d = disparity_.row(y);
+    for_each_run(d, [&](int begin, int end) {
+      node[count] = begin - end;
+      std::fill(labels + begin, labels + end, static_cast<std::uint32_t>(count));
+      ++count;
+    });
+    if (y > 0) {
+      const std::int16_t* u = disparity_.row(y - 1);
+      std::uint32_t last_a = 0xFFFFFFFF;
+      std::uint32_t last_b = 0xFFFFFFFF;
+      for (int x = 0; x < W; ++x) {
+        if (d[x] == kInvalidDisparity || u[x] == kInvalidDisparity || !near(d[x], u[x])) continue;
+        if (labels[x] == last_a && above[x] == last_b) continue;  // the same two runs again
+        last_a = labels[x];
+        last_b = above[x];
+        const std::int32_t a = find(static_cast<std::int32_t>(last_a));
+        const std::int32_t b = find(static_cast<std::int32_t>(last_b));
+        if (a == b) continue;
+        const auto [big, small] = node[a] <= node[b] ? std::pair{a, b} : std::pair{b, a};
+        node[big] += node[small];
+        node[small] = big;
       }
     }
+    std::swap(labels, above);
+  }
+  std::int32_t i = 0;
+  for (int y = 0; y < H; ++y) {
+    std::int16_t* d = disparity_.row(y);
+    for_each_run(d, [&](int begin, int end) {
+      if (-node[find(i++)] < config_.speckle_size) std::fill(d + begin, d + end, kInvalidDisparity);
+    });
   }
 }
 

@@ -1,292 +1,370 @@
 #pragma once
 
-// The stereo kernels written once over a vector vocabulary of unsigned 16-bit lanes
-// (simd/neon_u16.hpp, simd/avx2_u16.hpp). Each gives the same bits as its *_ref in stereo.cpp.
+// The stereo kernels written once over a vocabulary of 16 lanes, as bytes and as 16-bit values
+// (simd/neon_x16.hpp, simd/avx2_x16.hpp). Each gives the same bits as its *_ref in stereo.cpp.
+// Disparities go 16 at a time (the range is a multiple of 16): costs and SGM path values in
+// bytes, sums in 16-bit lanes.
 #include <algorithm>
 #include <cstdint>
 
 #include "epipole/vision/stereo.hpp"
 #include "stereo_census.hpp"
+#include "stereo_winner.hpp"
 
 namespace epipole::vision::kernels {
 
-// The census of the kLanes pixels from x, whose columns x - 4 .. x + kLanes + 3 are readable.
+// The census of the 16 pixels from x, whose columns x - 4 .. x + 19 are readable.
 template <typename V>
-inline void census_vector(const std::uint8_t* const* rows, int x, std::uint16_t* lo,
-                          std::uint16_t* hi) {
-  using Vec = typename V::Vec;
-  Vec l = V::zero();
-  Vec h = V::zero();
+inline void census_vector(const std::uint8_t* const* rows, int x, std::uint8_t* const* planes,
+                          int at) {
+  using B = typename V::B;
+  B acc[kCensusPlanes] = {V::zerob(), V::zerob(), V::zerob(), V::zerob()};
+#pragma GCC unroll 31
   for (int b = 0; b < kCensusBits; ++b) {
     const CensusOffset o = kCensusOffsets[b];
-    const Vec a = V::load_u8(rows[kCensusRadiusY + o.dy] + x + o.dx);
-    const Vec c = V::load_u8(rows[kCensusRadiusY - o.dy] + x - o.dx);
-    const Vec bit = V::bit_and(V::gt_small(a, c),
-                               V::splat(static_cast<std::uint16_t>(1u << (b < 16 ? b : b - 16))));
-    if (b < 16) {
-      l = V::bit_or(l, bit);
-    } else {
-      h = V::bit_or(h, bit);
-    }
+    const B a = V::loadb(rows[kCensusRadiusY + o.dy] + x + o.dx);
+    const B c = V::loadb(rows[kCensusRadiusY - o.dy] + x - o.dx);
+    acc[b / 8] =
+        V::set_if_greater(acc[b / 8], a, c, V::splatb(static_cast<std::uint8_t>(1u << (b % 8))));
   }
-  V::store(lo, l);
-  V::store(hi, h);
+  for (int p = 0; p < kCensusPlanes; ++p) V::storeb(planes[p] + at, acc[p]);
 }
 
 template <typename V>
-void census_row_simd(const std::uint8_t* const* rows, int width, std::uint16_t* lo,
-                     std::uint16_t* hi) {
+void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* const* planes) {
+  constexpr int kLanes = 16;
   constexpr int kR = kCensusRadiusX;
-  if (width < V::kLanes + 2 * kR) {
-    for (int x = 0; x < width; ++x) census_pixel(rows, width, x, lo, hi);
+  if (width < kLanes + 2 * kR) {
+    for (int x = 0; x < width; ++x) census_pixel(rows, width, x, planes);
     return;
   }
   // Interior columns [kR, width - kR); the last vector may overlap the previous one.
   const int end = width - kR;
-  for (int x = kR; x < end; x += V::kLanes) {
-    const int at = std::min(x, end - V::kLanes);
-    census_vector<V>(rows, at, lo + at, hi + at);
+  for (int x = kR; x < end; x += kLanes) {
+    const int at = std::min(x, end - kLanes);
+    census_vector<V>(rows, at, planes, at);
   }
   // The kR border columns on each side: one vector over a copy of the rows with the columns
   // clamped, the same values census_pixel reads.
-  constexpr int kSpan = V::kLanes + 2 * kR;
+  constexpr int kSpan = kLanes + 2 * kR;
   std::uint8_t copy[7][kSpan];
   const std::uint8_t* copy_rows[7];
-  std::uint16_t l[V::kLanes];
-  std::uint16_t h[V::kLanes];
-  for (const int first : {0, width - V::kLanes}) {  // image column of lane 0
+  std::uint8_t lanes[kCensusPlanes][kLanes];
+  std::uint8_t* const lane_planes[kCensusPlanes] = {lanes[0], lanes[1], lanes[2], lanes[3]};
+  for (const int first : {0, width - kLanes}) {  // image column of lane 0
     for (int r = 0; r < 7; ++r) {
       for (int i = 0; i < kSpan; ++i)
         copy[r][i] = rows[r][std::clamp(first - kR + i, 0, width - 1)];
       copy_rows[r] = copy[r];
     }
-    census_vector<V>(copy_rows, kR, l, h);
+    census_vector<V>(copy_rows, kR, lane_planes, 0);
     const int begin = first == 0 ? 0 : width - kR;
     for (int x = begin; x < begin + kR; ++x) {
-      lo[x] = l[x - first];
-      hi[x] = h[x - first];
+      for (int p = 0; p < kCensusPlanes; ++p) planes[p][x] = lanes[p][x - first];
     }
   }
 }
 
+// The costs of pixel x for the 16 disparities from d (left: its census bytes, splat); the
+// disparities beyond the left border (d > x) cost the most.
 template <typename V>
-void cost_row_simd(const std::uint16_t* left_lo, const std::uint16_t* left_hi,
-                   const std::uint16_t* right_lo, const std::uint16_t* right_hi, int width,
-                   int disparities, std::uint16_t* cost) {
-  using Vec = typename V::Vec;
+inline typename V::B cost_block(const typename V::B* left, const std::uint8_t* const* right,
+                                std::ptrdiff_t k, int x, int d) {
+  using B = typename V::B;
+  const B c = V::popcount4(
+      V::xorb(left[0], V::loadb(right[0] + k + d)), V::xorb(left[1], V::loadb(right[1] + k + d)),
+      V::xorb(left[2], V::loadb(right[2] + k + d)), V::xorb(left[3], V::loadb(right[3] + k + d)));
+  if (x >= d + 15) return c;
+  const B beyond = V::gtb(V::addb(V::iotab(), V::splatb(static_cast<std::uint8_t>(d))),
+                          V::splatb(static_cast<std::uint8_t>(x)));
+  return V::maxb(c, V::andb(beyond, V::splatb(kMaxCensusCost)));
+}
+
+template <typename V>
+inline void splat_census(const std::uint8_t* const* left, int x, typename V::B* out) {
+  for (int p = 0; p < kCensusPlanes; ++p) out[p] = V::splatb(left[p][x]);
+}
+
+template <typename V>
+void cost_row_simd(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
+                   int disparities, std::uint8_t* cost) {
+  using B = typename V::B;
   for (int x = 0; x < width; ++x) {
-    const Vec l = V::splat(left_lo[x]);
-    const Vec h = V::splat(left_hi[x]);
-    const std::uint16_t* rl = right_lo + (width - 1 - x);
-    const std::uint16_t* rh = right_hi + (width - 1 - x);
-    std::uint16_t* out = cost + static_cast<std::ptrdiff_t>(x) * disparities;
-    for (int d = 0; d < disparities; d += V::kLanes) {
-      V::store(out + d,
-               V::popcount2(V::bit_xor(l, V::load(rl + d)), V::bit_xor(h, V::load(rh + d))));
-    }
+    B l[kCensusPlanes];
+    splat_census<V>(left, x, l);
+    const std::ptrdiff_t k = width - 1 - x;
+    std::uint8_t* out = cost + static_cast<std::ptrdiff_t>(x) * disparities;
+    for (int d = 0; d < disparities; d += 16) V::storeb(out + d, cost_block<V>(l, right, k, x, d));
   }
 }
 
-// One path step for kLanes disparities at d: c + min(p[d], p[d-1] + P1, p[d+1] + P1,
-// min_prev + P2) - min_prev.
+// Winner take all, one pixel at a time in increasing x (wta_row_ref defines the result).
+// The right image's candidates live in a window of D (cost, disparity) pairs, lane d for right
+// pixel x - d; moving to x + 1 moves it up one lane, and the pair that leaves at lane D - 1 is
+// final. The window is stored behind one block of padding (kNoCost), so a pixel's loads read
+// exactly what the previous pixel stored.
 template <typename V>
-inline typename V::Vec sgm_step(typename V::Vec c, const std::uint16_t* p, typename V::Vec p1,
-                                typename V::Vec min_p2, typename V::Vec min_prev) {
-  const typename V::Vec best =
-      V::min(V::min(V::load(p), min_p2), V::add(V::min(V::load(p - 1), V::load(p + 1)), p1));
-  return V::sub(V::add(c, best), min_prev);
+class WtaPixels {
+  using H = typename V::H;
+
+ public:
+  WtaPixels(const WtaRow& row, int disparities)
+      : row_(row),
+        disparities_(disparities),
+        ratio_(uniqueness_ratio(row.uniqueness)),
+        cost_(row.window),
+        disp_(row.window + disparities + 16) {
+    std::fill_n(cost_, disparities + 16, kNoCost);
+    std::fill_n(disp_, disparities + 16, std::uint16_t{0xFFFF});
+  }
+
+  // The winner of pixel x. sums(d) gives the sums of disparities d .. d + 15 and has stored
+  // them at s + d, where the uniqueness test reads them again.
+  template <typename Sums>
+  [[gnu::always_inline]] inline void pixel(int x, const std::uint16_t* s, Sums&& sums) {
+    const int D = disparities_;
+    const H sixteen = V::splath(16);
+    H index = V::iotah();
+    H m = V::splath(kNoCost);
+    H m_index = V::splath(0);
+    H prev_cost = V::loadh(cost_);
+    H prev_disp = V::loadh(disp_);
+    for (int d = 0; d < D; d += 16) {
+      const H v = sums(d);
+      m_index = V::selecth(V::gth(m, v), index, m_index);
+      m = V::minh(m, v);
+      const H old_cost = V::loadh(cost_ + 16 + d);
+      const H old_disp = V::loadh(disp_ + 16 + d);
+      const H shifted_cost = V::shift_in(prev_cost, old_cost);
+      const H shifted_disp = V::shift_in(prev_disp, old_disp);
+      V::storeh(cost_ + 16 + d, V::minh(shifted_cost, v));
+      V::storeh(disp_ + 16 + d, V::selecth(V::gth(shifted_cost, v), index, shifted_disp));
+      prev_cost = old_cost;
+      prev_disp = old_disp;
+      index = V::addh(index, sixteen);
+    }
+    if (x >= D) row_.right_best[x - D] = static_cast<std::int16_t>(V::last(prev_disp));
+
+    const std::uint16_t min_cost = V::hminh(m);
+    const int best =
+        V::hminh(V::selecth(V::eqh(m, V::splath(min_cost)), m_index, V::splath(0xFFFF)));
+    // Unique when every sum below the limit is at best - 1 .. best + 1: the count of sums
+    // below it (each lane counts down by the all-ones mask) equals the count among those three.
+    const int limit = std::min(uniqueness_limit(min_cost, ratio_), static_cast<int>(kNoCost));
+    const std::uint32_t near = (best > 0 && s[best - 1] < limit ? 1u : 0u) +
+                               (s[best] < limit ? 1u : 0u) +
+                               (best < D - 1 && s[best + 1] < limit ? 1u : 0u);
+    const H l = V::splath(static_cast<std::uint16_t>(limit));
+    H count = V::splath(0);
+    for (int d = 0; d < D; d += 16) count = V::subh(count, V::gth(l, V::loadh(s + d)));
+    store_winner(row_, x, V::hsumh(count) == near ? best : -1, s, D);
+  }
+
+  // After the last pixel: the right pixels width - D .. width - 1 are in the window.
+  void finish(int width) {
+    for (int d = 0; d < std::min(disparities_, width); ++d) {
+      row_.right_best[width - 1 - d] = static_cast<std::int16_t>(disp_[16 + d]);
+    }
+  }
+
+ private:
+  WtaRow row_;
+  int disparities_;
+  std::uint32_t ratio_;
+  std::uint16_t* cost_;
+  std::uint16_t* disp_;
+};
+
+// One path step for 16 disparities at d: c + min(p[d], p[d-1] + P1, p[d+1] + P1,
+// min_prev + P2) - min_prev, in bytes. The saturating adds are exact where it matters: a sum
+// that saturates is above p[d] <= 255 and cannot be the minimum; the result is at most
+// 31 + P2 <= 255.
+template <typename V>
+inline typename V::B sgm_step(typename V::B c, const std::uint8_t* p, typename V::B p1,
+                              typename V::B min_p2, typename V::B min_prev) {
+  const typename V::B best = V::minb(V::minb(V::loadb(p), min_p2),
+                                     V::addsb(V::minb(V::loadb(p - 1), V::loadb(p + 1)), p1));
+  return V::addb(V::subb(best, min_prev), c);
 }
 
 template <typename V>
 void sgm_row_simd(const SgmRow& r) {
-  using Vec = typename V::Vec;
+  using B = typename V::B;
+  using H = typename V::H;
   const int D = r.disparities;
-  const std::ptrdiff_t stride = D + 16;
-  const Vec p1 = V::splat(static_cast<std::uint16_t>(r.p1));
-  const std::uint16_t p2 = static_cast<std::uint16_t>(r.p2);
-  std::uint16_t* h[2] = {r.scratch + 8, r.scratch + stride + 8};
-  for (std::uint16_t* e : h) {
+  const std::ptrdiff_t stride = D + 32;
+  const B p1 = V::splatb(static_cast<std::uint8_t>(r.p1));
+  const auto plus_p2 = [&](int m) { return static_cast<std::uint8_t>(std::min(m + r.p2, 255)); };
+  std::uint8_t* h[2] = {r.scratch + 16, r.scratch + stride + 16};
+  for (std::uint8_t* e : h) {
     e[-1] = kSgmPad;
     e[D] = kSgmPad;
   }
   constexpr int kDx[3] = {0, -1, 1};
 
-  // Left to right, with the three paths from the previous row.
-  for (int d = 0; d < D; ++d) h[0][d] = 0;
-  std::uint16_t h_min = 0;
-  for (int x = 0; x < r.width; ++x) {
-    const std::uint16_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
-    const std::uint16_t* p[3];
-    Vec min_prev[3];
-    Vec min_p2[3];
-    std::uint16_t* q[3];
-    Vec mins[4];
+  // Right to left, with the three paths from the previous row: the sums of four paths.
+  std::fill_n(h[0], D, std::uint8_t{0});
+  int h_min = 0;
+  for (int x = r.width - 1; x >= 0; --x) {
+    const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
+    const std::uint8_t* p[3];
+    B min_prev[3];
+    B min_p2[3];
+    std::uint8_t* q[3];
+    B mins[4];
     for (int k = 0; k < 3; ++k) {
-      p[k] = r.prev[k] + (x + kDx[k] + 1) * stride + 8;
-      const std::uint16_t m = r.prev_min[k][x + kDx[k] + 1];
-      min_prev[k] = V::splat(m);
-      min_p2[k] = V::splat(static_cast<std::uint16_t>(m + p2));
-      q[k] = r.cur[k] + (x + 1) * stride + 8;
-      mins[k] = V::splat(0xFFFF);
+      p[k] = r.prev[k] + (x + kDx[k] + 1) * stride + 16;
+      const int m = r.prev_min[k][x + kDx[k] + 1];
+      min_prev[k] = V::splatb(static_cast<std::uint8_t>(m));
+      min_p2[k] = V::splatb(plus_p2(m));
+      q[k] = r.cur[k] + (x + 1) * stride + 16;
+      mins[k] = V::splatb(0xFF);
     }
-    mins[3] = V::splat(0xFFFF);
-    const Vec h_prev = V::splat(h_min);
-    const Vec h_p2 = V::splat(static_cast<std::uint16_t>(h_min + p2));
+    mins[3] = V::splatb(0xFF);
+    const B h_prev = V::splatb(static_cast<std::uint8_t>(h_min));
+    const B h_p2 = V::splatb(plus_p2(h_min));
     std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
-    for (int d = 0; d < D; d += V::kLanes) {
-      const Vec cost = V::load(c + d);
-      const Vec lr = sgm_step<V>(cost, h[0] + d, p1, h_p2, h_prev);
-      V::store(h[1] + d, lr);
-      mins[3] = V::min(mins[3], lr);
-      Vec sum = lr;
+    for (int d = 0; d < D; d += 16) {
+      const B cost = V::loadb(c + d);
+      const B rl = sgm_step<V>(cost, h[0] + d, p1, h_p2, h_prev);
+      V::storeb(h[1] + d, rl);
+      mins[3] = V::minb(mins[3], rl);
+      H sum = V::widen(rl);
 #pragma GCC unroll 3
       for (int k = 0; k < 3; ++k) {
-        const Vec v = sgm_step<V>(cost, p[k] + d, p1, min_p2[k], min_prev[k]);
-        V::store(q[k] + d, v);
-        mins[k] = V::min(mins[k], v);
-        sum = V::add(sum, v);
+        const B v = sgm_step<V>(cost, p[k] + d, p1, min_p2[k], min_prev[k]);
+        V::storeb(q[k] + d, v);
+        mins[k] = V::minb(mins[k], v);
+        sum = V::addw(sum, v);
       }
-      V::store(s + d, sum);
+      V::storeh(s + d, sum);
     }
-    for (int k = 0; k < 3; ++k) r.cur_min[k][x + 1] = V::hmin(mins[k]);
-    h_min = V::hmin(mins[3]);
-    std::uint16_t* t = h[0];
-    h[0] = h[1];
-    h[1] = t;
+    for (int k = 0; k < 3; ++k) r.cur_min[k][x + 1] = V::hminb(mins[k]);
+    h_min = V::hminb(mins[3]);
+    std::swap(h[0], h[1]);
   }
 
-  // Right to left.
-  for (int d = 0; d < D; ++d) h[0][d] = 0;
+  // Left to right: the fifth path, then the winner of each pixel.
+  WtaPixels<V> wta(r.wta, D);
+  std::fill_n(h[0], D, std::uint8_t{0});
   h_min = 0;
-  for (int x = r.width - 1; x >= 0; --x) {
-    const std::uint16_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
+  for (int x = 0; x < r.width; ++x) {
+    const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
     std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
-    const Vec h_prev = V::splat(h_min);
-    const Vec h_p2 = V::splat(static_cast<std::uint16_t>(h_min + p2));
-    Vec m = V::splat(0xFFFF);
-    for (int d = 0; d < D; d += V::kLanes) {
-      const Vec rl = sgm_step<V>(V::load(c + d), h[0] + d, p1, h_p2, h_prev);
-      V::store(h[1] + d, rl);
-      m = V::min(m, rl);
-      V::store(s + d, V::add(V::load(s + d), rl));
-    }
-    h_min = V::hmin(m);
-    std::uint16_t* t = h[0];
-    h[0] = h[1];
-    h[1] = t;
+    const B h_prev = V::splatb(static_cast<std::uint8_t>(h_min));
+    const B h_p2 = V::splatb(plus_p2(h_min));
+    B m = V::splatb(0xFF);
+    wta.pixel(x, s, [&](int d) {
+      const B lr = sgm_step<V>(V::loadb(c + d), h[0] + d, p1, h_p2, h_prev);
+      V::storeb(h[1] + d, lr);
+      m = V::minb(m, lr);
+      const H sum = V::addw(V::loadh(s + d), lr);
+      V::storeh(s + d, sum);
+      return sum;
+    });
+    h_min = V::hminb(m);
+    std::swap(h[0], h[1]);
   }
+  wta.finish(r.width);
 }
 
 template <typename V>
-void wta_row_simd(std::uint16_t* sums, int width, int D, int uniqueness, std::int16_t* disparity,
-                  std::int16_t* best_out, std::uint16_t* right_min, std::uint16_t* right_disp) {
-  using Vec = typename V::Vec;
-  const Vec iota = V::iota();
-  const std::uint32_t ratio = uniqueness_ratio(uniqueness);
-  for (int x = 0; x < width; ++x) {
-    std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
-    // Per lane: the smallest cost and its first disparity.
-    Vec m = V::splat(0xFFFF);
-    Vec m_index = V::zero();
-    for (int d = 0; d < D; d += V::kLanes) {
-      const Vec v = V::load(s + d);
-      const Vec index = V::add(iota, V::splat(static_cast<std::uint16_t>(d)));
-      m_index = V::select(V::gt(m, v), index, m_index);
-      m = V::min(m, v);
-    }
-    const std::uint16_t min_cost = V::hmin(m);
-    const int best = V::hmin(V::select(V::eq(m, V::splat(min_cost)), m_index, V::splat(0xFFFF)));
-    const int below = best > 0 ? s[best - 1] : 0;
-    const int above = best < D - 1 ? s[best + 1] : 0;
-    bool unique = true;
-    const int limit = uniqueness_limit(min_cost, ratio);
-    if (limit > 0) {
-      const int threshold = std::min(limit - 1, 0xFFFE);
-      // Disparities best - 1 .. best + 1 do not compete: they are set to 0xFFFF, above any
-      // threshold, in registers (storing them would stall the loads that follow).
-      const Vec first_near = V::splat(static_cast<std::uint16_t>(best - 1));
-      const Vec three = V::splat(3);
-      const Vec t = V::splat(static_cast<std::uint16_t>(threshold));
-      Vec hit = V::zero();
-      for (int d = 0; d < D; d += V::kLanes) {
-        const Vec index = V::add(iota, V::splat(static_cast<std::uint16_t>(d)));
-        const Vec near = V::gt(three, V::sub(index, first_near));
-        const Vec v = V::bit_or(V::load(s + d), near);
-        hit = V::bit_or(hit, V::eq(V::min(v, t), v));
-      }
-      unique = !V::any(hit);
-    }
-    if (!unique || best > x) {
-      disparity[x] = kInvalidDisparity;
-      best_out[x] = -1;
-    } else {
-      disparity[x] = static_cast<std::int16_t>(subpixel(best, D, below, min_cost, above));
-      best_out[x] = static_cast<std::int16_t>(best);
-    }
-  }
-
-  // The best disparity of each right pixel: the smallest cost, the smallest d among equal
-  // costs, so the order of x does not matter. Consecutive x overlap by all but one value, so x
-  // goes in steps of kStep, letting each store retire before an overlapping load.
-  constexpr int kStep = 16;
-  for (int start = 0; start < kStep; ++start) {
-    for (int x = start; x < width; x += kStep) {
-      const std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
-      std::uint16_t* rm = right_min + (width - 1 - x);
-      std::uint16_t* rd = right_disp + (width - 1 - x);
-      for (int d = 0; d < D; d += V::kLanes) {
-        const Vec v = V::load(s + d);
-        const Vec index = V::add(iota, V::splat(static_cast<std::uint16_t>(d)));
-        const Vec old = V::load(rm + d);
-        const Vec old_d = V::load(rd + d);
-        const Vec better = V::bit_or(V::gt(old, v), V::bit_and(V::eq(old, v), V::gt(old_d, index)));
-        V::store(rm + d, V::select(better, v, old));
-        V::store(rd + d, V::select(better, index, old_d));
-      }
-    }
-  }
-}
-
-template <typename V>
-void box_columns_simd(std::uint16_t* sums, const std::uint16_t* add, const std::uint16_t* sub,
+void box_columns_simd(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub,
                       int n) {
   int i = 0;
   if (add != nullptr && sub != nullptr) {
-    for (; i + V::kLanes <= n; i += V::kLanes) {
-      V::store(sums + i, V::sub(V::add(V::load(sums + i), V::load(add + i)), V::load(sub + i)));
+    for (; i + 16 <= n; i += 16) {
+      V::storeh(sums + i, V::subh(V::addw(V::loadh(sums + i), V::loadb(add + i)),
+                                  V::widen(V::loadb(sub + i))));
     }
     for (; i < n; ++i) sums[i] = static_cast<std::uint16_t>(sums[i] + add[i] - sub[i]);
   } else if (add != nullptr) {
-    for (; i + V::kLanes <= n; i += V::kLanes) {
-      V::store(sums + i, V::add(V::load(sums + i), V::load(add + i)));
-    }
+    for (; i + 16 <= n; i += 16)
+      V::storeh(sums + i, V::addw(V::loadh(sums + i), V::loadb(add + i)));
     for (; i < n; ++i) sums[i] = static_cast<std::uint16_t>(sums[i] + add[i]);
   } else if (sub != nullptr) {
-    for (; i + V::kLanes <= n; i += V::kLanes) {
-      V::store(sums + i, V::sub(V::load(sums + i), V::load(sub + i)));
+    for (; i + 16 <= n; i += 16) {
+      V::storeh(sums + i, V::subh(V::loadh(sums + i), V::widen(V::loadb(sub + i))));
     }
     for (; i < n; ++i) sums[i] = static_cast<std::uint16_t>(sums[i] - sub[i]);
   }
 }
 
+// Block matching: one column for row y, 16 disparities from d (column += entering - leaving;
+// the pointers are the column's D values in each).
+template <typename V, bool kEnters, bool kLeaves>
+[[gnu::always_inline]] inline typename V::H bm_column(std::uint16_t* column,
+                                                      const std::uint8_t* entering,
+                                                      const std::uint8_t* leaving, int d) {
+  typename V::H v = V::loadh(column + d);
+  if constexpr (kEnters) v = V::addw(v, V::loadb(entering + d));
+  if constexpr (kLeaves) v = V::subh(v, V::widen(V::loadb(leaving + d)));
+  V::storeh(column + d, v);
+  return v;
+}
+
+// One row of block matching in one sweep: column x + r updated just before the box of x needs
+// it, the box of x from the box of x - 1, its winner.
+template <typename V, bool kEnters, bool kLeaves>
+void bm_row_sweep(const BmRow& r) {
+  using H = typename V::H;
+  const int W = r.width;
+  const int D = r.disparities;
+  const int R = r.radius;
+  std::uint16_t* const sums = r.sums;
+  const auto offset = [D](int c) { return static_cast<std::ptrdiff_t>(c) * D; };
+  // The entering and leaving costs of column c (null when there is no such row).
+  const auto entering_at = [&](int c) { return kEnters ? r.entering + offset(c) : nullptr; };
+  const auto leaving_at = [&](int c) { return kLeaves ? r.leaving + offset(c) : nullptr; };
+  // Column c, updated.
+  const auto update = [&](int c, int d) {
+    return bm_column<V, kEnters, kLeaves>(r.columns + offset(c), entering_at(c), leaving_at(c), d);
+  };
+  WtaPixels<V> wta(r.wta, D);
+  // x = 0: columns 0..R.
+  for (int c = 0; c < R; ++c) {
+    for (int d = 0; d < D; d += 16) update(c, d);
+  }
+  wta.pixel(0, sums, [&](int d) {
+    H acc = update(R, d);
+    for (int c = 0; c < R; ++c) acc = V::addh(acc, V::loadh(r.columns + offset(c) + d));
+    V::storeh(sums + d, acc);
+    return acc;
+  });
+  // Column x + R enters, column x - R - 1 leaves (zeros before the first column).
+  std::uint16_t* const zero = sums + D;
+  std::fill_n(zero, D, std::uint16_t{0});
+  for (int x = 1; x < W - R; ++x) {
+    const std::uint16_t* leaves = x - R - 1 >= 0 ? r.columns + offset(x - R - 1) : zero;
+    std::uint16_t* column = r.columns + offset(x + R);
+    const std::uint8_t* entering = entering_at(x + R);
+    const std::uint8_t* leaving = leaving_at(x + R);
+    wta.pixel(x, sums, [&](int d) {
+      const H acc = V::subh(
+          V::addh(V::loadh(sums + d), bm_column<V, kEnters, kLeaves>(column, entering, leaving, d)),
+          V::loadh(leaves + d));
+      V::storeh(sums + d, acc);
+      return acc;
+    });
+  }
+  // The last R pixels: no column enters.
+  for (int x = std::max(W - R, 1); x < W; ++x) {
+    const std::uint16_t* leaves = x - R - 1 >= 0 ? r.columns + offset(x - R - 1) : zero;
+    wta.pixel(x, sums, [&](int d) {
+      const H acc = V::subh(V::loadh(sums + d), V::loadh(leaves + d));
+      V::storeh(sums + d, acc);
+      return acc;
+    });
+  }
+  wta.finish(W);
+}
+
 template <typename V>
-void box_row_simd(const std::uint16_t* columns, int width, int D, int radius, std::uint16_t* sums) {
-  using Vec = typename V::Vec;
-  for (int d = 0; d < D; d += V::kLanes) {
-    Vec acc = V::zero();
-    for (int x = 0; x <= radius && x < width; ++x) {
-      acc = V::add(acc, V::load(columns + static_cast<std::ptrdiff_t>(x) * D + d));
-    }
-    V::store(sums + d, acc);
-    for (int x = 1; x < width; ++x) {
-      if (x + radius < width) {
-        acc = V::add(acc, V::load(columns + static_cast<std::ptrdiff_t>(x + radius) * D + d));
-      }
-      if (x - radius - 1 >= 0) {
-        acc = V::sub(acc, V::load(columns + static_cast<std::ptrdiff_t>(x - radius - 1) * D + d));
-      }
-      V::store(sums + static_cast<std::ptrdiff_t>(x) * D + d, acc);
-    }
+void bm_row_simd(const BmRow& r) {
+  if (r.entering != nullptr) {
+    r.leaving != nullptr ? bm_row_sweep<V, true, true>(r) : bm_row_sweep<V, true, false>(r);
+  } else {
+    r.leaving != nullptr ? bm_row_sweep<V, false, true>(r) : bm_row_sweep<V, false, false>(r);
   }
 }
 

@@ -27,7 +27,7 @@ struct StereoConfig {
   int max_disparity = 64;  // disparities 0..max_disparity-1; 16..256, a multiple of 16
   StereoMethod method = StereoMethod::sgm;
   int p1 = 11;             // SGM: penalty for a disparity change of 1 (census cost units)
-  int p2 = 120;            // SGM: penalty for larger changes (>= p1)
+  int p2 = 120;            // SGM: penalty for larger changes (p1..224)
   int block_size = 7;      // BM: box of block_size x block_size census costs (odd, 3..21)
   int uniqueness = 10;     // percent: another disparity (not +-1) must cost this much more
   int lr_max_diff = 1;     // left-right check tolerance in pixels; < 0 switches it off
@@ -71,95 +71,110 @@ class StereoMatcher {
   std::vector<std::unique_ptr<Worker>> workers_;
   std::vector<std::int16_t> padded_;   // the output with a border of one invalid pixel
   ImageView<std::int16_t> disparity_;  // the output: padded_ without its border
-  std::vector<std::uint8_t> visited_;  // speckle filter
-  std::vector<std::uint32_t> region_;  // speckle filter: pixels of the region being grown
+  // Speckle filter: union-find over the runs of the rows (a root holds minus its region's size,
+  // another run its parent) and the run of each pixel of two rows.
+  std::vector<std::int32_t> runs_;
+  std::vector<std::uint32_t> labels_;
 };
 
 namespace kernels {
 
-// Census of one row: 9x7 centre-symmetric census, bit b = I(x+dx_b, y+dy_b) > I(x-dx_b, y-dy_b)
-// for the 31 offsets of the upper half window. rows[0..6] are rows y-3..y+3 (clamped at the
-// image border by the caller); columns are clamped too. Bits 0..15 go to lo, 16..30 to hi.
-using CensusRowKernel = void(const std::uint8_t* const* rows, int width, std::uint16_t* lo,
-                             std::uint16_t* hi);
-// Matching cost of one row: cost[x * D + d] = Hamming distance between the left census at x and
-// the right census at x - d. The right census comes reversed: right_lo[k] is the census of right
-// pixel width - 1 - k, for k < width + D (the caller pads k >= width).
-using CostRowKernel = void(const std::uint16_t* left_lo, const std::uint16_t* left_hi,
-                           const std::uint16_t* right_lo, const std::uint16_t* right_hi, int width,
-                           int disparities, std::uint16_t* cost);
+// The census of a row in four byte planes: bits 0..7 of every pixel in planes[0], 8..15 in
+// planes[1], 16..23 in planes[2], 24..30 in planes[3]. Census: 9x7 centre-symmetric, bit
+// b = I(x+dx_b, y+dy_b) > I(x-dx_b, y-dy_b) for the 31 offsets of the upper half window.
+// rows[0..6] are rows y-3..y+3 (clamped at the image border by the caller); columns are clamped
+// too.
+using CensusRowKernel = void(const std::uint8_t* const* rows, int width,
+                             std::uint8_t* const* planes);
+// Matching cost of one row: cost[x * D + d] = Hamming distance (0..31) between the left census
+// at x and the right census at x - d, and 31 (kMaxCensusCost) where d > x (beyond the left
+// border). The right census comes reversed: right[p][k] is plane p of right pixel
+// width - 1 - k, for k < width + D (the caller pads k >= width).
+using CostRowKernel = void(const std::uint8_t* const* left, const std::uint8_t* const* right,
+                           int width, int disparities, std::uint8_t* cost);
 
-// One row of semi-global aggregation. Path arrays hold, per x in -1..width, `stride` values
-// (= D + 16) with the disparities at offset 8; entries -1 and width are zero, and the values at
-// d = -1 and d = D are kSgmPad. mins hold each x's minimum (index x + 1).
-constexpr std::uint16_t kSgmPad = 0x3FFF;
+// Winner take all of one row of aggregated costs S(x, d) (each below kNoCost), as the last step
+// of the SGM and BM row kernels. disparity[x]: d * 16 with parabolic sub-pixel, or
+// kInvalidDisparity when not unique or when d > x; best[x]: that integer d or -1.
+// right_best[xr]: the right image's best disparity at xr, the smallest S(xr + d, d) over
+// 0 <= d < min(D, width - xr), the smallest d among equal costs. window: 2 * (D + 16) values
+// of scratch.
+constexpr std::uint16_t kNoCost = 0x7FFF;
+struct WtaRow {
+  int uniqueness;
+  std::int16_t* disparity;
+  std::int16_t* best;
+  std::int16_t* right_best;
+  std::uint16_t* window;
+};
+
+// One row of semi-global aggregation and its winner take all. Path values are 8-bit: each path
+// step is C + min(...) - min_prev, between 0 and max cost + P2 = 31 + P2, so P2 <= 224 keeps
+// them exact. Path arrays hold, per x in -1..width, `stride` = D + 32 bytes with the
+// disparities at offset 16; entries -1 and width are zero, and the values at d = -1 and d = D
+// are kSgmPad. mins hold each x's minimum (index x + 1).
+constexpr std::uint8_t kSgmPad = 0xFF;
+constexpr int kMaxSgmP2 = 255 - 31;
 struct SgmRow {
-  const std::uint16_t* cost;  // [x * D + d]
+  const std::uint8_t* cost;  // [x * D + d], each 0..31
   int width;
   int disparities;
   int p1;
   int p2;
-  const std::uint16_t* prev[3];  // top, top-left, top-right: the previous row
-  std::uint16_t* cur[3];
-  const std::uint16_t* prev_min[3];
-  std::uint16_t* cur_min[3];
-  std::uint16_t* scratch;  // 2 * stride values: the horizontal paths
-  std::uint16_t* sums;     // out: [x * D + d], the sum over the 5 paths
+  const std::uint8_t* prev[3];  // top, top-left, top-right: the previous row
+  std::uint8_t* cur[3];
+  const std::uint8_t* prev_min[3];
+  std::uint8_t* cur_min[3];
+  std::uint8_t* scratch;  // 2 * stride bytes: the horizontal paths
+  std::uint16_t* sums;    // width * D values of scratch: the sums over the paths
+  WtaRow wta;
 };
 using SgmRowKernel = void(const SgmRow& row);
 
-// Winner take all on one row of aggregated costs (sums, each below kNoCost; the kernel may
-// overwrite them). disparity[x]: d * 16 with parabolic sub-pixel, or kInvalidDisparity when not
-// unique or when d > x; best[x]: the integer d or -1. right_min/right_disp (width + D values,
-// reversed like the right census, set to kNoCost and 0xFFFF by the caller) get the best cost and
-// disparity (the smallest d among equal costs) of each right pixel.
-constexpr std::uint16_t kNoCost = 0x7FFF;
-using WtaRowKernel = void(std::uint16_t* sums, int width, int disparities, int uniqueness,
-                          std::int16_t* disparity, std::int16_t* best, std::uint16_t* right_min,
-                          std::uint16_t* right_disp);
+// Box filter step (fast mode): sums[i] += add[i] - sub[i] over n values (add or sub may be
+// null).
+using BoxColumnsKernel = void(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub,
+                              int n);
 
-// Box filter steps (fast mode): sums[i] += add[i] - sub[i] over n values (sub may be null), and
-// the horizontal box of radius r over a row of per-x columns of D values.
-using BoxColumnsKernel = void(std::uint16_t* sums, const std::uint16_t* add,
-                              const std::uint16_t* sub, int n);
-using BoxRowKernel = void(const std::uint16_t* columns, int width, int disparities, int radius,
-                          std::uint16_t* sums);
+// One row of block matching in one pass (what box_columns + box_wta_ref do one after the
+// other): the column sums are updated with the cost row entering the box and the one leaving
+// it (either may be null), and the box and its winner are taken.
+struct BmRow {
+  const std::uint8_t* entering;
+  const std::uint8_t* leaving;
+  std::uint16_t* columns;  // width * D
+  int width;
+  int disparities;
+  int radius;
+  std::uint16_t* sums;  // width * D values of scratch (width >= 2)
+  WtaRow wta;
+};
+using BmRowKernel = void(const BmRow& row);
 
 struct StereoKernels {
   CensusRowKernel* census;
   CostRowKernel* cost;
   SgmRowKernel* sgm;
-  WtaRowKernel* wta;
   BoxColumnsKernel* box_columns;
-  BoxRowKernel* box_row;
+  BmRowKernel* bm;
 };
 
 StereoKernels stereo_kernels(SimdPath path);
 
-void census_row_ref(const std::uint8_t* const* rows, int width, std::uint16_t* lo,
-                    std::uint16_t* hi);
-void cost_row_ref(const std::uint16_t* left_lo, const std::uint16_t* left_hi,
-                  const std::uint16_t* right_lo, const std::uint16_t* right_hi, int width,
-                  int disparities, std::uint16_t* cost);
+void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* const* planes);
+void cost_row_ref(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
+                  int disparities, std::uint8_t* cost);
 void sgm_row_ref(const SgmRow& row);
-void wta_row_ref(std::uint16_t* sums, int width, int disparities, int uniqueness,
-                 std::int16_t* disparity, std::int16_t* best, std::uint16_t* right_min,
-                 std::uint16_t* right_disp);
-void box_columns_ref(std::uint16_t* sums, const std::uint16_t* add, const std::uint16_t* sub,
-                     int n);
-void box_row_ref(const std::uint16_t* columns, int width, int disparities, int radius,
-                 std::uint16_t* sums);
+void box_columns_ref(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub, int n);
+void bm_row_ref(const BmRow& row);
+// The horizontal box of radius r over a row of per-x columns of D values into sums
+// [x * D + d], and its winner take all.
+void box_wta_ref(const std::uint16_t* columns, int width, int disparities, int radius,
+                 std::uint16_t* sums, const WtaRow& wta);
+// The definition of the winner take all over a whole row of sums [x * D + d].
+void wta_row_ref(const std::uint16_t* sums, int width, int disparities, const WtaRow& wta);
 
 // One pixel of the census (clamped columns), shared by every path for the border columns.
-void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint16_t* lo,
-                  std::uint16_t* hi);
-// Uniqueness, shared by every path: a disparity (other than best +-1) whose cost is below
-// uniqueness_limit(min_cost, uniqueness_ratio(u)) ~ min_cost * 100 / (100 - u) makes the pixel
-// ambiguous. ratio = 2^16 * 100 / (100 - u), fixed point, so no division per pixel.
-std::uint32_t uniqueness_ratio(int uniqueness);
-int uniqueness_limit(int min_cost, std::uint32_t ratio);
-// Parabolic sub-pixel position, shared by every path: d*16 + offset from the three costs.
-int subpixel(int d, int disparities, int below, int at, int above);
-
+void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint8_t* const* planes);
 }  // namespace kernels
 }  // namespace epipole::vision

@@ -1,0 +1,225 @@
+// epipole match LEFT RIGHT: sparse stereo matches of a rectified pair (or a raw pair rectified
+// here with --calib), and with --calib their 3-D points, as JSON and/or a picture.
+#include <chrono>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "epipole/core/draw.hpp"
+#include "epipole/core/image_io.hpp"
+#include "epipole/firmware/sparse_points.hpp"
+#include "epipole/vision/fast.hpp"
+#include "epipole/vision/harris.hpp"
+#include "epipole/vision/sparse_stereo.hpp"
+#include "stereo_input.hpp"
+
+namespace epipole::tools {
+
+namespace {
+
+struct MatchOptions {
+  std::string left;
+  std::string right;
+  std::string calib;
+  std::string detector = "fast";
+  int threshold = 20;  // FAST
+  int max_corners = 4000;
+  int max_disparity = 64;
+  int row_tolerance = 1;
+  int ratio = 80;
+  int max_distance = 64;
+  bool json = false;
+  std::string draw;
+};
+
+// The corners of both images with the chosen detector (each image its own detector, as the
+// frame loop has them).
+struct Corners {
+  std::vector<vision::Corner> left, right;
+};
+
+Corners detect(const MatchOptions& options, GrayView left, GrayView right, SimdPath path) {
+  Corners c;
+  const auto run = [&](auto& detector, GrayView image, std::vector<vision::Corner>& out) {
+    const auto found = detector.detect(image);
+    out.assign(found.begin(), found.end());
+  };
+  for (const bool is_left : {true, false}) {
+    const GrayView image = is_left ? left : right;
+    std::vector<vision::Corner>& out = is_left ? c.left : c.right;
+    if (options.detector == "harris") {
+      vision::HarrisConfig config{.width = image.width(), .height = image.height()};
+      config.min_distance = 5;
+      config.max_corners = options.max_corners;
+      vision::HarrisDetector harris(config, path);
+      run(harris, image, out);
+    } else {
+      vision::FastDetector fast({.width = image.width(),
+                                 .height = image.height(),
+                                 .threshold = options.threshold,
+                                 .max_corners = options.max_corners},
+                                path);
+      run(fast, image, out);
+    }
+  }
+  return c;
+}
+
+// Left | right side by side, each match a line between its two corners, colour by disparity.
+RgbImage match_picture(GrayView left, GrayView right, std::span<const vision::SparseMatch> matches,
+                       int max_disparity) {
+  const int w = left.width();
+  RgbImage picture(2 * w, left.height());
+  gray_to_rgb(left, picture.view().sub(0, 0, w, left.height()));
+  gray_to_rgb(right, picture.view().sub(w, 0, w, left.height()));
+  for (const vision::SparseMatch& m : matches) {
+    const double t = std::clamp(static_cast<double>(m.disparity) / max_disparity, 0.0, 1.0);
+    const Rgb8 colour{static_cast<std::uint8_t>(255 * t), static_cast<std::uint8_t>(255 * (1 - t)),
+                      64};
+    const int xl = static_cast<int>(std::lround(m.xl));
+    const int yl = static_cast<int>(std::lround(m.yl));
+    const int xr = static_cast<int>(std::lround(m.xr)) + w;
+    const int yr = static_cast<int>(std::lround(m.yr));
+    draw_circle(picture.view(), xl, yl, 3, colour);
+    draw_circle(picture.view(), xr, yr, 3, colour);
+    draw_line(picture.view(), xl, yl, xr, yr, colour);
+  }
+  return picture;
+}
+
+void run_match(const MatchOptions& options, const GlobalOptions& global) {
+  const SimdPath path = parse_simd_path(global.kernels);
+  const StereoInput input = load_stereo_input(options.left, options.right, options.calib, path);
+  const int width = input.left.width();
+  const int height = input.left.height();
+  vision::SparseStereoMatcher matcher({.width = width,
+                                       .height = height,
+                                       .max_disparity = options.max_disparity,
+                                       .row_tolerance = options.row_tolerance,
+                                       .ratio = options.ratio,
+                                       .max_distance = options.max_distance,
+                                       .max_corners = options.max_corners,
+                                       .max_matches = options.max_corners},
+                                      path);
+  const Corners corners = detect(options, input.left, input.right, path);
+  const auto start = std::chrono::steady_clock::now();
+  const std::span<const vision::SparseMatch> matches =
+      matcher.match(input.left, corners.left, input.right, corners.right);
+  const std::chrono::duration<double, std::milli> elapsed =
+      std::chrono::steady_clock::now() - start;
+
+  std::vector<firmware::SparsePoint> points;
+  if (input.calibration) {
+    const calib::Triangulator triangulator(*input.calibration);
+    points.resize(matches.size());
+    points.resize(firmware::triangulate_matches(triangulator, matches, points));
+  }
+
+  if (options.json) {
+    nlohmann::json m = nlohmann::json::array();
+    for (const vision::SparseMatch& s : matches) {
+      m.push_back({{"xl", s.xl},
+                   {"yl", s.yl},
+                   {"xr", s.xr},
+                   {"yr", s.yr},
+                   {"disparity", s.disparity},
+                   {"distance", s.distance}});
+    }
+    nlohmann::json out = {{"width", width},
+                          {"height", height},
+                          {"detector", options.detector},
+                          {"kernels", to_string(matcher.simd_path())},
+                          {"rectified", input.rectifiers.has_value()},
+                          {"max_disparity", options.max_disparity},
+                          {"row_tolerance", options.row_tolerance},
+                          {"ratio", options.ratio},
+                          {"left_corners", corners.left.size()},
+                          {"right_corners", corners.right.size()},
+                          {"truncated", matcher.truncated()},
+                          {"milliseconds", elapsed.count()},
+                          {"matches", std::move(m)}};
+    if (input.calibration) {
+      nlohmann::json p = nlohmann::json::array();
+      for (const firmware::SparsePoint& s : points) {
+        p.push_back({{"xl", s.xl},
+                     {"yl", s.yl},
+                     {"disparity", s.disparity},
+                     {"x", s.x},
+                     {"y", s.y},
+                     {"z", s.z}});
+      }
+      out["points"] = std::move(p);
+    } else {
+      out["points"] = nullptr;
+      out["points_note"] = "no 3-D points without --calib (the pair is taken as rectified)";
+    }
+    std::cout << out.dump() << "\n";
+  } else {
+    std::cout << matches.size() << " matches of " << corners.left.size() << " / "
+              << corners.right.size() << " corners (" << options.detector << ", "
+              << options.max_disparity << " disparities, " << to_string(matcher.simd_path())
+              << ") in " << elapsed.count() << " ms";
+    if (input.calibration) {
+      std::cout << ", " << points.size() << " 3-D points";
+    } else {
+      std::cout << " (no 3-D points without --calib)";
+    }
+    std::cout << (matcher.truncated() ? ", truncated" : "") << "\n";
+  }
+  if (!options.draw.empty()) {
+    const RgbImage picture = match_picture(input.left, input.right, matches, options.max_disparity);
+    save_image(options.draw, ImageView<const Rgb8>(picture.view()));
+  }
+}
+
+}  // namespace
+
+void add_match_command(CLI::App& app, const GlobalOptions& global) {
+  auto options = std::make_shared<MatchOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "match", "Sparse stereo: corners matched along the rows, 3-D points with --calib");
+  cmd->add_option("left", options->left, "Left image (PNG, JPEG, PGM)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("right", options->right, "Right image")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--calib", options->calib,
+                  "Calibration file (YAML): rectify the raw pair first and triangulate the "
+                  "matches into 3-D points (without it the pair is taken as rectified and no "
+                  "points are computed)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--detector", options->detector, "Corner detector: fast or harris")
+      ->check(CLI::IsMember({"fast", "harris"}))
+      ->capture_default_str();
+  cmd->add_option("--threshold,-t", options->threshold, "FAST intensity threshold (0..255)")
+      ->check(CLI::Range(0, 255))
+      ->capture_default_str();
+  cmd->add_option("--max-corners,-n", options->max_corners,
+                  "Corners per image, and matches, at most")
+      ->check(CLI::Range(1, 1'000'000))
+      ->capture_default_str();
+  cmd->add_option("--max-disparity,-d", options->max_disparity,
+                  "Disparities 0..N-1 are searched (smaller than the width)")
+      ->capture_default_str();
+  cmd->add_option("--row-tolerance", options->row_tolerance,
+                  "Candidates on rows y-T..y+T of the other image (0..16)")
+      ->capture_default_str();
+  cmd->add_option("--ratio", options->ratio,
+                  "Ratio test, percent: best distance below this share of the second best")
+      ->capture_default_str();
+  cmd->add_option("--max-distance", options->max_distance,
+                  "Largest Hamming distance of the 256-bit descriptors")
+      ->capture_default_str();
+  cmd->add_flag("--json", options->json,
+                R"(Print {"matches":[{"xl","yl","xr","yr","disparity","distance"}],)"
+                R"("points":[{"xl","yl","disparity","x","y","z"}] (null without --calib),...})");
+  cmd->add_option("--draw", options->draw,
+                  "Write the pair side by side with a line for each match (.png)");
+  cmd->callback([options, &global] { run_match(*options, global); });
+}
+
+}  // namespace epipole::tools

@@ -1,0 +1,177 @@
+// Sparse stereo: the Hamming kernel of every path against the reference, bit for bit; matches
+// on a synthetic pair shifted by a known (integer and half-pixel) disparity; bad input.
+#include "epipole/vision/sparse_stereo.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "epipole/core/error.hpp"
+#include "epipole/vision/fast.hpp"
+#include "random_image.hpp"
+
+namespace epipole::vision {
+namespace {
+
+TEST(SparseStereoKernels, HammingEqualsReference) {
+  std::mt19937 rng(7);
+  std::vector<std::uint8_t> data(32 * 20 + 7);
+  for (auto& b : data) b = static_cast<std::uint8_t>(rng());
+  data[5] = 0;  // some all-zero and all-one bytes
+  data[40] = 0xFF;
+  for (const std::size_t offset : {0u, 1u, 3u}) {
+    const std::uint8_t* query = data.data() + 32 * 19 + offset;  // the last one, unaligned
+    for (int n = 0; n <= 13; ++n) {
+      std::vector<std::uint16_t> ref(static_cast<std::size_t>(n) + 1, 999);
+      kernels::hamming_ref(query, data.data() + offset, n, ref.data());
+      for (const SimdPath path : available_simd_paths()) {
+        std::vector<std::uint16_t> out(static_cast<std::size_t>(n) + 1, 999);
+        kernels::hamming_kernel(path)(query, data.data() + offset, n, out.data());
+        ASSERT_EQ(out, ref) << to_string(path) << " n " << n << " offset " << offset;
+      }
+    }
+  }
+  std::vector<std::uint16_t> self(1);
+  kernels::hamming_ref(data.data(), data.data(), 1, self.data());
+  EXPECT_EQ(self[0], 0);
+}
+
+// A textured scene: the left view and a right view whose pixel x shows the left's x + d
+// (linear interpolation between pixels for half-pixel d).
+struct ShiftedPair {
+  ShiftedPair(int width, int height, double d) : left(width, height), right(width, height) {
+    const int source_width = width + 40;
+    GrayImage source(source_width, height);
+    test::fill(source.view(), test::Pattern::blobs, 11);
+    // Smooth it a little, so that a half-pixel shift is a meaningful interpolation.
+    GrayImage smooth(source_width, height);
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < source_width; ++x) {
+        const int a = source.view()(std::max(x - 1, 0), y);
+        const int b = source.view()(std::min(x + 1, source_width - 1), y);
+        smooth.view()(x, y) = static_cast<std::uint8_t>((a + 2 * source.view()(x, y) + b + 2) / 4);
+      }
+    }
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) {
+        left.view()(x, y) = smooth.view()(x + 8, y);
+        const double s = x + 8 + d;
+        const int i = static_cast<int>(std::floor(s));
+        const double f = s - i;
+        right.view()(x, y) = static_cast<std::uint8_t>(
+            std::lround((1 - f) * smooth.view()(i, y) + f * smooth.view()(i + 1, y)));
+      }
+    }
+  }
+  GrayImage left, right;
+};
+
+std::vector<Corner> corners_of(GrayView image) {
+  FastDetector fast({.width = image.width(), .height = image.height(), .threshold = 20});
+  const auto c = fast.detect(image);
+  return {c.begin(), c.end()};
+}
+
+TEST(SparseStereo, FindsAKnownDisparityOnEveryPath) {
+  for (const double d : {7.0, 6.5}) {
+    const ShiftedPair pair(160, 96, d);
+    const auto left = corners_of(pair.left.view());
+    const auto right = corners_of(pair.right.view());
+    ASSERT_GT(left.size(), 40u);
+    std::vector<SparseMatch> ref;
+    for (const SimdPath path : available_simd_paths()) {
+      SparseStereoMatcher matcher({.width = 160, .height = 96, .max_disparity = 32}, path);
+      const auto m = matcher.match(pair.left.view(), left, pair.right.view(), right);
+      ASSERT_GT(m.size(), 20u) << to_string(path);
+      int close = 0;
+      double error = 0;
+      for (const SparseMatch& match : m) {
+        EXPECT_FLOAT_EQ(match.xr, match.xl - match.disparity);
+        EXPECT_LE(std::abs(match.yr - match.yl), 1.0f);
+        EXPECT_LE(match.distance, 64);
+        const double e = std::abs(static_cast<double>(match.disparity) - d);
+        close += e <= 0.5 ? 1 : 0;
+        error += e;
+      }
+      EXPECT_GE(close, static_cast<int>(m.size()) * 9 / 10) << to_string(path) << " d " << d;
+      EXPECT_LT(error / static_cast<double>(m.size()), 0.25) << to_string(path) << " d " << d;
+      if (path == SimdPath::reference) {
+        ref.assign(m.begin(), m.end());
+        continue;
+      }
+      ASSERT_EQ(m.size(), ref.size()) << to_string(path);
+      for (std::size_t i = 0; i < ref.size(); ++i) {
+        EXPECT_EQ(m[i].xl, ref[i].xl);
+        EXPECT_EQ(m[i].disparity, ref[i].disparity);
+        EXPECT_EQ(m[i].distance, ref[i].distance);
+      }
+    }
+  }
+}
+
+TEST(SparseStereo, BoundsAndRangeAreRespected) {
+  const ShiftedPair pair(160, 96, 12.0);
+  const auto left = corners_of(pair.left.view());
+  const auto right = corners_of(pair.right.view());
+  // A range that excludes the true disparity finds (almost) nothing right.
+  SparseStereoMatcher narrow({.width = 160, .height = 96, .max_disparity = 8});
+  for (const SparseMatch& m : narrow.match(pair.left.view(), left, pair.right.view(), right)) {
+    EXPECT_LT(m.disparity, 8 + 2.5f);  // the sub-pixel search may move it by 2
+  }
+  SparseStereoMatcher few({.width = 160, .height = 96, .max_disparity = 32, .max_matches = 5});
+  EXPECT_EQ(few.match(pair.left.view(), left, pair.right.view(), right).size(), 5u);
+  EXPECT_TRUE(few.truncated());
+  SparseStereoMatcher some_corners(
+      {.width = 160, .height = 96, .max_disparity = 32, .max_corners = 10});
+  EXPECT_LE(some_corners.match(pair.left.view(), left, pair.right.view(), right).size(), 10u);
+  EXPECT_TRUE(some_corners.truncated());
+  // No corners, no matches.
+  SparseStereoMatcher matcher({.width = 160, .height = 96});
+  EXPECT_TRUE(matcher.match(pair.left.view(), {}, pair.right.view(), right).empty());
+  EXPECT_FALSE(matcher.truncated());
+}
+
+std::string error_of(const auto& make) {
+  try {
+    make();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(SparseStereo, BadInputIsAClearError) {
+  EXPECT_NE(error_of([] {
+              SparseStereoMatcher m({.width = 64, .height = 48, .max_disparity = 64});
+            }).find("smaller than the image width"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { SparseStereoMatcher m({.width = 20, .height = 48}); }).find("outside"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              SparseStereoMatcher m({.width = 64, .height = 48, .max_disparity = 16, .ratio = 0});
+            }).find("ratio 0"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              SparseStereoMatcher m(
+                  {.width = 64, .height = 48, .max_disparity = 16, .row_tolerance = 40});
+            }).find("row tolerance 40"),
+            std::string::npos);
+  GrayImage a(64, 48), b(64, 47);
+  test::fill(a.view(), test::Pattern::noise, 1);
+  test::fill(b.view(), test::Pattern::noise, 2);
+  SparseStereoMatcher matcher({.width = 64, .height = 48, .max_disparity = 16});
+  EXPECT_NE(error_of([&] { matcher.match(a.view(), {}, b.view(), {}); }).find("differ in size"),
+            std::string::npos);
+  const std::vector<Corner> outside = {{70, 10, 1.0f}};
+  EXPECT_NE(error_of([&] {
+              matcher.match(a.view(), outside, a.view(), {});
+            }).find("corner (70, 10) is outside the 64x48 image"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace epipole::vision

@@ -1,0 +1,309 @@
+#include "epipole/vision/sparse_stereo.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cstdlib>
+
+#include "epipole/core/error.hpp"
+#include "kernel_set.hpp"
+
+namespace epipole::vision {
+
+namespace kernels {
+
+void hamming_ref(const std::uint8_t* query, const std::uint8_t* candidates, int n,
+                 std::uint16_t* distances) {
+  constexpr int kBytes = SparseStereoMatcher::kDescriptorBytes;
+  for (int i = 0; i < n; ++i) {
+    int bits = 0;
+    for (int b = 0; b < kBytes; ++b) {
+      bits += std::popcount(static_cast<unsigned>(query[b] ^ candidates[i * kBytes + b]));
+    }
+    distances[i] = static_cast<std::uint16_t>(bits);
+  }
+}
+
+HammingKernel* hamming_kernel(SimdPath path) {
+  return KernelSet<HammingKernel>{hamming_ref, hamming_neon, nullptr}.pick(path);
+}
+
+}  // namespace kernels
+
+namespace {
+
+constexpr int kBits = SparseStereoMatcher::kDescriptorBytes * 8;
+constexpr int kBoxRadius = 2;
+constexpr int kSadRadius = 3;
+constexpr int kSadSearch = 2;       // sub-pixel: SAD at d - 2 .. d + 2
+constexpr int kNoSad = 0x7FFFFFFF;  // a window outside the image
+
+template <typename T>
+std::size_t bytes_of(const std::vector<T>& v) {
+  return v.size() * sizeof(T);
+}
+
+}  // namespace
+
+SparseStereoMatcher::SparseStereoMatcher(const SparseStereoConfig& config, SimdPath path)
+    : config_(config), path_(path) {
+  const int W = config.width;
+  const int H = config.height;
+  require(W > 2 * kBorder && H > 2 * kBorder && W <= 32767 && H <= 32767, "image size ", W, "x", H,
+          " is outside ", 2 * kBorder + 1, "x", 2 * kBorder + 1, "..32767x32767 for sparse stereo");
+  require(config.max_disparity >= 1 && config.max_disparity < W, "disparity range ",
+          config.max_disparity, " must be in 1..", W - 1, " (smaller than the image width)");
+  require(config.row_tolerance >= 0 && config.row_tolerance <= 16, "row tolerance ",
+          config.row_tolerance, " must be in 0..16 rows");
+  require(config.ratio >= 1 && config.ratio <= 100, "ratio ", config.ratio,
+          " must be in 1..100 percent");
+  require(config.max_distance >= 0 && config.max_distance <= kBits, "maximum distance ",
+          config.max_distance, " must be in 0..", kBits);
+  require(config.max_corners >= 1 && config.max_corners <= 1'000'000, "maximum corners ",
+          config.max_corners, " must be in 1..1000000");
+  require(config.max_matches >= 1 && config.max_matches <= 1'000'000, "maximum matches ",
+          config.max_matches, " must be in 1..1000000");
+  require(simd_path_available(path), "kernel path ", to_string(path),
+          " is not available on this CPU");
+
+  // The test pattern: offsets in -12..12, each the sum of two uniform draws in -6..6 from a
+  // fixed linear congruential generator, so every build has the same descriptor.
+  pattern_.resize(4 * kBits);
+  std::uint32_t state = 0x2545F491u;
+  const auto draw = [&] {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<int>((state >> 16) % 13u) - 6;
+  };
+  for (std::int16_t& offset : pattern_) offset = static_cast<std::int16_t>(draw() + draw());
+
+  const auto pixels = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+  const auto corners = static_cast<std::size_t>(config.max_corners);
+  box_rows_.assign(static_cast<std::size_t>(2 * kBoxRadius + 1) * static_cast<std::size_t>(W), 0);
+  distances_.assign(corners, 0);
+  for (Side* side : {&left_, &right_}) {
+    side->box.assign(pixels, 0);
+    side->descriptors.assign(corners * kDescriptorBytes, 0);
+    side->x.assign(corners, 0);
+    side->y.assign(corners, 0);
+    side->row_start.assign(static_cast<std::size_t>(H) + 1, 0);
+    side->order.assign(corners, 0);
+    side->partner.assign(corners, -2);
+  }
+  matches_.resize(static_cast<std::size_t>(config.max_matches));
+}
+
+std::size_t SparseStereoMatcher::working_set_bytes() const {
+  std::size_t n =
+      bytes_of(pattern_) + bytes_of(box_rows_) + bytes_of(distances_) + bytes_of(matches_);
+  for (const Side* side : {&left_, &right_}) {
+    n += bytes_of(side->box) + bytes_of(side->descriptors) + bytes_of(side->x) + bytes_of(side->y) +
+         bytes_of(side->row_start) + bytes_of(side->order) + bytes_of(side->partner);
+  }
+  return n;
+}
+
+// The 5x5 box sums of the image (interior pixels only), the corners sorted by (y, x) with
+// their descriptors, and the first corner of each row.
+void SparseStereoMatcher::prepare(Side& side, GrayView image, std::span<const Corner> corners) {
+  const int W = config_.width;
+  const int H = config_.height;
+  constexpr int kRows = 2 * kBoxRadius + 1;
+  const auto horizontal = [&](int y) {
+    const std::uint8_t* src = image.row(y);
+    std::uint16_t* out = box_rows_.data() + static_cast<std::ptrdiff_t>(y % kRows) * W;
+    int sum = 0;
+    for (int x = 0; x < kRows - 1; ++x) sum += src[x];
+    for (int x = kBoxRadius; x < W - kBoxRadius; ++x) {
+      sum += src[x + kBoxRadius];
+      out[x] = static_cast<std::uint16_t>(sum);
+      sum -= src[x - kBoxRadius];
+    }
+  };
+  for (int y = 0; y < kRows - 1; ++y) horizontal(y);
+  for (int y = kBoxRadius; y < H - kBoxRadius; ++y) {
+    horizontal(y + kBoxRadius);
+    std::uint16_t* out = side.box.data() + static_cast<std::ptrdiff_t>(y) * W;
+    const std::uint16_t* r[kRows];
+    for (int i = 0; i < kRows; ++i) {
+      r[i] = box_rows_.data() + static_cast<std::ptrdiff_t>((y - kBoxRadius + i) % kRows) * W;
+    }
+    for (int x = kBoxRadius; x < W - kBoxRadius; ++x) {
+      out[x] = static_cast<std::uint16_t>(r[0][x] + r[1][x] + r[2][x] + r[3][x] + r[4][x]);
+    }
+  }
+
+  // Corners with a descriptor, at most max_corners, sorted by (y, x).
+  int n = 0;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    const Corner& c = corners[i];
+    require(c.x >= 0 && c.y >= 0 && c.x < W && c.y < H, "corner (", c.x, ", ", c.y,
+            ") is outside the ", W, "x", H, " image");
+    if (c.x < kBorder || c.y < kBorder || c.x >= W - kBorder || c.y >= H - kBorder) continue;
+    if (n == config_.max_corners) {
+      truncated_ = true;
+      continue;
+    }
+    side.order[static_cast<std::size_t>(n++)] = static_cast<std::uint32_t>(i);
+  }
+  std::sort(side.order.begin(), side.order.begin() + n, [&](std::uint32_t a, std::uint32_t b) {
+    return corners[a].y != corners[b].y
+               ? corners[a].y < corners[b].y
+               : (corners[a].x != corners[b].x ? corners[a].x < corners[b].x : a < b);
+  });
+  side.count = n;
+  std::fill(side.row_start.begin(), side.row_start.end(), 0u);
+  for (int k = 0; k < n; ++k) {
+    const Corner& c = corners[side.order[static_cast<std::size_t>(k)]];
+    side.x[static_cast<std::size_t>(k)] = static_cast<std::int16_t>(c.x);
+    side.y[static_cast<std::size_t>(k)] = static_cast<std::int16_t>(c.y);
+    ++side.row_start[static_cast<std::size_t>(c.y) + 1];
+    std::uint8_t* d = side.descriptors.data() + static_cast<std::ptrdiff_t>(k) * kDescriptorBytes;
+    const std::uint16_t* centre = side.box.data() + static_cast<std::ptrdiff_t>(c.y) * W + c.x;
+    for (int byte = 0; byte < kDescriptorBytes; ++byte) {
+      unsigned bits = 0;
+      for (int b = 0; b < 8; ++b) {
+        const std::int16_t* o = pattern_.data() + 4 * (byte * 8 + b);
+        const int p = centre[o[1] * W + o[0]];
+        const int q = centre[o[3] * W + o[2]];
+        bits |= (p < q ? 1u : 0u) << b;
+      }
+      d[byte] = static_cast<std::uint8_t>(bits);
+    }
+    side.partner[static_cast<std::size_t>(k)] = -2;
+  }
+  for (int y = 0; y < H; ++y) {
+    side.row_start[static_cast<std::size_t>(y) + 1] += side.row_start[static_cast<std::size_t>(y)];
+  }
+}
+
+// The best corner of `to` for corner i of `from`: on rows y +- row_tolerance, at x - d for the
+// left image's corners (direction +1) or x + d for the right image's (-1).
+SparseStereoMatcher::Best SparseStereoMatcher::best_match(const Side& from, int i, const Side& to,
+                                                          int direction) {
+  const auto ui = static_cast<std::size_t>(i);
+  const int x = from.x[ui];
+  const int y = from.y[ui];
+  const int lo = direction > 0 ? x - config_.max_disparity + 1 : x;
+  const int hi = direction > 0 ? x : x + config_.max_disparity - 1;
+  const std::uint8_t* query = from.descriptors.data() + ui * kDescriptorBytes;
+  kernels::HammingKernel* const hamming = kernels::hamming_kernel(path_);
+  int best = -1;
+  int best_distance = kBits + 1;
+  int second = kBits + 1;
+  const int t = config_.row_tolerance;
+  for (int row = std::max(0, y - t); row <= std::min(config_.height - 1, y + t); ++row) {
+    const auto xs = to.x.begin();
+    const auto row_begin = xs + to.row_start[static_cast<std::size_t>(row)];
+    const auto row_end = xs + to.row_start[static_cast<std::size_t>(row) + 1];
+    const auto first = std::lower_bound(row_begin, row_end, static_cast<std::int16_t>(lo));
+    const auto last = std::upper_bound(first, row_end, static_cast<std::int16_t>(hi));
+    const int begin = static_cast<int>(first - xs);
+    const int n = static_cast<int>(last - first);
+    if (n == 0) continue;
+    hamming(query, to.descriptors.data() + static_cast<std::ptrdiff_t>(begin) * kDescriptorBytes, n,
+            distances_.data());
+    for (int k = 0; k < n; ++k) {
+      const int dist = distances_[static_cast<std::size_t>(k)];
+      if (dist < best_distance) {
+        second = best_distance;
+        best_distance = dist;
+        best = begin + k;
+      } else if (dist < second) {
+        second = dist;
+      }
+    }
+  }
+  Best result;
+  result.index = best;
+  result.distance = best_distance;
+  result.ok = best >= 0 && best_distance <= config_.max_distance &&
+              (second > kBits || best_distance * 100 < config_.ratio * second);
+  return result;
+}
+
+// The best corner of `to` for corner i of `from`, when it passes both tests; -1 otherwise.
+int SparseStereoMatcher::partner_of(Side& from, int i, const Side& to, int direction) {
+  std::int32_t& p = from.partner[static_cast<std::size_t>(i)];
+  if (p == -2) {
+    const Best b = best_match(from, i, to, direction);
+    p = b.ok ? b.index : -1;
+  }
+  return p;
+}
+
+// Sub-pixel disparity from the SAD of 7x7 windows around the corners' difference.
+float SparseStereoMatcher::refine(GrayView left, GrayView right, int xl, int yl, int xr,
+                                  int yr) const {
+  const int d = xl - xr;
+  int sad[2 * kSadSearch + 1];
+  for (int k = -kSadSearch; k <= kSadSearch; ++k) {
+    const int x = xl - (d + k);  // the right window's centre
+    if (x - kSadRadius < 0 || x + kSadRadius >= config_.width || d + k < 0) {
+      sad[k + kSadSearch] = kNoSad;
+      continue;
+    }
+    int s = 0;
+    for (int j = -kSadRadius; j <= kSadRadius; ++j) {
+      const std::uint8_t* a = left.row(yl + j) + xl;
+      const std::uint8_t* b = right.row(yr + j) + x;
+      for (int i = -kSadRadius; i <= kSadRadius; ++i) s += std::abs(a[i] - b[i]);
+    }
+    sad[k + kSadSearch] = s;
+  }
+  int m = 0;
+  for (int k = 1; k <= 2 * kSadSearch; ++k) {
+    if (sad[k] < sad[m]) m = k;
+  }
+  // No parabola at either end of the search or next to a window outside the image: the
+  // corners' own difference.
+  if (m == 0 || m == 2 * kSadSearch || sad[m - 1] == kNoSad || sad[m + 1] == kNoSad) {
+    return static_cast<float>(d);
+  }
+  const int below = sad[m - 1];
+  const int at = sad[m];
+  const int above = sad[m + 1];
+  const int denom = below + above - 2 * at;
+  const float offset =
+      denom > 0 ? static_cast<float>(below - above) / static_cast<float>(2 * denom) : 0.0f;
+  return static_cast<float>(d + m - kSadSearch) + offset;
+}
+
+std::span<const SparseMatch> SparseStereoMatcher::match(GrayView left,
+                                                        std::span<const Corner> left_corners,
+                                                        GrayView right,
+                                                        std::span<const Corner> right_corners) {
+  require(same_size(left, right), "left image ", left.width(), "x", left.height(),
+          " and right image ", right.width(), "x", right.height(), " differ in size");
+  require(left.width() == config_.width && left.height() == config_.height, "images are ",
+          left.width(), "x", left.height(), " but the sparse matcher is configured for ",
+          config_.width, "x", config_.height);
+  truncated_ = false;
+  match_count_ = 0;
+  prepare(left_, left, left_corners);
+  prepare(right_, right, right_corners);
+  for (int i = 0; i < left_.count; ++i) {
+    const int j = partner_of(left_, i, right_, 1);
+    if (j < 0 || partner_of(right_, j, left_, -1) != i) continue;
+    if (match_count_ == config_.max_matches) {
+      truncated_ = true;
+      break;
+    }
+    const auto ui = static_cast<std::size_t>(i);
+    const auto uj = static_cast<std::size_t>(j);
+    const int xl = left_.x[ui];
+    const int yl = left_.y[ui];
+    const int xr = right_.x[uj];
+    const int yr = right_.y[uj];
+    SparseMatch& m = matches_[static_cast<std::size_t>(match_count_++)];
+    m.xl = static_cast<float>(xl);
+    m.yl = static_cast<float>(yl);
+    m.disparity = refine(left, right, xl, yl, xr, yr);
+    m.xr = m.xl - m.disparity;
+    m.yr = static_cast<float>(yr);
+    kernels::hamming_ref(left_.descriptors.data() + ui * kDescriptorBytes,
+                         right_.descriptors.data() + uj * kDescriptorBytes, 1, distances_.data());
+    m.distance = distances_[0];
+  }
+  return {matches_.data(), static_cast<std::size_t>(match_count_)};
+}
+
+}  // namespace epipole::vision
