@@ -8,6 +8,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/yaml_fields.hpp"
+#include "epipole/firmware/protocol/messages.hpp"
 
 namespace epipole::firmware {
 
@@ -340,10 +341,13 @@ class BoardReader {
   }
 
   void read_sparse(const YAML::Node& root, BoardConfig& c) {
-    const YAML::Node n = section(root, "sparse", {"max_points", "row_tolerance", "ratio"});
-    integer(n, "sparse", "max_points", c.sparse.max_points, 1, 48);
-    integer(n, "sparse", "row_tolerance", c.sparse.row_tolerance, 0, 8);
-    number(n, "sparse", "ratio", c.sparse.ratio, 0.1, 1.0);
+    const YAML::Node n = section(
+        root, "sparse", {"max_points", "row_tolerance", "ratio", "max_distance", "max_matches"});
+    integer(n, "sparse", "max_points", c.sparse.max_points, 0, protocol::kMaxPoints);
+    integer(n, "sparse", "row_tolerance", c.sparse.row_tolerance, 0, 16);
+    integer(n, "sparse", "ratio", c.sparse.ratio, 1, 100);
+    integer(n, "sparse", "max_distance", c.sparse.max_distance, 0, 256);
+    integer(n, "sparse", "max_matches", c.sparse.max_matches, 1, 100'000);
   }
 
   void read_detector(const YAML::Node& root, BoardConfig& c) {

@@ -166,8 +166,26 @@ void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency) {
   s.corners_left = saturate<std::uint16_t>(r.corners_left.size());
   s.corners_right = saturate<std::uint16_t>(r.corners_right.size());
   s.valid_disparity_permille = static_cast<std::uint16_t>(r.valid_disparity_permille);
+  s.points = static_cast<std::uint16_t>(r.best_points.size());
   send(s);
   if (r.obstacles != nullptr) send(*r.obstacles);
+  if (!r.best_points.empty()) {
+    protocol::Points points;
+    points.frame = r.frame;
+    points.count = static_cast<std::uint8_t>(r.best_points.size());
+    const auto mm = [](float metres) {
+      return static_cast<std::int32_t>(std::clamp(std::lround(static_cast<double>(metres) * 1000.0),
+                                                  -2'000'000'000L, 2'000'000'000L));
+    };
+    for (std::size_t i = 0; i < r.best_points.size(); ++i) {
+      const SparsePoint& p = r.points[r.best_points[i]];
+      points.items[i] = {static_cast<std::uint16_t>(std::lround(p.xl * 16.0f)),
+                         static_cast<std::uint16_t>(std::lround(p.yl * 16.0f)), mm(p.x), mm(p.y),
+                         mm(p.z)};
+    }
+    send(points);
+  }
+  if (r.calibration_health) last_calibration_health_ = r.calibration_health;
 }
 
 RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& stop) {
@@ -184,6 +202,17 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
         link_.publish_heartbeat();
       } else {
         send(*h);
+        if (last_calibration_health_ && last_calibration_health_->matches > 0) {
+          const auto centipx = [](double px) {
+            return static_cast<std::uint16_t>(std::clamp(std::lround(px * 100), 0L, 65535L));
+          };
+          protocol::CalibrationHealth c;
+          c.matches = saturate<std::uint16_t>(
+              static_cast<std::uint64_t>(last_calibration_health_->matches));
+          c.median_offset_centipx = centipx(last_calibration_health_->median_px);
+          c.p90_offset_centipx = centipx(last_calibration_health_->p90_px);
+          send(c);
+        }
       }
     }
     // Say when a camera goes and comes back (the counters are in the health message).

@@ -1,5 +1,6 @@
 #include "epipole/firmware/pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <variant>
 
@@ -81,15 +82,33 @@ struct Pipeline::Stages {
   std::optional<StereoRectifiers> rectifiers;
   CornerDetector corners_left, corners_right;
   std::unique_ptr<vision::StereoMatcher> matcher;
+  vision::SparseStereoMatcher sparse;
   Stages(const BoardConfig& board, SimdPath path)
-      : corners_left(board, path), corners_right(board, path) {}
+      : corners_left(board, path), corners_right(board, path), sparse(sparse_config(board), path) {}
+  static vision::SparseStereoConfig sparse_config(const BoardConfig& board) {
+    vision::SparseStereoConfig c;
+    c.width = board.width();
+    c.height = board.height();
+    c.max_disparity = board.stereo.max_disparity;
+    c.row_tolerance = board.sparse.row_tolerance;
+    c.ratio = board.sparse.ratio;
+    c.max_distance = board.sparse.max_distance;
+    c.max_corners = board.corners.max_corners;
+    c.max_matches = board.sparse.max_matches;
+    return c;
+  }
 };
 
 Pipeline::Pipeline(const BoardConfig& board,
                    const std::optional<calib::StereoCalibration>& calibration, SimdPath path)
-    : stages_(std::make_unique<Stages>(board, path)) {
+    : stages_(std::make_unique<Stages>(board, path)),
+      calibration_health_(board.sparse.max_matches) {
   available_ = stage_bit(Stage::capture) | stage_bit(Stage::publish) | stage_bit(Stage::corners) |
-               stage_bit(Stage::disparity);
+               stage_bit(Stage::disparity) | stage_bit(Stage::sparse);
+  points_.resize(static_cast<std::size_t>(board.sparse.max_matches));
+  point_order_.resize(points_.size());
+  rectified_matches_.resize(points_.size());
+  max_points_ = board.sparse.max_points;
   if (calibration) {
     require(calibration->width == board.width() && calibration->height == board.height(),
             "calibration ", board.calibration.string(), " is for ", calibration->width, "x",
@@ -123,9 +142,12 @@ Pipeline::Pipeline(const BoardConfig& board,
 Pipeline::~Pipeline() = default;
 
 std::size_t Pipeline::working_set_bytes() const {
-  std::size_t n = stages_->corners_left.working_set_bytes() +
-                  stages_->corners_right.working_set_bytes() +
-                  stages_->matcher->working_set_bytes();
+  std::size_t n =
+      stages_->corners_left.working_set_bytes() + stages_->corners_right.working_set_bytes() +
+      stages_->matcher->working_set_bytes() + stages_->sparse.working_set_bytes() +
+      points_.size() *
+          (sizeof(SparsePoint) + sizeof(std::uint32_t) + sizeof(calib::RectifiedMatch)) +
+      calibration_health_.working_set_bytes();
   if (stages_->rectifiers) {
     n += stages_->rectifiers->left.working_set_bytes() +
          stages_->rectifiers->right.working_set_bytes();
@@ -149,6 +171,10 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   r.disparity = {};
   r.valid_disparity_permille = 0;
   r.obstacles = nullptr;
+  r.matches = {};
+  r.points = {};
+  r.best_points = {};
+  r.calibration_health.reset();
 
   hal::Nanoseconds t = steady_now();
   const auto lap = [&](Stage s) {
@@ -178,6 +204,33 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
         valid * 1000 / (static_cast<std::uint64_t>(r.disparity.width()) * r.disparity.height()));
     if (obstacles_) r.obstacles = &obstacles_->measure(r.disparity, frame);
     lap(Stage::disparity);
+  }
+  if (on(Stage::sparse) && (r.stages & stage_bit(Stage::corners)) != 0) {
+    r.matches = stages_->sparse.match(r.left, r.corners_left, r.right, r.corners_right);
+    if (triangulator_) {
+      const std::size_t n = triangulate_matches(*triangulator_, r.matches, points_);
+      r.points = {points_.data(), n};
+      // The most distinctive matches (smallest descriptor distance) become the points sent.
+      for (std::size_t i = 0; i < n; ++i) point_order_[i] = static_cast<std::uint32_t>(i);
+      const std::size_t keep = std::min(n, static_cast<std::size_t>(max_points_));
+      const auto distance = [&](std::uint32_t i) { return points_[i].distance; };
+      std::partial_sort(point_order_.begin(),
+                        point_order_.begin() + static_cast<std::ptrdiff_t>(keep),
+                        point_order_.begin() + static_cast<std::ptrdiff_t>(n),
+                        [&](std::uint32_t a, std::uint32_t b) {
+                          return distance(a) != distance(b) ? distance(a) < distance(b) : a < b;
+                        });
+      r.best_points = {point_order_.data(), keep};
+    }
+    if ((r.stages & stage_bit(Stage::rectify)) != 0) {
+      for (std::size_t i = 0; i < r.matches.size(); ++i) {
+        const vision::SparseMatch& m = r.matches[i];
+        rectified_matches_[i] = {m.xl, m.yl, m.xr, m.yr};
+      }
+      r.calibration_health =
+          calibration_health_.measure({rectified_matches_.data(), r.matches.size()});
+    }
+    lap(Stage::sparse);
   }
   return r;
 }

@@ -21,7 +21,8 @@ std::size_t triangulate_matches(const calib::Triangulator& triangulator,
                 m.disparity,
                 static_cast<float>(p.x()),
                 static_cast<float>(p.y()),
-                static_cast<float>(p.z())};
+                static_cast<float>(p.z()),
+                m.distance};
   }
   return n;
 }

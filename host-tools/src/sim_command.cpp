@@ -117,6 +117,14 @@ class PictureWriter final : public firmware::FrameObserver {
       for (const vision::Corner& c : r.corners_left) {
         draw_circle(corners.view(), c.x, c.y, 3, {0, 255, 0});
       }
+      // Matched corners, coloured by disparity as the disparity picture (red near).
+      for (const vision::SparseMatch& m : r.matches) {
+        const Rgb8 colour = colour_of(static_cast<double>(m.disparity) / max_disparity_);
+        for (int radius = 1; radius <= 4; ++radius) {
+          draw_circle(corners.view(), static_cast<int>(m.xl), static_cast<int>(m.yl), radius,
+                      colour);
+        }
+      }
       save_image(file("corners.png"), corners.view());
     }
     if (!r.disparity.empty()) {

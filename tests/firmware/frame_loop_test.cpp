@@ -101,6 +101,38 @@ TEST(FrameLoop, RunsEveryStageOnEveryPairAndPublishesIt) {
   EXPECT_EQ(s.health_messages, health.size());
 }
 
+TEST(FrameLoop, PublishesSparsePointsAtTheRigsDepthAndTheCalibrationHealth) {
+  test::SimRig rig;
+  BoardConfig config = rig.config;
+  config.stages.sparse = true;
+  config.sparse.max_points = 20;
+  Firmware fw(config, rig.images());
+  Recorder recorder;
+  fw.frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  fw.run(45, stop);
+  const auto summaries = recorder.all<protocol::FrameSummary>();
+  const auto points = recorder.all<protocol::Points>();
+  ASSERT_EQ(points.size(), summaries.size()) << "every frame has points";
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    EXPECT_EQ(points[i].frame, summaries[i].frame);
+    EXPECT_EQ(points[i].count, summaries[i].points);
+    EXPECT_EQ(points[i].count, 20) << "the textured images have far more matches than 20";
+    for (int k = 0; k < points[i].count; ++k) {
+      const protocol::Point& p = points[i].items[static_cast<std::size_t>(k)];
+      EXPECT_NEAR(p.z_mm, rig.depth() * 1000, 0.03 * rig.depth() * 1000)
+          << "frame " << points[i].frame << " point " << k;
+      // X from the image position: (u - cx) * Z / f.
+      const double u = p.u_x16 / 16.0;
+      EXPECT_NEAR(p.x_mm, (u - (rig.width - 1) / 2.0) * p.z_mm / test::SimRig::kFocal, 3.0);
+    }
+  }
+  const auto health = recorder.all<protocol::CalibrationHealth>();
+  ASSERT_GE(health.size(), 1u) << "with each health message";
+  EXPECT_GT(health[0].matches, 20);
+  EXPECT_EQ(health[0].median_offset_centipx, 0) << "an ideal rig: matches on the same rows";
+}
+
 TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
   // A trigger far faster than the host can process: the loop takes the freshest pair and
   // counts the ones it skipped; latency stays bounded instead of growing.

@@ -71,9 +71,11 @@ struct BoardConfig {
   vision::StereoConfig stereo;  // width and height come from the cameras
 
   struct Sparse {
-    int max_points = 48;    // 3-D points sent per frame (the protocol's limit)
-    int row_tolerance = 1;  // pixels
-    double ratio = 0.8;     // best / second best
+    int max_points = 48;     // 3-D points sent per frame (the protocol's limit), best matches first
+    int row_tolerance = 1;   // pixels: candidates on rows y - t .. y + t
+    int ratio = 80;          // percent: best distance below this share of the second best
+    int max_distance = 64;   // Hamming distance of the 256-bit descriptors
+    int max_matches = 2000;  // matches kept per frame
   } sparse;
 
   struct Detector {

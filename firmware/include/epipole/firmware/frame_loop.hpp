@@ -83,6 +83,7 @@ class FrameLoop {
   bool snapshot_pending_ = false;
   std::uint16_t snapshot_sequence_ = 0;
   std::uint64_t rejected_commands_ = 0;
+  std::optional<calib::HealthFigure> last_calibration_health_;  // of the latest matches
 };
 
 }  // namespace epipole::firmware

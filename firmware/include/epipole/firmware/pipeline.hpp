@@ -4,8 +4,10 @@
 #include <memory>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "epipole/calib/calibration.hpp"
+#include "epipole/calib/health.hpp"
 #include "epipole/calib/triangulation.hpp"
 #include "epipole/core/image.hpp"
 #include "epipole/core/simd.hpp"
@@ -13,7 +15,9 @@
 #include "epipole/firmware/health_monitor.hpp"
 #include "epipole/firmware/obstacles.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
+#include "epipole/firmware/sparse_points.hpp"
 #include "epipole/vision/corner.hpp"
+#include "epipole/vision/sparse_stereo.hpp"
 #include "epipole/vision/stereo.hpp"
 
 namespace epipole::firmware {
@@ -37,6 +41,14 @@ struct FrameResult {
   ImageView<const std::int16_t> disparity;  // x16, vision::kInvalidDisparity; empty when off
   int valid_disparity_permille = 0;
   const protocol::Obstacles* obstacles = nullptr;  // null without disparity or calibration
+  std::span<const vision::SparseMatch> matches;    // sparse matches along the rows
+  std::span<const SparsePoint> points;             // their 3-D points (with a calibration)
+  // The matches to send as 3-D points (sparse.max_points, smallest descriptor distance first):
+  // indices into `points`.
+  std::span<const std::uint32_t> best_points;
+  // How well the rectification holds: the vertical offsets of the sparse matches (only when the
+  // images were rectified with a calibration).
+  std::optional<calib::HealthFigure> calibration_health;
   StageTimes times{};
 };
 
@@ -68,6 +80,11 @@ class Pipeline {
   std::unique_ptr<Stages> stages_;
   std::unique_ptr<calib::Triangulator> triangulator_;
   std::unique_ptr<ObstacleSectors> obstacles_;
+  std::vector<SparsePoint> points_;
+  std::vector<std::uint32_t> point_order_;
+  std::vector<calib::RectifiedMatch> rectified_matches_;
+  calib::CalibrationHealth calibration_health_;
+  int max_points_ = 0;
   StageMask available_ = 0;
   FrameResult result_;
 };

@@ -15,6 +15,7 @@ struct SparsePoint {
   float xr = 0, yr = 0;
   float disparity = 0;
   float x = 0, y = 0, z = 0;
+  int distance = 0;  // the match's descriptor distance: smaller is more distinctive
 };
 
 // The 3-D points of sparse matches (calib::Triangulator::point at (xl, yl) with the match's
