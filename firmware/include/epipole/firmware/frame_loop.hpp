@@ -63,6 +63,8 @@ class FrameLoop {
   void start();
   void finish();
   void apply_commands();
+  protocol::AckStatus set_trigger_rate(const protocol::SetTriggerRate& command);
+  protocol::AckStatus set_exposure(const protocol::SetExposure& command);
   void publish(const FrameResult& result, hal::Nanoseconds latency);
   void send(const protocol::Message& message);
   FaultCounts faults();
