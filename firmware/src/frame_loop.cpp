@@ -40,7 +40,9 @@ bool check_trigger(const BoardConfig& config, Board& board) {
   return config.pairing_edge_delay.has_value() || board.sim() != nullptr;
 }
 
-hal::PairingConfig pairing_config(const BoardConfig& config, Board& board) {
+}  // namespace
+
+hal::PairingConfig pairing_config(const BoardConfig& config, const hal::SimBoard* sim) {
   hal::PairingConfig p = config.pairing;
   if (config.trigger.backend == "none") {
     // Free-running cameras count their frames each on its own: pairs are matched by time, and
@@ -50,11 +52,13 @@ hal::PairingConfig pairing_config(const BoardConfig& config, Board& board) {
   }
   if (config.pairing_edge_delay) {
     p.edge_delay = *config.pairing_edge_delay;
-  } else if (board.sim() != nullptr) {
-    p.edge_delay = board.sim()->timing.exposure_delay;
+  } else if (sim != nullptr) {
+    p.edge_delay = sim->timing.exposure_delay;
   }
   return p;
 }
+
+namespace {
 
 // set_exposure: exposure_us in microseconds and gain_centidb in hundredths of a decibel, 0 for
 // automatic as in the board file; the HAL's gain is the multiplier 10^(dB / 20).
@@ -73,7 +77,7 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
       pipeline_(pipeline),
       link_(link),
       trigger_(make_trigger_watch(config, board)),
-      grabber_(board.left(), board.right(), board.clock(), pairing_config(config, board),
+      grabber_(board.left(), board.right(), board.clock(), pairing_config(config, board.sim()),
                trigger_ && check_trigger(config, board) ? &trigger_->record() : nullptr),
       health_(board.clock().now()),
       snapshots_(config.snapshot_directory, config.width(), config.height()),

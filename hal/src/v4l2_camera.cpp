@@ -116,11 +116,11 @@ V4l2ControlPlan plan_exposure_controls(const std::string& device, Nanoseconds ex
   const auto in_range = [](const V4l2ControlInfo& c, std::int64_t value) {
     return value >= c.minimum && value <= c.maximum;
   };
-  const double exposure_us = static_cast<double>(exposure) / 1000.0;
+  const Nanoseconds exposure_us = exposure / 1000;
   if (exposure > 0) {
     require(controls.exposure_absolute.present, "camera ", device, ": exposure ", exposure_us,
             " us: the device has no V4L2_CID_EXPOSURE_ABSOLUTE control");
-    const std::int64_t units = std::max<std::int64_t>(std::llround(exposure_us / 100.0), 1);
+    const std::int64_t units = std::max<std::int64_t>((exposure + 50'000) / 100'000, 1);
     require(in_range(controls.exposure_absolute, units), "camera ", device, ": exposure ",
             exposure_us, " us is outside the device's ", controls.exposure_absolute.minimum, "..",
             controls.exposure_absolute.maximum, " x 100 us");
