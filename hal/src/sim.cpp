@@ -345,7 +345,12 @@ TriggerConfig board_trigger(double rate_hz) {
 
 SimBoard::SimBoard(double rate_hz, std::vector<GrayImage> left_images,
                    std::vector<GrayImage> right_images, SimCameraTiming camera_timing)
-    : trigger(board_trigger(rate_hz), clock),
+    : SimBoard(board_trigger(rate_hz), std::move(left_images), std::move(right_images),
+               camera_timing) {}
+
+SimBoard::SimBoard(TriggerConfig trigger_config, std::vector<GrayImage> left_images,
+                   std::vector<GrayImage> right_images, SimCameraTiming camera_timing)
+    : trigger(std::move(trigger_config), clock),
       left(std::make_shared<const std::vector<GrayImage>>(std::move(left_images))),
       right(std::make_shared<const std::vector<GrayImage>>(std::move(right_images))),
       timing(camera_timing) {

@@ -171,8 +171,12 @@ class SimCamera final : public CameraSource {
 // The simulated board: a virtual clock, the trigger master and the images of the left and
 // right cameras. The registry's "sim" backends create cameras ("left", "right") on it.
 struct SimBoard {
+  // The trigger at rate_hz, its pulses a quarter period long.
   SimBoard(double rate_hz, std::vector<GrayImage> left_images, std::vector<GrayImage> right_images,
            SimCameraTiming camera_timing = {});
+  // The trigger as configured (the board file's rate and pulse width; a master).
+  SimBoard(TriggerConfig trigger_config, std::vector<GrayImage> left_images,
+           std::vector<GrayImage> right_images, SimCameraTiming camera_timing = {});
   VirtualClock clock;
   SimTrigger trigger;
   std::shared_ptr<const std::vector<GrayImage>> left;
