@@ -24,7 +24,7 @@ Board::Board(const BoardConfig& config, SceneImages sim_images) {
   if (config.cameras.backend == "sim") {
     require(!sim_images.left.empty(), "board ", config.name,
             ": the simulated cameras have no images");
-    sim_ = std::make_unique<hal::SimBoard>(config.trigger.line.rate_hz, std::move(sim_images.left),
+    sim_ = std::make_unique<hal::SimBoard>(config.trigger.line, std::move(sim_images.left),
                                            std::move(sim_images.right), sim_timing(config));
     clock_ = &sim_->clock;
     context.sim = sim_.get();

@@ -474,6 +474,15 @@ void validate(const BoardConfig& c, const std::string& file) {
     fail("pairing.edge_tolerance_us",
          cat(c.pairing.edge_tolerance / 1000, " us is not below half the trigger period"));
   }
+  if (c.trigger.backend == "none") {  // free running: pairs are matched by time
+    const double fps = std::max(c.cameras.left.fps, c.cameras.right.fps);
+    if (2 * static_cast<double>(c.pairing.tolerance) >= 1e9 / fps) {
+      fail("pairing.tolerance_us",
+           cat(c.pairing.tolerance / 1000, " us is not below half the cameras' frame period (",
+               std::llround(1e6 / fps), " us at ", fps,
+               " fps): without a trigger, frames are paired by time"));
+    }
+  }
   if (c.stages.disparity && c.stereo.max_disparity >= c.width()) {
     fail("stereo.max_disparity",
          cat(c.stereo.max_disparity, " is not smaller than the width ", c.width()));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 #include "epipole/core/error.hpp"
@@ -28,7 +29,7 @@ constexpr StageMask kKnownStages = kAlwaysOn | stage_bit(Stage::rectify) |
 
 std::unique_ptr<TriggerWatch> make_trigger_watch(const BoardConfig& config, Board& board) {
   if (board.trigger() == nullptr) return nullptr;
-  const auto period = static_cast<hal::Nanoseconds>(1e9 / config.trigger.line.rate_hz);
+  const hal::Nanoseconds period = hal::period_of(config.trigger.line.rate_hz);
   return std::make_unique<TriggerWatch>(
       *board.trigger(), board.sim() != nullptr ? &board.sim()->trigger : nullptr, period);
 }
@@ -39,14 +40,33 @@ bool check_trigger(const BoardConfig& config, Board& board) {
   return config.pairing_edge_delay.has_value() || board.sim() != nullptr;
 }
 
-hal::PairingConfig pairing_config(const BoardConfig& config, Board& board) {
+}  // namespace
+
+hal::PairingConfig pairing_config(const BoardConfig& config, const hal::SimBoard* sim) {
   hal::PairingConfig p = config.pairing;
+  if (config.trigger.backend == "none") {
+    // Free-running cameras count their frames each on its own: pairs are matched by time, and
+    // the tolerance must be below half the frame period of the faster camera.
+    p.match_sequences = false;
+    p.trigger_period = hal::period_of(std::max(config.cameras.left.fps, config.cameras.right.fps));
+  }
   if (config.pairing_edge_delay) {
     p.edge_delay = *config.pairing_edge_delay;
-  } else if (board.sim() != nullptr) {
-    p.edge_delay = board.sim()->timing.exposure_delay;
+  } else if (sim != nullptr) {
+    p.edge_delay = sim->timing.exposure_delay;
   }
   return p;
+}
+
+namespace {
+
+// set_exposure: exposure_us in microseconds and gain_centidb in hundredths of a decibel, 0 for
+// automatic as in the board file; the HAL's gain is the multiplier 10^(dB / 20).
+hal::Nanoseconds exposure_of(const protocol::SetExposure& command) {
+  return hal::Nanoseconds{command.exposure_us} * 1000;
+}
+double gain_of(const protocol::SetExposure& command) {
+  return command.gain_centidb == 0 ? 0.0 : std::pow(10.0, command.gain_centidb / 2000.0);
 }
 
 }  // namespace
@@ -57,7 +77,7 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
       pipeline_(pipeline),
       link_(link),
       trigger_(make_trigger_watch(config, board)),
-      grabber_(board.left(), board.right(), board.clock(), pairing_config(config, board),
+      grabber_(board.left(), board.right(), board.clock(), pairing_config(config, board.sim()),
                trigger_ && check_trigger(config, board) ? &trigger_->record() : nullptr),
       health_(board.clock().now()),
       snapshots_(config.snapshot_directory, config.width(), config.height()),
@@ -136,9 +156,10 @@ void FrameLoop::apply_commands() {
         continue;  // acknowledged with the next pair, when it is taken
       }
       ack.status = protocol::AckStatus::rejected;
-    } else if (std::holds_alternative<protocol::SetTriggerRate>(c.message) ||
-               std::holds_alternative<protocol::SetExposure>(c.message)) {
-      ack.status = protocol::AckStatus::unsupported;
+    } else if (const auto* t = std::get_if<protocol::SetTriggerRate>(&c.message)) {
+      ack.status = set_trigger_rate(*t);
+    } else if (const auto* e = std::get_if<protocol::SetExposure>(&c.message)) {
+      ack.status = set_exposure(*e);
     } else {
       // A message the firmware sends, not a command.
       ack.status = protocol::AckStatus::rejected;
@@ -146,6 +167,55 @@ void FrameLoop::apply_commands() {
     if (ack.status == protocol::AckStatus::rejected) ++rejected_commands_;
     send(ack);
   }
+}
+
+protocol::AckStatus FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& command) {
+  hal::TriggerLine* line = board_.trigger();
+  if (line == nullptr || !trigger_) return protocol::AckStatus::unsupported;
+  const double rate_hz = command.rate_millihz / 1000.0;
+  hal::StereoPairer& pairer = grabber_.pairer();
+  const hal::Nanoseconds old_period = pairer.config().trigger_period;
+  try {
+    hal::with_rate(line->config(), rate_hz);  // a possible rate (and a master line) first
+    const hal::Nanoseconds period = hal::period_of(rate_hz);
+    pairer.set_trigger_period(period);  // the tolerances must stay below half the period
+    try {
+      line->set_rate(rate_hz);
+    } catch (const Error&) {
+      pairer.set_trigger_period(old_period);
+      throw;
+    }
+    trigger_->set_period(period);
+  } catch (const Error& e) {
+    std::fprintf(stderr, "epipole-fw: set_trigger_rate %u mHz rejected: %s\n",
+                 static_cast<unsigned>(command.rate_millihz), e.what());
+    return protocol::AckStatus::rejected;
+  }
+  return protocol::AckStatus::ok;
+}
+
+protocol::AckStatus FrameLoop::set_exposure(const protocol::SetExposure& command) {
+  const hal::Nanoseconds exposure = exposure_of(command);
+  const double gain = gain_of(command);
+  hal::CameraSource& left = board_.left();
+  hal::CameraSource& right = board_.right();
+  const hal::Nanoseconds left_exposure = left.config().exposure;
+  const double left_gain = left.config().gain;
+  try {
+    left.set_exposure(exposure, gain);
+    try {
+      right.set_exposure(exposure, gain);
+    } catch (const Error&) {
+      left.set_exposure(left_exposure, left_gain);  // both cameras alike, or neither changes
+      throw;
+    }
+  } catch (const Error& e) {
+    std::fprintf(stderr, "epipole-fw: set_exposure %u us, %u cdB rejected: %s\n",
+                 static_cast<unsigned>(command.exposure_us),
+                 static_cast<unsigned>(command.gain_centidb), e.what());
+    return protocol::AckStatus::rejected;
+  }
+  return protocol::AckStatus::ok;
 }
 
 void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency) {

@@ -37,7 +37,8 @@ void TriggerWatch::run() {
   hal::Nanoseconds last_edge = steady_now();
   bool quiet = false;  // one loss per quiet spell, however long it lasts
   while (!stopping_) {
-    const hal::EdgeResult r = line_.wait_edge(std::min<hal::Nanoseconds>(100'000'000, 2 * period_));
+    const hal::Nanoseconds period = period_.load();
+    const hal::EdgeResult r = line_.wait_edge(std::min<hal::Nanoseconds>(100'000'000, 2 * period));
     const hal::Nanoseconds now = steady_now();
     if (r.status == hal::EdgeStatus::ok) {
       record_.add(r.edge);
@@ -45,7 +46,7 @@ void TriggerWatch::run() {
       quiet = false;
       continue;
     }
-    if ((r.status == hal::EdgeStatus::lost || now - last_edge > 3 * period_) && !quiet) {
+    if ((r.status == hal::EdgeStatus::lost || now - last_edge > 3 * period) && !quiet) {
       ++losses_;
       quiet = true;
     }

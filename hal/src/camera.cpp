@@ -135,11 +135,16 @@ void validate(const CameraConfig& config) {
           to_string(config.format));
   require(std::isfinite(config.fps) && config.fps > 0.0 && config.fps <= 1000.0, "camera ", d,
           ": frame rate ", config.fps, " is impossible (0 < fps <= 1000)");
-  require(config.exposure >= 0, "camera ", d, ": exposure ", config.exposure, " ns is negative");
-  require(std::isfinite(config.gain) && config.gain >= 0.0, "camera ", d, ": gain ", config.gain,
-          " is negative");
+  validate_exposure(d, config.exposure, config.gain);
   require(config.buffer_count >= 2 && config.buffer_count <= 32, "camera ", d, ": buffer count ",
           config.buffer_count, " is impossible (2..32)");
+}
+
+void validate_exposure(const std::string& device, Nanoseconds exposure, double gain) {
+  require(exposure >= 0 && exposure <= kMaxExposure, "camera ", device, ": exposure ", exposure,
+          " ns is impossible (0: automatic, at most ", kMaxExposure, " ns)");
+  require(std::isfinite(gain) && gain >= 0.0 && gain <= kMaxGain, "camera ", device, ": gain ",
+          gain, " is impossible (0: automatic, at most ", kMaxGain, ")");
 }
 
 void validate(const TriggerConfig& config) {
@@ -151,6 +156,20 @@ void validate(const TriggerConfig& config) {
   require(config.pulse_width > 0 && static_cast<double>(config.pulse_width) < period, "trigger ",
           config.line, ": pulse width ", config.pulse_width, " ns does not fit the period ", period,
           " ns");
+}
+
+TriggerConfig with_rate(const TriggerConfig& config, double rate_hz) {
+  require(config.role == TriggerRole::master, "trigger ", config.line,
+          ": a slave line cannot set a rate (", rate_hz,
+          " Hz asked): the master that drives it sets the rate");
+  TriggerConfig changed = config;
+  changed.rate_hz = rate_hz;
+  validate(changed);
+  return changed;
+}
+
+Nanoseconds period_of(double rate_hz) {
+  return static_cast<Nanoseconds>(1e9 / rate_hz + 0.5);
 }
 
 }  // namespace epipole::hal

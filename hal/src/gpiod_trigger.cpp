@@ -20,7 +20,7 @@ constexpr Nanoseconds kPerSecond = 1'000'000'000;
 
 GpiodTrigger::GpiodTrigger(TriggerConfig config) : config_(std::move(config)) {
   validate(config_);
-  period_ = static_cast<Nanoseconds>(1e9 / config_.rate_hz + 0.5);
+  period_ = period_of(config_.rate_hz);
   if (config_.chip.empty()) {
     line_ = gpiod_line_find(config_.line.c_str());
     if (line_ == nullptr) {
@@ -62,8 +62,14 @@ void GpiodTrigger::start() {
                     std::strerror(errno)));
   }
   requested_ = true;
-  start_ = clock_.now();
+  schedule_.start(clock_.now(), period_.load(std::memory_order_acquire));
   next_ = 0;
+}
+
+void GpiodTrigger::set_rate(double rate_hz) {
+  // Only rate_hz is written: the waiting thread reads the role and the pulse width.
+  config_.rate_hz = with_rate(config_, rate_hz).rate_hz;
+  period_.store(period_of(rate_hz), std::memory_order_release);
 }
 
 void GpiodTrigger::stop() {
@@ -76,11 +82,15 @@ EdgeResult GpiodTrigger::wait_edge(Nanoseconds timeout) {
   if (!requested_) return {EdgeStatus::lost, {}};
   timeout = std::max<Nanoseconds>(timeout, 0);
   if (config_.role == TriggerRole::master) {
+    const Nanoseconds period = period_.load(std::memory_order_acquire);
+    if (period != schedule_.period()) {  // set_rate(): from the last edge fired on
+      schedule_.change_period(next_ == 0 ? 0 : next_ - 1, period);
+    }
     const Nanoseconds now = clock_.now();
-    Nanoseconds edge = start_ + static_cast<Nanoseconds>(next_) * period_;
+    Nanoseconds edge = schedule_.time(next_);
     if (edge < now) {  // late: skip the missed periods instead of firing a burst
-      next_ += static_cast<std::uint32_t>((now - edge + period_ - 1) / period_);
-      edge = start_ + static_cast<Nanoseconds>(next_) * period_;
+      next_ += static_cast<std::uint32_t>((now - edge + period - 1) / period);
+      edge = schedule_.time(next_);
     }
     if (edge > now + timeout) {
       clock_.sleep_until(now + timeout);

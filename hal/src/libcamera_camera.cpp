@@ -120,6 +120,56 @@ bool control_range(const lc::ControlInfo& info, lc::ControlType type, T& lo, T& 
   return hi >= lo && hi > T{0};
 }
 
+LibcameraControlRange range_of(const lc::ControlInfoMap& info, const lc::ControlId& id,
+                               lc::ControlType type) {
+  LibcameraControlRange r;
+  const auto it = info.find(&id);
+  if (it == info.end()) return r;
+  r.present = true;
+  if (type == lc::ControlTypeInteger32) {
+    std::int32_t lo = 0, hi = 0;
+    r.bounded = control_range(it->second, type, lo, hi);
+    r.min = lo;
+    r.max = hi;
+  } else {
+    float lo = 0.0f, hi = 0.0f;
+    r.bounded = control_range(it->second, type, lo, hi);
+    r.min = lo;
+    r.max = hi;
+  }
+  return r;
+}
+
+LibcameraExposureLimits exposure_limits(const lc::ControlInfoMap& info) {
+  LibcameraExposureLimits l;
+  l.exposure_time = range_of(info, lc::controls::ExposureTime, lc::ControlTypeInteger32);
+  l.analogue_gain = range_of(info, lc::controls::AnalogueGain, lc::ControlTypeFloat);
+  l.ae_enable = info.find(&lc::controls::AeEnable) != info.end();
+#if EPIPOLE_LIBCAMERA_HAS_EXPOSURE_MODES
+  l.exposure_time_mode = info.find(&lc::controls::ExposureTimeMode) != info.end();
+  l.analogue_gain_mode = info.find(&lc::controls::AnalogueGainMode) != info.end();
+#endif
+  return l;
+}
+
+void put(const LibcameraExposureControls& c, lc::ControlList& list) {
+#if EPIPOLE_LIBCAMERA_HAS_EXPOSURE_MODES
+  if (c.exposure_time_manual) {
+    list.set(lc::controls::ExposureTimeMode, *c.exposure_time_manual
+                                                 ? lc::controls::ExposureTimeModeManual
+                                                 : lc::controls::ExposureTimeModeAuto);
+  }
+  if (c.analogue_gain_manual) {
+    list.set(lc::controls::AnalogueGainMode, *c.analogue_gain_manual
+                                                 ? lc::controls::AnalogueGainModeManual
+                                                 : lc::controls::AnalogueGainModeAuto);
+  }
+#endif
+  if (c.ae_enable) list.set(lc::controls::AeEnable, *c.ae_enable);
+  if (c.exposure_time_us) list.set(lc::controls::ExposureTime, *c.exposure_time_us);
+  if (c.analogue_gain) list.set(lc::controls::AnalogueGain, *c.analogue_gain);
+}
+
 }  // namespace
 
 // ----------------------------------------------------------------------------------------------
@@ -138,6 +188,7 @@ struct LibcameraCamera::Impl final : LibcameraStream::Requeuer {
   void open();
   void configure();
   void set_controls();
+  void set_exposure(Nanoseconds exposure, double gain);
   void close();
   void start();
   void stop();
@@ -154,7 +205,9 @@ struct LibcameraCamera::Impl final : LibcameraStream::Requeuer {
   lc::Stream* lc_stream = nullptr;
   const LibcameraFormat* format = nullptr;
   std::size_t stride = 0;
-  lc::ControlList controls{lc::controls::controls};
+  lc::ControlList controls{lc::controls::controls};  // sent with Camera::start()
+  lc::ControlList pending{lc::controls::controls};   // sent with the next request queued
+  bool has_pending = false;
   std::unique_ptr<lc::FrameBufferAllocator> allocator;
   std::vector<std::unique_ptr<lc::Request>> requests;
   struct Mapping {
@@ -251,38 +304,9 @@ void LibcameraCamera::Impl::set_controls() {
   controls.clear();
   const lc::ControlInfoMap& info = camera->controls();
   const std::string& d = config.device;
-  if (config.exposure > 0) {
-    const auto it = info.find(&lc::controls::ExposureTime);
-    require(it != info.end(), "camera ", d, ": exposure ", config.exposure,
-            " ns: libcamera camera ", id, " has no ExposureTime control");
-    const auto us = static_cast<std::int32_t>(std::max<Nanoseconds>(config.exposure / 1000, 1));
-    std::int32_t lo = 0, hi = 0;
-    require(!control_range(it->second, lc::ControlTypeInteger32, lo, hi) || (us >= lo && us <= hi),
-            "camera ", d, ": exposure ", config.exposure, " ns is outside the camera's ", lo, "..",
-            hi, " us");
-#if EPIPOLE_LIBCAMERA_HAS_EXPOSURE_MODES
-    if (info.find(&lc::controls::ExposureTimeMode) != info.end()) {
-      controls.set(lc::controls::ExposureTimeMode, lc::controls::ExposureTimeModeManual);
-    }
-#endif
-    controls.set(lc::controls::ExposureTime, us);
-  }
-  if (config.gain > 0.0) {
-    const auto it = info.find(&lc::controls::AnalogueGain);
-    require(it != info.end(), "camera ", d, ": gain ", config.gain, ": libcamera camera ", id,
-            " has no AnalogueGain control");
-    const auto gain = static_cast<float>(config.gain);
-    float lo = 0.0f, hi = 0.0f;
-    require(!control_range(it->second, lc::ControlTypeFloat, lo, hi) || (gain >= lo && gain <= hi),
-            "camera ", d, ": gain ", config.gain, " is outside the camera's analogue gain ", lo,
-            "..", hi);
-#if EPIPOLE_LIBCAMERA_HAS_EXPOSURE_MODES
-    if (info.find(&lc::controls::AnalogueGainMode) != info.end()) {
-      controls.set(lc::controls::AnalogueGainMode, lc::controls::AnalogueGainModeManual);
-    }
-#endif
-    controls.set(lc::controls::AnalogueGain, gain);
-  }
+  put(plan_libcamera_exposure(d, id, config.exposure, config.gain, exposure_limits(info),
+                              EPIPOLE_LIBCAMERA_HAS_EXPOSURE_MODES, true),
+      controls);
   // The trigger sets the rate in external mode; free running, the frame duration does.
   const auto limits = info.find(&lc::controls::FrameDurationLimits);
   if (config.trigger == TriggerMode::free_running && limits != info.end()) {
@@ -346,6 +370,7 @@ void LibcameraCamera::Impl::stop() {
     (void)camera->stop();  // cancels what is queued, synchronously
     running = false;
   }
+  has_pending = false;  // the controls for start() hold the values
   stream.stop();
   requests.clear();
   for (const Mapping& m : mappings) ::munmap(m.base, m.length);
@@ -368,9 +393,25 @@ void LibcameraCamera::Impl::close() {
   }
 }
 
+void LibcameraCamera::Impl::set_exposure(Nanoseconds exposure, double gain) {
+  require(camera != nullptr, "camera ", config.device, ": exposure and gain: not open");
+  const LibcameraExposureControls c = plan_libcamera_exposure(
+      config.device, id, exposure, gain, exposure_limits(camera->controls()),
+      EPIPOLE_LIBCAMERA_HAS_EXPOSURE_MODES, false);
+  if (running) {
+    pending.clear();
+    put(c, pending);
+    has_pending = true;
+  }
+}
+
 bool LibcameraCamera::Impl::requeue(int slot) {
   lc::Request* request = requests[static_cast<std::size_t>(slot)].get();
   request->reuse(lc::Request::ReuseBuffers);
+  if (has_pending) {  // set_exposure(): the controls go with this request
+    request->controls().merge(pending);
+    has_pending = false;
+  }
   return camera->queueRequest(request) == 0;
 }
 
@@ -423,6 +464,14 @@ AcquireResult LibcameraCamera::acquire(Nanoseconds timeout) {
 
 void LibcameraCamera::release(const Frame& frame) {
   impl_->stream.release(frame);
+}
+
+void LibcameraCamera::set_exposure(Nanoseconds exposure, double gain) {
+  validate_exposure(config_.device, exposure, gain);
+  impl_->set_exposure(exposure, gain);  // checks them against the camera first
+  config_.exposure = exposure;
+  config_.gain = gain;
+  impl_->set_controls();  // what the next Camera::start() sends (the same checks passed)
 }
 
 void LibcameraCamera::reopen() {

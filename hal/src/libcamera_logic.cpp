@@ -147,6 +147,54 @@ std::size_t select_camera(std::string_view device, std::span<const std::string> 
                   " (cameras found: ", list_cameras(ids), ")"));
 }
 
+LibcameraExposureControls plan_libcamera_exposure(const std::string& device,
+                                                  const std::string& camera_id,
+                                                  Nanoseconds exposure, double gain,
+                                                  const LibcameraExposureLimits& limits, bool modes,
+                                                  bool starting) {
+  LibcameraExposureControls c;
+  const auto fits = [](const LibcameraControlRange& r, double v) {
+    return !r.bounded || (v >= r.min && v <= r.max);
+  };
+  if (exposure > 0) {
+    require(limits.exposure_time.present, "camera ", device, ": exposure ", exposure,
+            " ns: libcamera camera ", camera_id, " has no ExposureTime control");
+    const auto us = static_cast<std::int32_t>(std::max<Nanoseconds>(exposure / 1000, 1));
+    require(fits(limits.exposure_time, us), "camera ", device, ": exposure ", exposure,
+            " ns is outside the camera's ", limits.exposure_time.min, "..",
+            limits.exposure_time.max, " us");
+    c.exposure_time_us = us;
+  }
+  if (gain > 0.0) {
+    require(limits.analogue_gain.present, "camera ", device, ": gain ", gain, ": libcamera camera ",
+            camera_id, " has no AnalogueGain control");
+    require(fits(limits.analogue_gain, gain), "camera ", device, ": gain ", gain,
+            " is outside the camera's analogue gain ", limits.analogue_gain.min, "..",
+            limits.analogue_gain.max);
+    c.analogue_gain = static_cast<float>(gain);
+  }
+  const auto automatic = [&](bool has_control, const char* what, const char* control) {
+    require(has_control || starting, "camera ", device, ": automatic ", what, ": libcamera camera ",
+            camera_id, " has no ", control, " control");
+    return has_control;
+  };
+  if (modes) {
+    if (exposure > 0 && limits.exposure_time_mode) c.exposure_time_manual = true;
+    if (exposure == 0 && automatic(limits.exposure_time_mode, "exposure", "ExposureTimeMode")) {
+      c.exposure_time_manual = false;
+    }
+    if (gain > 0.0 && limits.analogue_gain_mode) c.analogue_gain_manual = true;
+    if (gain == 0.0 && automatic(limits.analogue_gain_mode, "gain", "AnalogueGainMode")) {
+      c.analogue_gain_manual = false;
+    }
+  } else if (exposure > 0 && gain > 0.0) {
+    if (limits.ae_enable) c.ae_enable = false;
+  } else if (automatic(limits.ae_enable, exposure == 0 ? "exposure" : "gain", "AeEnable")) {
+    c.ae_enable = true;
+  }
+  return c;
+}
+
 // ----------------------------------------------------------------------------------------------
 
 std::uint32_t RequestRing::start(int slots) {

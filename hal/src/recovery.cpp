@@ -34,6 +34,9 @@ bool RecoveringCamera::try_reopen() {
   ++counters_.reopen_attempts;
   try {
     camera_.reopen();
+    // Backends apply their config() again when they reopen; a camera that came back another
+    // way (replaced, reset) gets the run-time values here.
+    if (exposure_set_) camera_.set_exposure(exposure_, gain_);
     if (!camera_.streaming()) camera_.start();
   } catch (const Error& e) {
     ++counters_.reopen_failures;
@@ -51,6 +54,13 @@ bool RecoveringCamera::try_reopen() {
 void RecoveringCamera::reopen() {
   lost_ = true;
   if (!try_reopen()) throw Error(last_error_);
+}
+
+void RecoveringCamera::set_exposure(Nanoseconds exposure, double gain) {
+  camera_.set_exposure(exposure, gain);
+  exposure_set_ = true;
+  exposure_ = exposure;
+  gain_ = gain;
 }
 
 AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {

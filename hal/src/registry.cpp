@@ -48,6 +48,7 @@ class SimTriggerHandle final : public TriggerLine {
   void start() override { trigger_.start(); }
   void stop() override { trigger_.stop(); }
   EdgeResult wait_edge(Nanoseconds timeout) override { return trigger_.wait_edge(timeout); }
+  void set_rate(double rate_hz) override { trigger_.set_rate(rate_hz); }
 
  private:
   SimTrigger& trigger_;
@@ -66,7 +67,8 @@ BackendRegistry make_builtin() {
     if (!left) timing.seed = timing.seed * 0x9e3779b97f4a7c15ULL + 1;  // independent jitter
     auto camera =
         std::make_unique<SimCamera>(config, left ? board.left : board.right, board.clock, timing);
-    board.trigger.connect(*camera);
+    // A free-running camera ignores the trigger line: it runs on its own at its frame rate.
+    if (config.trigger == TriggerMode::external) board.trigger.connect(*camera);
     return std::unique_ptr<CameraSource>(std::move(camera));
   });
   r.add_camera("v4l2", [](const CameraConfig& config, const BackendContext&) {

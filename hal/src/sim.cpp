@@ -24,10 +24,6 @@ double chance(std::uint64_t seed, std::uint32_t sequence, std::uint64_t salt) {
   return static_cast<double>(h >> 11) * 0x1.0p-53;
 }
 
-Nanoseconds period_of(double rate_hz) {
-  return static_cast<Nanoseconds>(1e9 / rate_hz + 0.5);
-}
-
 TriggerConfig own_trigger_config(const CameraConfig& config) {
   validate(config);
   TriggerConfig t;
@@ -50,7 +46,7 @@ SimTrigger::SimTrigger(TriggerConfig config, VirtualClock& clock)
 }
 
 void SimTrigger::start() {
-  start_ = clock_.now();
+  schedule_.start(clock_.now(), period_);
   next_emit_ = 0;
   next_report_ = 0;
   next_record_ = 0;
@@ -59,6 +55,17 @@ void SimTrigger::start() {
 
 void SimTrigger::stop() {
   running_ = false;
+}
+
+void SimTrigger::set_rate(double rate_hz) {
+  config_.rate_hz = with_rate(config_, rate_hz).rate_hz;
+  period_ = period_of(rate_hz);
+  if (!running_) return;  // start() schedules at the new period
+  // The last edge that exists already: given to a camera (they are told ahead of the clock),
+  // reported, recorded, or simply passed by the clock.
+  const std::uint32_t generated =
+      std::max({next_emit_, next_report_, next_record_, schedule_.edges_until(clock_.now())});
+  schedule_.change_period(generated == 0 ? 0 : generated - 1, period_);
 }
 
 void SimTrigger::connect(SimCamera& camera) {
@@ -72,8 +79,8 @@ void SimTrigger::connect(SimCamera& camera) {
 
 void SimTrigger::emit_until(Nanoseconds until) {
   if (!running_) return;
-  while (start_ + static_cast<Nanoseconds>(next_emit_) * period_ <= until) {
-    const TriggerEdge edge{next_emit_, start_ + static_cast<Nanoseconds>(next_emit_) * period_};
+  while (schedule_.time(next_emit_) <= until) {
+    const TriggerEdge edge{next_emit_, schedule_.time(next_emit_)};
     for (int i = 0; i < camera_count_; ++i) cameras_[i]->on_trigger(edge);
     ++next_emit_;
   }
@@ -81,11 +88,9 @@ void SimTrigger::emit_until(Nanoseconds until) {
   // a real line's, only gets an edge once the clock has passed it, so that it holds the recent
   // edges and not the coming ones.
   const Nanoseconds now = clock_.now();
-  while (next_record_ < next_emit_ &&
-         start_ + static_cast<Nanoseconds>(next_record_) * period_ <= now) {
-    if (record_ != nullptr) {
-      record_->add({next_record_, start_ + static_cast<Nanoseconds>(next_record_) * period_});
-    }
+  next_record_ = std::max(next_record_, schedule_.oldest());
+  while (next_record_ < next_emit_ && schedule_.time(next_record_) <= now) {
+    if (record_ != nullptr) record_->add({next_record_, schedule_.time(next_record_)});
     ++next_record_;
   }
 }
@@ -93,7 +98,8 @@ void SimTrigger::emit_until(Nanoseconds until) {
 EdgeResult SimTrigger::wait_edge(Nanoseconds timeout) {
   if (!running_) return {EdgeStatus::lost, {}};
   const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
-  const Nanoseconds t = start_ + static_cast<Nanoseconds>(next_report_) * period_;
+  next_report_ = std::max(next_report_, schedule_.oldest());
+  const Nanoseconds t = schedule_.time(next_report_);
   if (t <= deadline) {
     clock_.sleep_until(t);
     emit_until(t);
@@ -109,6 +115,8 @@ EdgeResult SimTrigger::wait_edge(Nanoseconds timeout) {
 SimCamera::SimCamera(CameraConfig config, std::shared_ptr<const std::vector<GrayImage>> images,
                      VirtualClock& clock, SimCameraTiming timing)
     : config_(std::move(config)),
+      configured_exposure_(config_.exposure),
+      configured_gain_(config_.gain),
       name_("sim:" + config_.device),
       images_(std::move(images)),
       clock_(clock),
@@ -153,6 +161,18 @@ void SimCamera::stop() {
   queue_size_ = 0;
   std::fill(held_.begin(), held_.end(), 0);
   ++generation_;
+}
+
+void SimCamera::set_exposure(Nanoseconds exposure, double gain) {
+  validate_exposure(name_, exposure, gain);
+  config_.exposure = exposure;
+  config_.gain = gain;
+  double scale = 1.0;
+  if (exposure > 0 && configured_exposure_ > 0) {
+    scale *= static_cast<double>(exposure) / static_cast<double>(configured_exposure_);
+  }
+  if (gain > 0.0 && configured_gain_ > 0.0) scale *= gain / configured_gain_;
+  brightness_q16_ = static_cast<std::uint32_t>(std::min(scale, 256.0) * 65536.0 + 0.5);
 }
 
 void SimCamera::inject(const SimFault& fault) {
@@ -258,6 +278,13 @@ AcquireResult SimCamera::acquire(Nanoseconds timeout) {
                                                static_cast<std::uint64_t>(y * config_.width + x)) >>
                                            56);
       }
+    } else if (brightness_q16_ != 1u << 16) {  // exposure or gain changed
+      const std::uint8_t* in = source.view().row(y);
+      std::uint8_t* out = buffer.view().row(y);
+      for (int x = 0; x < config_.width; ++x) {
+        const std::uint64_t v = (std::uint64_t{in[x]} * brightness_q16_ + (1u << 15)) >> 16;
+        out[x] = static_cast<std::uint8_t>(std::min<std::uint64_t>(v, 255));
+      }
     } else {
       std::memcpy(buffer.view().row(y), source.view().row(y),
                   static_cast<std::size_t>(config_.width));
@@ -318,7 +345,12 @@ TriggerConfig board_trigger(double rate_hz) {
 
 SimBoard::SimBoard(double rate_hz, std::vector<GrayImage> left_images,
                    std::vector<GrayImage> right_images, SimCameraTiming camera_timing)
-    : trigger(board_trigger(rate_hz), clock),
+    : SimBoard(board_trigger(rate_hz), std::move(left_images), std::move(right_images),
+               camera_timing) {}
+
+SimBoard::SimBoard(TriggerConfig trigger_config, std::vector<GrayImage> left_images,
+                   std::vector<GrayImage> right_images, SimCameraTiming camera_timing)
+    : trigger(std::move(trigger_config), clock),
       left(std::make_shared<const std::vector<GrayImage>>(std::move(left_images))),
       right(std::make_shared<const std::vector<GrayImage>>(std::move(right_images))),
       timing(camera_timing) {

@@ -11,18 +11,31 @@ StereoPairer::StereoPairer(CameraSource& left, CameraSource& right, PairingConfi
     : left_(left), right_(right), config_(config), trigger_(trigger) {
   require(config_.tolerance >= 0, "stereo pairing (", left_.name(), ", ", right_.name(),
           "): timestamp tolerance ", config_.tolerance, " ns is negative");
-  require(config_.trigger_period == 0 || 2 * config_.tolerance < config_.trigger_period,
-          "stereo pairing (", left_.name(), ", ", right_.name(), "): timestamp tolerance ",
-          config_.tolerance, " ns is not below half the trigger period ", config_.trigger_period,
-          " ns, so frames of neighbouring triggers could pair");
+  require(config_.match_sequences || trigger_ == nullptr, "stereo pairing (", left_.name(), ", ",
+          right_.name(), "): pairing by time alone cannot check the trigger record (sequences)");
   if (trigger_ != nullptr) {
     require(config_.edge_tolerance >= 0, "stereo pairing (", left_.name(), ", ", right_.name(),
             "): edge tolerance ", config_.edge_tolerance, " ns is negative");
-    require(config_.trigger_period == 0 || 2 * config_.edge_tolerance < config_.trigger_period,
-            "stereo pairing (", left_.name(), ", ", right_.name(), "): edge tolerance ",
-            config_.edge_tolerance, " ns is not below half the trigger period ",
-            config_.trigger_period, " ns, so a frame could fit two trigger edges");
   }
+  check_period(config_.trigger_period);
+}
+
+void StereoPairer::check_period(Nanoseconds period) const {
+  require(period >= 0, "stereo pairing (", left_.name(), ", ", right_.name(), "): period ", period,
+          " ns is negative");
+  require(period == 0 || 2 * config_.tolerance < period, "stereo pairing (", left_.name(), ", ",
+          right_.name(), "): timestamp tolerance ", config_.tolerance,
+          " ns is not below half the trigger period ", period,
+          " ns, so frames of neighbouring triggers could pair");
+  require(period == 0 || trigger_ == nullptr || 2 * config_.edge_tolerance < period,
+          "stereo pairing (", left_.name(), ", ", right_.name(), "): edge tolerance ",
+          config_.edge_tolerance, " ns is not below half the trigger period ", period,
+          " ns, so a frame could fit two trigger edges");
+}
+
+void StereoPairer::set_trigger_period(Nanoseconds period) {
+  check_period(period);
+  config_.trigger_period = period;
 }
 
 bool StereoPairer::on_trigger(const Frame& left, const Frame& right) const {
@@ -48,14 +61,17 @@ bool StereoPairer::push(Side side, const Frame& frame) {
   Queue& q = queue(side);
   const bool left = side == Side::left;
   ++(left ? counters_.pushed_left : counters_.pushed_right);
-  // A sequence that does not increase is a duplicate or garbled: refuse it.
-  if (q.has_last && static_cast<std::int32_t>(frame.sequence - q.last) <= 0) {
+  // A sequence that does not increase is a duplicate or garbled: refuse it. Pairing by time,
+  // so is a timestamp that does not increase.
+  if (q.has_last && (static_cast<std::int32_t>(frame.sequence - q.last) <= 0 ||
+                     (!config_.match_sequences && frame.timestamp <= q.last_time))) {
     camera(side).release(frame);
     ++(left ? counters_.out_of_order_left : counters_.out_of_order_right);
     return ready_;
   }
   q.has_last = true;
   q.last = frame.sequence;
+  q.last_time = frame.timestamp;
   if (q.size == kCapacity)
     drop_front(side, left ? counters_.unpaired_left : counters_.unpaired_right);
   q.frames[(q.head + q.size) % kCapacity] = frame;
@@ -64,7 +80,51 @@ bool StereoPairer::push(Side side, const Frame& frame) {
   return ready_;
 }
 
+void StereoPairer::take_fronts() {
+  pair_ = {left_q_.front(), right_q_.front()};
+  left_q_.head = (left_q_.head + 1) % kCapacity;
+  --left_q_.size;
+  right_q_.head = (right_q_.head + 1) % kCapacity;
+  --right_q_.size;
+  ready_ = true;
+  ++counters_.pairs;
+}
+
+// Each side's frames come in time order. Of the two oldest frames, the earlier one (`early`)
+// can pair only with the later one (`late`): every other frame of late's side is later still.
+// Late may have a nearer partner in the frame after early, if that is already here; one that
+// has not come yet is no nearer when the tolerance is below half the frame period.
+void StereoPairer::match_by_time() {
+  while (!ready_ && left_q_.size > 0 && right_q_.size > 0) {
+    const Frame& l = left_q_.front();
+    const Frame& r = right_q_.front();
+    if (l.clock != r.clock) {
+      drop_front(Side::left, counters_.mismatched_left);
+      drop_front(Side::right, counters_.mismatched_right);
+      continue;
+    }
+    const Side early = l.timestamp <= r.timestamp ? Side::left : Side::right;
+    std::uint64_t& unpaired =
+        early == Side::left ? counters_.unpaired_left : counters_.unpaired_right;
+    const Queue& q = queue(early);
+    const Nanoseconds late_time = early == Side::left ? r.timestamp : l.timestamp;
+    const Nanoseconds dt = late_time - q.front().timestamp;
+    const auto distance = [&](const Frame& f) {
+      return f.timestamp > late_time ? f.timestamp - late_time : late_time - f.timestamp;
+    };
+    if (dt > config_.tolerance || (q.size > 1 && distance(q.second()) < dt)) {
+      drop_front(early, unpaired);
+      continue;
+    }
+    take_fronts();
+  }
+}
+
 void StereoPairer::match() {
+  if (!config_.match_sequences) {
+    match_by_time();
+    return;
+  }
   while (!ready_ && left_q_.size > 0 && right_q_.size > 0) {
     const Frame& l = left_q_.front();
     const Frame& r = right_q_.front();
@@ -86,13 +146,7 @@ void StereoPairer::match() {
         drop_front(Side::right, counters_.off_trigger_right);
         continue;
       }
-      pair_ = {l, r};
-      left_q_.head = (left_q_.head + 1) % kCapacity;
-      --left_q_.size;
-      right_q_.head = (right_q_.head + 1) % kCapacity;
-      --right_q_.size;
-      ready_ = true;
-      ++counters_.pairs;
+      take_fronts();
     }
   }
 }

@@ -26,4 +26,48 @@ void TriggerRecord::clear() {
   added_ = 0;
 }
 
+// ----------------------------------------------------------------------------------------------
+
+void EdgeSchedule::start(Nanoseconds first_edge, Nanoseconds period) {
+  segments_[0] = {0, first_edge, period};
+  first_ = 0;
+  count_ = 1;
+}
+
+void EdgeSchedule::change_period(std::uint32_t anchor, Nanoseconds period) {
+  const Segment& last = newest();
+  // An anchor before the current rate began would rewrite edges already fired at that rate.
+  if (static_cast<std::int32_t>(anchor - last.first) < 0) anchor = last.first;
+  if (anchor == last.first) {
+    segments_[(first_ + count_ - 1) % kSegments].period = period;
+    return;
+  }
+  const Segment next{anchor, time(anchor), period};
+  if (count_ == kSegments) {  // the oldest rate is forgotten
+    first_ = (first_ + 1) % kSegments;
+    --count_;
+  }
+  segments_[(first_ + count_) % kSegments] = next;
+  ++count_;
+}
+
+Nanoseconds EdgeSchedule::time(std::uint32_t sequence) const {
+  for (std::size_t i = count_; i-- > 0;) {
+    const Segment& s = segments_[(first_ + i) % kSegments];
+    if (sequence >= s.first || i == 0) {
+      return s.time +
+             (static_cast<Nanoseconds>(sequence) - static_cast<Nanoseconds>(s.first)) * s.period;
+    }
+  }
+  return 0;
+}
+
+std::uint32_t EdgeSchedule::edges_until(Nanoseconds t) const {
+  for (std::size_t i = count_; i-- > 0;) {
+    const Segment& s = segments_[(first_ + i) % kSegments];
+    if (t >= s.time) return s.first + static_cast<std::uint32_t>((t - s.time) / s.period) + 1;
+  }
+  return oldest();
+}
+
 }  // namespace epipole::hal

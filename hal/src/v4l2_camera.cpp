@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 
 #include "epipole/core/error.hpp"
@@ -86,6 +87,77 @@ AcquireStatus buffer_status(std::uint32_t buffer_flags, std::size_t bytes_used, 
   const std::size_t bytes = std::min(bytes_used == 0 ? length : bytes_used, length);
   return (buffer_flags & V4L2_BUF_FLAG_ERROR) != 0 || bytes < needed ? AcquireStatus::corrupt
                                                                      : AcquireStatus::ok;
+}
+
+const char* v4l2_control_name(std::uint32_t id) {
+  switch (id) {
+    case V4L2_CID_EXPOSURE_AUTO:
+      return "V4L2_CID_EXPOSURE_AUTO";
+    case V4L2_CID_EXPOSURE_ABSOLUTE:
+      return "V4L2_CID_EXPOSURE_ABSOLUTE";
+    case V4L2_CID_AUTOGAIN:
+      return "V4L2_CID_AUTOGAIN";
+    case V4L2_CID_GAIN:
+      return "V4L2_CID_GAIN";
+    default:
+      return "a control";
+  }
+}
+
+V4l2ControlPlan plan_exposure_controls(const std::string& device, Nanoseconds exposure, double gain,
+                                       const V4l2ExposureControls& controls, bool starting) {
+  V4l2ControlPlan plan;
+  const auto add = [&](std::uint32_t id, std::int32_t value) {
+    plan.controls[static_cast<std::size_t>(plan.count++)] = {id, value};
+  };
+  const auto offers = [](const V4l2ControlInfo& c, int item) {
+    return c.present && item >= 0 && item < 64 && (c.menu >> item & 1u) != 0;
+  };
+  const auto in_range = [](const V4l2ControlInfo& c, std::int64_t value) {
+    return value >= c.minimum && value <= c.maximum;
+  };
+  const Nanoseconds exposure_us = exposure / 1000;
+  if (exposure > 0) {
+    require(controls.exposure_absolute.present, "camera ", device, ": exposure ", exposure_us,
+            " us: the device has no V4L2_CID_EXPOSURE_ABSOLUTE control");
+    const std::int64_t units = std::max<std::int64_t>((exposure + 50'000) / 100'000, 1);
+    require(in_range(controls.exposure_absolute, units), "camera ", device, ": exposure ",
+            exposure_us, " us is outside the device's ", controls.exposure_absolute.minimum, "..",
+            controls.exposure_absolute.maximum, " x 100 us");
+    if (controls.exposure_auto.present) {
+      require(offers(controls.exposure_auto, V4L2_EXPOSURE_MANUAL), "camera ", device,
+              ": exposure ", exposure_us,
+              " us: the device's V4L2_CID_EXPOSURE_AUTO has no manual mode");
+      add(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL);
+    }
+    add(V4L2_CID_EXPOSURE_ABSOLUTE, static_cast<std::int32_t>(units));
+  } else if (controls.exposure_auto.present) {
+    const int mode = offers(controls.exposure_auto, V4L2_EXPOSURE_AUTO)
+                         ? V4L2_EXPOSURE_AUTO
+                         : V4L2_EXPOSURE_APERTURE_PRIORITY;
+    require(offers(controls.exposure_auto, mode), "camera ", device,
+            ": automatic exposure: the device's V4L2_CID_EXPOSURE_AUTO offers no automatic mode");
+    add(V4L2_CID_EXPOSURE_AUTO, mode);
+  } else {
+    require(starting, "camera ", device,
+            ": automatic exposure: the device has no V4L2_CID_EXPOSURE_AUTO control");
+  }
+  if (gain > 0.0) {
+    require(controls.gain.present, "camera ", device, ": gain ", gain,
+            ": the device has no V4L2_CID_GAIN control");
+    const std::int64_t value = std::llround(gain);
+    require(in_range(controls.gain, value), "camera ", device, ": gain ", gain,
+            " is outside the device's ", controls.gain.minimum, "..", controls.gain.maximum,
+            " (V4L2_CID_GAIN, in the driver's units)");
+    if (controls.autogain.present) add(V4L2_CID_AUTOGAIN, 0);
+    add(V4L2_CID_GAIN, static_cast<std::int32_t>(value));
+  } else if (controls.autogain.present) {
+    add(V4L2_CID_AUTOGAIN, 1);
+  } else {
+    require(starting, "camera ", device,
+            ": automatic gain: the device has no V4L2_CID_AUTOGAIN control");
+  }
+  return plan;
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -190,15 +262,51 @@ void V4l2Camera::negotiate() {
   parm.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(config_.fps * 1000.0);
   (void)xioctl(fd_, VIDIOC_S_PARM, &parm);  // not every driver has a frame-rate control
 
-  if (config_.exposure > 0) {
-    v4l2_control c{V4L2_CID_EXPOSURE_ABSOLUTE,
-                   static_cast<std::int32_t>(config_.exposure / 100'000)};  // 100 us units
-    if (xioctl(fd_, VIDIOC_S_CTRL, &c) != 0) fail("cannot set exposure", errno);
+  apply_exposure(config_.exposure, config_.gain, true);
+}
+
+V4l2ControlInfo V4l2Camera::query_control(std::uint32_t id) const {
+  v4l2_queryctrl q{};
+  q.id = id;
+  V4l2ControlInfo info;
+  if (xioctl(fd_, VIDIOC_QUERYCTRL, &q) != 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED) != 0) {
+    return info;
   }
-  if (config_.gain > 0.0) {
-    v4l2_control c{V4L2_CID_GAIN, static_cast<std::int32_t>(config_.gain)};
-    if (xioctl(fd_, VIDIOC_S_CTRL, &c) != 0) fail("cannot set gain", errno);
+  info.present = true;
+  info.minimum = q.minimum;
+  info.maximum = q.maximum;
+  if (q.type == V4L2_CTRL_TYPE_MENU) {
+    for (std::int32_t i = std::max(q.minimum, 0); i <= std::min(q.maximum, 63); ++i) {
+      v4l2_querymenu m{};
+      m.id = id;
+      m.index = static_cast<std::uint32_t>(i);
+      if (xioctl(fd_, VIDIOC_QUERYMENU, &m) == 0) info.menu |= std::uint64_t{1} << i;
+    }
   }
+  return info;
+}
+
+void V4l2Camera::apply_exposure(Nanoseconds exposure, double gain, bool starting) {
+  const V4l2ExposureControls available{
+      query_control(V4L2_CID_EXPOSURE_AUTO), query_control(V4L2_CID_EXPOSURE_ABSOLUTE),
+      query_control(V4L2_CID_AUTOGAIN), query_control(V4L2_CID_GAIN)};
+  const V4l2ControlPlan plan =
+      plan_exposure_controls(config_.device, exposure, gain, available, starting);
+  for (int i = 0; i < plan.count; ++i) {
+    v4l2_control c{plan.controls[static_cast<std::size_t>(i)].id,
+                   plan.controls[static_cast<std::size_t>(i)].value};
+    if (xioctl(fd_, VIDIOC_S_CTRL, &c) != 0) {
+      fail(cat("cannot set ", v4l2_control_name(c.id), " to ", c.value).c_str(), errno);
+    }
+  }
+}
+
+void V4l2Camera::set_exposure(Nanoseconds exposure, double gain) {
+  validate_exposure(config_.device, exposure, gain);
+  require(fd_ >= 0, "camera ", config_.device, ": exposure and gain: the device is not open");
+  apply_exposure(exposure, gain, false);
+  config_.exposure = exposure;
+  config_.gain = gain;
 }
 
 void V4l2Camera::start() {

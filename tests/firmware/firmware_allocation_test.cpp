@@ -3,7 +3,10 @@
 // link's thread).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
+#include <functional>
+#include <span>
 
 #include "allocation_counter.hpp"
 #include "epipole/firmware/firmware.hpp"
@@ -12,14 +15,17 @@
 namespace epipole::firmware {
 namespace {
 
-// Reads the program's allocation count at two frames of the run.
+// Reads the program's allocation count at two frames of the run; `each` (made before the run)
+// sees every frame.
 struct Sampler final : FrameObserver {
   std::uint32_t first, last;
   std::size_t at_first = 0, at_last = 0;
+  std::function<void(std::uint32_t)> each;
   Sampler(std::uint32_t a, std::uint32_t b) : first(a), last(b) {}
   void on_frame(const FrameResult& r) override {
     if (r.frame == first) at_first = test::allocations_in_all_threads();
     if (r.frame == last) at_last = test::allocations_in_all_threads();
+    if (each) each(r.frame);
   }
 };
 
@@ -48,6 +54,20 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
     while (reading) robot.read(buffer, 10'000'000);
   });
   Sampler sampler(20, 1020);
+  if (GetParam() == BoardConfig::LinkProtocol::epipole) {
+    // The robot's run-time commands, applied on the way: the trigger rate and the exposure.
+    sampler.each = [&robot](std::uint32_t frame) {
+      const auto send = [&](const protocol::Message& m, std::uint16_t sequence) {
+        std::array<std::uint8_t, protocol::kMaxFrameSize> bytes{};
+        const std::size_t n = protocol::encode_frame(m, sequence, bytes);
+        robot.write(std::as_bytes(std::span(bytes.data(), n)), 100'000'000);
+      };
+      if (frame == 300) send(protocol::SetTriggerRate{20'000}, 1);
+      if (frame == 400) send(protocol::SetExposure{3000, 600}, 2);
+      if (frame == 700) send(protocol::SetTriggerRate{30'000}, 3);
+      if (frame == 800) send(protocol::SetExposure{0, 0}, 4);
+    };
+  }
   fw.frame_loop().set_observer(&sampler);
   const std::atomic<bool> stop{false};
   const RunSummary s = fw.run(1030, stop);
@@ -61,6 +81,11 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   EXPECT_GT(sampler.at_first, 0u);
   EXPECT_EQ(sampler.at_last - sampler.at_first, 0u)
       << "operator new calls between frames 20 and 1020";
+  if (GetParam() == BoardConfig::LinkProtocol::epipole) {
+    EXPECT_EQ(s.commands, 4u) << "the commands were applied within the counted frames";
+    EXPECT_EQ(s.faults.bad_commands, 0u);
+    EXPECT_EQ(fw.board().trigger()->config().rate_hz, 30.0);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Protocols, SteadyState,

@@ -6,7 +6,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <filesystem>
+#include <functional>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "epipole/firmware/firmware.hpp"
@@ -209,19 +212,36 @@ TEST(FrameLoop, RecoversFromALostCameraWithoutRestarting) {
 
 // A board with a link on a pseudo-terminal, and the robot at its other end.
 struct LinkedRig {
+  using Make = std::function<BoardConfig(const test::SimRig&)>;
   test::SimRig rig;
   BoardConfig config;
   std::unique_ptr<Firmware> fw;
   std::unique_ptr<hal::TermiosSerialPort> robot;
   protocol::FrameDecoder decoder;
   explicit LinkedRig(const std::string& extra = "",
-                     BoardConfig::LinkProtocol protocol = BoardConfig::LinkProtocol::epipole) {
-    config = rig.parse(extra);
+                     BoardConfig::LinkProtocol protocol = BoardConfig::LinkProtocol::epipole)
+      : LinkedRig([&](const test::SimRig& r) {
+          BoardConfig c = r.parse(extra);
+          c.serial.protocol = protocol;
+          return c;
+        }) {}
+  // The board `make` makes of the rig; the cameras replay `images` pairs.
+  explicit LinkedRig(const Make& make, int images = 2) {
+    config = make(rig);
     config.serial.backend = "pty";
-    config.serial.protocol = protocol;
-    fw = std::make_unique<Firmware>(config, rig.images());
+    fw = std::make_unique<Firmware>(config, rig.images(images));
     robot = std::make_unique<hal::TermiosSerialPort>(
         hal::SerialConfig{fw->board().serial_peer(), 115200});
+  }
+  // The acknowledgements the robot received, in command order.
+  std::vector<protocol::CommandAck> acks() {
+    std::vector<protocol::CommandAck> out;
+    for (const auto& m : receive()) {
+      if (const auto* a = std::get_if<protocol::CommandAck>(&m.message)) out.push_back(*a);
+    }
+    std::sort(out.begin(), out.end(),
+              [](const auto& a, const auto& b) { return a.command_sequence < b.command_sequence; });
+    return out;
   }
   void send(const protocol::Message& m, std::uint16_t sequence) {
     std::array<std::uint8_t, protocol::kMaxFrameSize> frame{};
@@ -262,7 +282,7 @@ TEST(FrameLoop, AppliesTheRobotsCommandsAndAcknowledgesThem) {
   linked.fw->frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
   const RunSummary s = linked.fw->run(200, stop);
-  const auto received = linked.receive();
+  const std::vector<protocol::CommandAck> acks = linked.acks();
   EXPECT_EQ(s.commands, 3u);
 
   // Disparity stops after the command, and never comes back.
@@ -279,13 +299,7 @@ TEST(FrameLoop, AppliesTheRobotsCommandsAndAcknowledgesThem) {
     EXPECT_EQ(recorder.frames[i].centre_disparity, -1) << i;
     EXPECT_NE(recorder.frames[i].stages & stage_bit(Stage::corners), 0) << i;
   }
-  std::vector<protocol::CommandAck> acks;
-  for (const auto& m : received) {
-    if (const auto* a = std::get_if<protocol::CommandAck>(&m.message)) acks.push_back(*a);
-  }
   ASSERT_EQ(acks.size(), 3u);
-  std::sort(acks.begin(), acks.end(),
-            [](const auto& a, const auto& b) { return a.command_sequence < b.command_sequence; });
   EXPECT_EQ(acks[0].status, protocol::AckStatus::ok);
   EXPECT_EQ(acks[1].status, protocol::AckStatus::ok) << "the snapshot was taken";
   EXPECT_EQ(acks[2].status, protocol::AckStatus::rejected);
@@ -298,6 +312,226 @@ TEST(FrameLoop, AppliesTheRobotsCommandsAndAcknowledgesThem) {
   // Everything the robot received was valid, with increasing sequence numbers.
   EXPECT_EQ(linked.decoder.stats().bad_crc + linked.decoder.stats().bad_cobs, 0u);
   EXPECT_EQ(linked.decoder.stats().lost, 0u);
+}
+
+// Sends `commands` (sequence numbers from `first`) once, when the loop is at frame `at`, and
+// slows the loop a little so that the link thread reads them during the run.
+void send_at(Recorder& recorder, LinkedRig& linked, std::uint32_t at,
+             std::vector<protocol::Message> commands, std::uint16_t first) {
+  auto before = std::move(recorder.also);
+  recorder.also = [&linked, at, first, commands = std::move(commands), before,
+                   sent = false](const FrameResult& r) mutable {
+    if (before) before(r);
+    if (r.frame < at || sent) return;
+    sent = true;
+    for (std::size_t i = 0; i < commands.size(); ++i) {
+      linked.send(commands[i], static_cast<std::uint16_t>(first + i));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  };
+}
+
+std::vector<protocol::AckStatus> statuses(const std::vector<protocol::CommandAck>& acks) {
+  std::vector<protocol::AckStatus> out;
+  for (const auto& a : acks) out.push_back(a.status);
+  return out;
+}
+
+TEST(FrameLoop, SetTriggerRateChangesThePeriodOfTheTriggers) {
+  using protocol::AckStatus;
+  LinkedRig linked;
+  Recorder recorder;
+  recorder.also = [](const FrameResult&) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  };
+  send_at(recorder, linked, 40,
+          {protocol::SetTriggerRate{15'000},     // 15 Hz
+           protocol::SetTriggerRate{0},          // impossible
+           protocol::SetTriggerRate{2'000'000},  // 2 kHz: impossible
+           protocol::SetTriggerRate{400'000}},   // 400 Hz: 2.5 ms < twice the 2 ms tolerance
+          200);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = linked.fw->run(150, stop);
+  EXPECT_EQ(statuses(linked.acks()),
+            (std::vector<AckStatus>{AckStatus::ok, AckStatus::rejected, AckStatus::rejected,
+                                    AckStatus::rejected}));
+  EXPECT_EQ(s.faults.bad_commands, 3u);
+  EXPECT_EQ(linked.fw->board().trigger()->config().rate_hz, 15.0);
+  EXPECT_NO_THROW(hal::with_rate(linked.fw->board().trigger()->config(), 400.0))
+      << "the line could run at 400 Hz: the pairing tolerance is what refused it";
+  // Every trigger, in order; the edges step at 30 Hz, then, from the last edge the cameras had
+  // been told of when the command came, at 15 Hz.
+  ASSERT_EQ(recorder.frames.size(), 150u);
+  std::size_t switched = 0;
+  for (std::size_t i = 1; i < recorder.frames.size(); ++i) {
+    EXPECT_EQ(recorder.frames[i].frame, recorder.frames[i - 1].frame + 1);
+    const hal::Nanoseconds step = recorder.frames[i].trigger_ns - recorder.frames[i - 1].trigger_ns;
+    if (switched == 0 && step != hal::period_of(30)) switched = i;
+    EXPECT_EQ(step, switched == 0 ? hal::period_of(30) : hal::period_of(15)) << "frame " << i;
+  }
+  EXPECT_GT(switched, 40u);
+  EXPECT_LT(switched, 50u);
+  const auto summaries = recorder.all<protocol::FrameSummary>();
+  ASSERT_EQ(summaries.size(), 150u);
+  EXPECT_EQ(summaries.back().trigger_ns - summaries[summaries.size() - 2].trigger_ns,
+            static_cast<std::uint64_t>(hal::period_of(15)))
+      << "the robot sees the new period";
+  const auto health = recorder.all<protocol::Health>();
+  ASSERT_GE(health.size(), 5u);
+  EXPECT_EQ(health[0].fps_centi, 3000);
+  EXPECT_NEAR(health.back().fps_centi, 1500, 100) << "health follows the new rate";
+  EXPECT_EQ(health.back().latency_p50_us, 7000u) << "the cameras' own delay, as before";
+}
+
+TEST(FrameLoop, SetExposureReachesBothCameras) {
+  using protocol::AckStatus;
+  // The cameras start at 2 ms and unity gain; the simulated ones scale what they replay by the
+  // exposure and gain relative to that.
+  LinkedRig linked(
+      [](const test::SimRig& r) {
+        BoardConfig c = r.parse();
+        for (hal::CameraConfig* camera : {&c.cameras.left, &c.cameras.right}) {
+          camera->exposure = 2'000'000;
+          camera->gain = 1.0;
+        }
+        return c;
+      },
+      1);
+  Recorder recorder;
+  std::vector<std::pair<int, int>> pixels;  // a dark pixel of each raw image, frame by frame
+  std::pair<int, int> lp{-1, -1}, rp{-1, -1};
+  recorder.also = [&](const FrameResult& r) {
+    const auto dark = [](GrayView v) {
+      for (int y = 0; y < v.height(); ++y) {
+        for (int x = 0; x < v.width(); ++x) {
+          if (v(x, y) >= 10 && v(x, y) <= 40) return std::pair{x, y};
+        }
+      }
+      return std::pair{-1, -1};
+    };
+    if (lp.first < 0) lp = dark(r.left_raw);
+    if (rp.first < 0) rp = dark(r.right_raw);
+    if (lp.first >= 0 && rp.first >= 0) {
+      pixels.emplace_back(r.left_raw(lp.first, lp.second), r.right_raw(rp.first, rp.second));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  };
+  send_at(recorder, linked, 5, {protocol::SetExposure{4000, 0}}, 300);  // twice the light
+  send_at(recorder, linked, 40,
+          {protocol::SetExposure{6000, 602},      // 3 x the exposure, 6.02 dB: 6 x the light
+           protocol::SetExposure{20'000'000, 0},  // 20 s: impossible
+           protocol::SetExposure{1000, 6100}},    // 61 dB: 1122 x, beyond the gain's 1000
+          301);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  linked.fw->run(80, stop);
+  EXPECT_EQ(statuses(linked.acks()),
+            (std::vector<AckStatus>{AckStatus::ok, AckStatus::ok, AckStatus::rejected,
+                                    AckStatus::rejected}));
+  for (const hal::Side side : {hal::Side::left, hal::Side::right}) {
+    const hal::CameraConfig& c = linked.fw->board().sim_camera(side)->config();
+    EXPECT_EQ(c.exposure, 6'000'000);
+    EXPECT_NEAR(c.gain, 2.0, 0.001) << "6.02 dB";
+  }
+  // Each camera's pixel: v, then 2 v, then 6 v, never going back.
+  ASSERT_EQ(pixels.size(), 80u) << "a pixel of 10..40 in both images";
+  const auto [l0, r0] = pixels.front();
+  int stage = 0;
+  for (std::size_t i = 0; i < pixels.size(); ++i) {
+    const int scale[3] = {1, 2, 6};
+    while (stage < 2 && pixels[i].first == l0 * scale[stage + 1]) ++stage;
+    EXPECT_EQ(pixels[i].first, l0 * scale[stage]) << "frame " << i;
+    EXPECT_EQ(pixels[i].second, r0 * scale[stage]) << "frame " << i << ": both cameras alike";
+  }
+  EXPECT_EQ(stage, 2);
+}
+
+TEST(FrameLoop, FreeRunningCamerasWithoutATriggerPairByTime) {
+  using protocol::AckStatus;
+  // Two free-running cameras (trigger.backend none, as on the usb-stereo board), the right one's
+  // clock 1 % fast, 5 % of the frames dropped on each side: their frame counters drift apart,
+  // and their exposures drift through every phase, so pairing by sequence would stop within
+  // seconds. One image: a pair of any two frames shows the rig's disparity.
+  LinkedRig linked(
+      [](const test::SimRig& r) {
+        BoardConfig c = r.parse_free_running("pairing: {tolerance_us: 15000}\n");
+        c.cameras.right.fps = 30.3;
+        c.sim.drop_rate = 0.05;
+        c.sim.seed = 3;
+        return c;
+      },
+      1);
+  EXPECT_FALSE(pairing_config(linked.config).match_sequences);
+  EXPECT_EQ(linked.fw->board().trigger(), nullptr);
+  Recorder recorder;
+  send_at(recorder, linked, 5, {protocol::SetTriggerRate{15'000}, protocol::SetExposure{3000, 0}},
+          400);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = linked.fw->run(240, stop);
+  EXPECT_EQ(statuses(linked.acks()),
+            (std::vector<AckStatus>{AckStatus::unsupported, AckStatus::ok}))
+      << "no trigger line to set; the cameras' exposure still is";
+  ASSERT_EQ(s.frames, 240u);
+  std::uint32_t longest_gap = 0;
+  for (std::size_t i = 0; i < recorder.frames.size(); ++i) {
+    const auto& f = recorder.frames[i];
+    // The pair's number and time are the left frame's: frame n at n periods + 5 ms exposure.
+    EXPECT_EQ(f.trigger_ns,
+              static_cast<hal::Nanoseconds>(f.frame) * hal::period_of(30) + 5'000'000);
+    EXPECT_NEAR(f.centre_disparity, linked.rig.disparity * 16, 8) << "frame " << f.frame;
+    if (i > 0) {
+      EXPECT_GT(f.frame, recorder.frames[i - 1].frame);
+      longest_gap = std::max(longest_gap, f.frame - recorder.frames[i - 1].frame);
+    }
+  }
+  // Pairs keep coming: no frame is within 15 ms while the phase crosses the 3.3 ms band in the
+  // middle (33.3 - 2 x 15), at 0.33 ms a frame: about 10 frames, a few more with drops beside.
+  EXPECT_LE(longest_gap, 16u);
+  EXPECT_GE(longest_gap, 8u) << "the phase went through the band";
+  // By sequence, left and right frame n are 0.33 n ms apart: beyond the 15 ms from frame 46 on.
+  EXPECT_GT(recorder.frames.back().frame, 240u);
+  const hal::SimCamera& left = *linked.fw->board().sim_camera(hal::Side::left);
+  const hal::SimCamera& right = *linked.fw->board().sim_camera(hal::Side::right);
+  const hal::PairingCounters& p = s.pairing;
+  EXPECT_EQ(p.pairs, 240u + s.stale);
+  EXPECT_GT(p.unpaired_left + p.unpaired_right, 20u);
+  EXPECT_EQ(p.mismatched_left + p.mismatched_right + p.off_trigger_left, 0u);
+  const std::uint64_t accounted_left =
+      p.pairs + p.unpaired_left + p.mismatched_left + p.out_of_order_left;
+  const std::uint64_t accounted_right =
+      p.pairs + p.unpaired_right + p.mismatched_right + p.out_of_order_right;
+  EXPECT_LE(accounted_left, p.pushed_left);
+  EXPECT_LE(p.pushed_left - accounted_left, 4u) << "what still waits in the pairer";
+  EXPECT_LE(accounted_right, p.pushed_right);
+  EXPECT_LE(p.pushed_right - accounted_right, 4u);
+  EXPECT_EQ(left.config().exposure, 3'000'000);
+  EXPECT_EQ(right.config().exposure, 3'000'000);
+}
+
+TEST(FrameLoop, PairingFollowsTheBoardsTrigger) {
+  const BoardConfig usb =
+      load_board_config(std::filesystem::path(EPIPOLE_SOURCE_DIR) / "board" / "usb-stereo");
+  const hal::PairingConfig p = pairing_config(usb);
+  EXPECT_FALSE(p.match_sequences) << "two free-running UVC cameras: by time";
+  EXPECT_EQ(p.tolerance, 16'000'000);
+  EXPECT_EQ(p.trigger_period, hal::period_of(30)) << "the cameras' frame period";
+  const BoardConfig pi = load_board_config(std::filesystem::path(EPIPOLE_SOURCE_DIR) / "board" /
+                                           "raspberrypi5-ov9281");
+  EXPECT_TRUE(pairing_config(pi).match_sequences) << "one trigger for both: by sequence";
+  EXPECT_EQ(pairing_config(pi).trigger_period, hal::period_of(30));
+  // Without a trigger the tolerance must stay below half the cameras' frame period.
+  const test::SimRig rig;
+  try {
+    rig.parse_free_running("pairing: {tolerance_us: 17000}\n");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pairing.tolerance_us: 17000 us is not below half the "
+                                         "cameras' frame period (33333 us at 30 fps)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(FrameLoop, StopsWhenAskedAndDrainsTheLink) {

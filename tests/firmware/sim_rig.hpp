@@ -7,6 +7,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 
 #include "epipole/calib/calibration.hpp"
@@ -100,6 +101,19 @@ struct SimRig {
   }
   firmware::BoardConfig parse(const std::string& extra = "") const {
     return firmware::parse_board_config(yaml(extra), dir.path() / "board.yaml");
+  }
+  // The same board without a trigger line: both cameras free running at 30 fps (as the
+  // usb-stereo board), so the frame loop pairs their frames by time.
+  firmware::BoardConfig parse_free_running(const std::string& extra = "") const {
+    std::string text = yaml(extra);
+    const auto swap = [&](const std::string& from, const std::string& to) {
+      const std::size_t at = text.find(from);
+      if (at == std::string::npos) throw std::logic_error("sim_rig.hpp: no '" + from + "'");
+      text.replace(at, from.size(), to);
+    };
+    swap("trigger: external", "trigger: free_running");
+    swap("trigger: {backend: sim, line: sim, rate_hz: 30}", "trigger: {backend: none}");
+    return firmware::parse_board_config(text, dir.path() / "board.yaml");
   }
 
   SimRig(int w = 160, int h = 96, int d = 8, const std::string& extra = "")

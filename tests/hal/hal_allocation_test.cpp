@@ -13,19 +13,41 @@
 namespace epipole::hal {
 namespace {
 
-TEST(HalAllocations, AcquireReleaseAndPairingNeverAllocate) {
+// A simulated board at 30 Hz with 64x32 images, and a camera configuration for it.
+SimBoard small_board() {
   std::vector<GrayImage> left, right;
   left.emplace_back(64, 32);
   right.emplace_back(64, 32);
-  SimBoard board(30.0, std::move(left), std::move(right));
+  return SimBoard(30.0, std::move(left), std::move(right));
+}
+
+CameraConfig small_camera(const char* device, TriggerMode trigger) {
   CameraConfig config;
   config.width = 64;
   config.height = 32;
-  config.trigger = TriggerMode::external;
-  config.device = "left";
-  SimCamera l(config, board.left, board.clock, board.timing);
-  config.device = "right";
-  SimCamera r(config, board.right, board.clock, board.timing);
+  config.trigger = trigger;
+  config.device = device;
+  return config;
+}
+
+// Pairs from the grabber, `turns` times, each given back at once; `before` runs first each turn.
+template <typename Before>
+int grab_pairs(StereoGrabber& grabber, int turns, Before before) {
+  int pairs = 0;
+  for (int i = 0; i < turns; ++i) {
+    before(i);
+    const PairResult p = grabber.next(100'000'000);
+    if (p.status != PairStatus::ok) continue;
+    ++pairs;
+    grabber.release(p.pair);
+  }
+  return pairs;
+}
+
+TEST(HalAllocations, AcquireReleaseAndPairingNeverAllocate) {
+  SimBoard board = small_board();
+  SimCamera l(small_camera("left", TriggerMode::external), board.left, board.clock, board.timing);
+  SimCamera r(small_camera("right", TriggerMode::external), board.right, board.clock, board.timing);
   board.trigger.connect(l);
   board.trigger.connect(r);
   r.inject({.kind = SimFaultKind::drop, .sequence = 20, .count = 2});
@@ -47,19 +69,51 @@ TEST(HalAllocations, AcquireReleaseAndPairingNeverAllocate) {
   board.trigger.start();
   l.start();
   r.start();
-  int pairs = 0;
   test::AllocationCounter counter;
-  for (int i = 0; i < 200; ++i) {
-    const PairResult p = grabber.next(100'000'000);
-    if (p.status != PairStatus::ok) continue;
-    ++pairs;
-    grabber.release(p.pair);
-  }
+  const int pairs = grab_pairs(grabber, 200, [](int) {});
   EXPECT_EQ(counter.count(), 0u);
   EXPECT_GT(pairs, 100);
   EXPECT_EQ(rl.counters().reopens, 1u);
   EXPECT_EQ(grabber.pairer().counters().corrupt_right, 1u);
   EXPECT_EQ(grabber.pairer().counters().off_trigger_left, 1u);
+}
+
+TEST(HalAllocations, RunTimeControlsAndPairingByTimeNeverAllocate) {
+  SimBoard board = small_board();
+  SimCamera triggered(small_camera("left", TriggerMode::external), board.left, board.clock,
+                      board.timing);
+  board.trigger.connect(triggered);
+  // Two free-running cameras at slightly different rates, paired by time.
+  CameraConfig config = small_camera("left", TriggerMode::free_running);
+  config.exposure = 2'000'000;
+  config.gain = 1.0;
+  SimCamera l(config, board.left, board.clock, board.timing);
+  config.device = "right";
+  config.fps = 30.1;
+  SimCamera r(config, board.right, board.clock, board.timing);
+  l.set_fault_rates({.drop = 0.05, .seed = 3});
+  RecoveringCamera rl(l, board.clock);
+  StereoGrabber grabber(
+      rl, r, board.clock,
+      {.tolerance = 10'000'000, .trigger_period = 33'222'591, .match_sequences = false});
+  board.trigger.start();
+  triggered.start();
+  l.start();
+  r.start();
+  test::AllocationCounter counter;
+  const int pairs = grab_pairs(grabber, 300, [&](int i) {
+    if (i % 50 == 10) {  // 60 Hz, 4 ms and 2x at 10, 110, 210; back at 60, 160, 260
+      board.trigger.set_rate(i % 100 == 10 ? 60.0 : 30.0);
+      rl.set_exposure(i % 100 == 10 ? 4'000'000 : 0, i % 100 == 10 ? 2.0 : 0.0);
+      grabber.pairer().set_trigger_period(33'222'591);
+    }
+    const AcquireResult t = triggered.acquire(100'000'000);
+    if (t.status == AcquireStatus::ok) triggered.release(t.frame);
+  });
+  EXPECT_EQ(counter.count(), 0u);
+  EXPECT_GT(pairs, 200);
+  EXPECT_EQ(board.trigger.config().rate_hz, 30.0);
+  EXPECT_EQ(l.config().exposure, 0);
 }
 
 // The libcamera backend's acquire/release half, fed with fake completed requests: frames,

@@ -347,6 +347,79 @@ TEST(LibcameraStream, PlanesTooSmallNameTheDevice) {
             "camera cam0: stride 16 is below the 32 bytes of a 16-pixel YUYV row");
 }
 
+// An OV9281 as the Raspberry Pi pipeline states it: exposure 29..66666 us, analogue gain 1..16.
+LibcameraExposureLimits ov9281(bool modes) {
+  LibcameraExposureLimits l;
+  l.exposure_time = {true, true, 29, 66666};
+  l.analogue_gain = {true, true, 1.0, 16.0};
+  l.ae_enable = !modes;
+  l.exposure_time_mode = modes;
+  l.analogue_gain_mode = modes;
+  return l;
+}
+
+LibcameraExposureControls plan(Nanoseconds exposure, double gain,
+                               const LibcameraExposureLimits& limits, bool modes,
+                               bool starting = false) {
+  return plan_libcamera_exposure("cam0", "/base/ov9281@60", exposure, gain, limits, modes,
+                                 starting);
+}
+
+TEST(LibcameraControls, ManualAndAutomaticBeforeAndAfterTheModeControls) {
+  // Before libcamera 0.5: the values, and AeEnable off when both are manual, on otherwise.
+  LibcameraExposureControls c = plan(4'000'000, 2.0, ov9281(false), false);
+  EXPECT_EQ(c.exposure_time_us, 4000);
+  EXPECT_EQ(c.analogue_gain, 2.0f);
+  EXPECT_EQ(c.ae_enable, false);
+  EXPECT_FALSE(c.exposure_time_manual.has_value());
+  c = plan(0, 2.0, ov9281(false), false);
+  EXPECT_FALSE(c.exposure_time_us.has_value());
+  EXPECT_EQ(c.analogue_gain, 2.0f);
+  EXPECT_EQ(c.ae_enable, true) << "the exposure stays automatic, the gain fixed";
+  c = plan(0, 0.0, ov9281(false), false);
+  EXPECT_EQ(c.ae_enable, true);
+  EXPECT_FALSE(c.analogue_gain.has_value());
+  // 0.5 on: each value's own mode.
+  c = plan(4'000'000, 0.0, ov9281(true), true);
+  EXPECT_EQ(c.exposure_time_us, 4000);
+  EXPECT_EQ(c.exposure_time_manual, true);
+  EXPECT_EQ(c.analogue_gain_manual, false);
+  EXPECT_FALSE(c.ae_enable.has_value());
+  // 500 ns is less than a microsecond: at least 1 us is asked (here below the camera's 29).
+  LibcameraExposureLimits open = ov9281(false);
+  open.exposure_time.bounded = false;
+  EXPECT_EQ(plan(500, 0.0, open, false).exposure_time_us, 1);
+  // A camera without the controls that turn automatic on: left as it is at start-up only.
+  LibcameraExposureLimits bare = ov9281(false);
+  bare.ae_enable = false;
+  c = plan(0, 0.0, bare, false, true);
+  EXPECT_FALSE(c.ae_enable.has_value());
+  EXPECT_FALSE(c.exposure_time_us.has_value());
+}
+
+TEST(LibcameraControls, MissingControlsAndValuesOutOfRangeAreNamed) {
+  const auto message = [](Nanoseconds exposure, double gain, const LibcameraExposureLimits& l,
+                          bool modes) { return error_of([&] { plan(exposure, gain, l, modes); }); };
+  EXPECT_EQ(message(100'000'000, 2.0, ov9281(false), false),
+            "camera cam0: exposure 100000000 ns is outside the camera's 29..66666 us");
+  EXPECT_EQ(message(4'000'000, 20.0, ov9281(false), false),
+            "camera cam0: gain 20 is outside the camera's analogue gain 1..16");
+  LibcameraExposureLimits bare;
+  EXPECT_EQ(message(4'000'000, 0.0, bare, false),
+            "camera cam0: exposure 4000000 ns: libcamera camera /base/ov9281@60 has no "
+            "ExposureTime control");
+  EXPECT_EQ(message(0, 2.0, bare, false),
+            "camera cam0: gain 2: libcamera camera /base/ov9281@60 has no AnalogueGain control");
+  EXPECT_EQ(message(0, 0.0, bare, false),
+            "camera cam0: automatic exposure: libcamera camera /base/ov9281@60 has no AeEnable "
+            "control");
+  LibcameraExposureLimits no_modes = ov9281(true);
+  no_modes.analogue_gain_mode = false;
+  EXPECT_EQ(message(4'000'000, 0.0, no_modes, true),
+            "camera cam0: automatic gain: libcamera camera /base/ov9281@60 has no "
+            "AnalogueGainMode control");
+}
+
 TEST(LibcameraBackend, RegisteredAndMissingCamerasNamed) {
   CameraConfig config;
   config.device = "cam-epipole-missing";

@@ -1,9 +1,13 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <iterator>
+#include <limits>
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "epipole/core/error.hpp"
@@ -535,6 +539,399 @@ TEST(Registry, UnknownAndUnavailableBackends) {
   EXPECT_THROW(r.create_serial("uart", {.device = "/dev/ttyS0", .baud = 9600}), Error);
 }
 
+TEST(Registry, FreeRunningSimCamerasIgnoreTheBoardsTrigger) {
+  SimBoard board(50.0, images(), images());
+  const BackendContext context{&board.clock, &board};
+  CameraConfig c = config_for("left");
+  c.trigger = TriggerMode::free_running;
+  c.fps = 25.0;
+  auto camera = BackendRegistry::builtin().create_camera("sim", c, context);
+  board.trigger.start();
+  camera->start();
+  Nanoseconds last = -1;
+  for (std::uint32_t i = 0; i < 10; ++i) {
+    const AcquireResult r = camera->acquire(100 * kMs);
+    ASSERT_EQ(r.status, AcquireStatus::ok);
+    EXPECT_EQ(r.frame.sequence, i) << "its own frame counter";
+    if (last >= 0) {
+      EXPECT_EQ(r.frame.timestamp - last, 40 * kMs) << "its own rate, not 50 Hz";
+    }
+    last = r.frame.timestamp;
+    camera->release(r.frame);
+  }
+}
+
+TEST(TriggerLines, WithRateChecksTheRateAndTheRole) {
+  TriggerConfig t{.line = "GPIO17",
+                  .chip = {},
+                  .role = TriggerRole::master,
+                  .rate_hz = 30.0,
+                  .pulse_width = 100'000};
+  EXPECT_EQ(with_rate(t, 60.0).rate_hz, 60.0);
+  EXPECT_EQ(with_rate(t, 60.0).line, "GPIO17");
+  EXPECT_EQ(period_of(60.0), 16'666'667);
+  const auto message = [](const TriggerConfig& c, double rate) {
+    try {
+      with_rate(c, rate);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message(t, 0.0).find("trigger GPIO17: rate 0 Hz is impossible"), std::string::npos)
+      << message(t, 0.0);
+  EXPECT_NE(message(t, 1e4).find("rate 10000 Hz"), std::string::npos) << message(t, 1e4);
+  EXPECT_NE(message(t, 20000.0).find("GPIO17"), std::string::npos);
+  t.pulse_width = 20 * kMs;
+  EXPECT_NE(message(t, 60.0).find("trigger GPIO17: pulse width 20000000 ns does not fit"),
+            std::string::npos)
+      << message(t, 60.0);
+  t.role = TriggerRole::slave;
+  EXPECT_NE(message(t, 30.0).find("trigger GPIO17: a slave line cannot set a rate (30 Hz"),
+            std::string::npos)
+      << message(t, 30.0);
+}
+
+// A device that forgets its exposure when it is reopened (back to automatic), as a replaced or
+// reset camera would.
+class ForgetfulCamera final : public CameraSource {
+ public:
+  explicit ForgetfulCamera(SimCamera& camera) : camera_(camera) {}
+  const std::string& name() const override { return camera_.name(); }
+  const CameraConfig& config() const override { return camera_.config(); }
+  void start() override { camera_.start(); }
+  void stop() override { camera_.stop(); }
+  bool streaming() const override { return camera_.streaming(); }
+  AcquireResult acquire(Nanoseconds timeout) override { return camera_.acquire(timeout); }
+  void release(const Frame& frame) override { camera_.release(frame); }
+  void reopen() override {
+    camera_.reopen();
+    camera_.set_exposure(0, 0.0);
+  }
+  void set_exposure(Nanoseconds exposure, double gain) override {
+    camera_.set_exposure(exposure, gain);
+  }
+
+ private:
+  SimCamera& camera_;
+};
+
+TEST(Recovery, SetExposureIsAppliedAgainAfterAReopen) {
+  Rig rig;
+  rig.left.inject({.kind = SimFaultKind::disconnect, .sequence = 5});
+  ForgetfulCamera forgetful(rig.left);
+  RecoveringCamera left(forgetful, rig.board.clock);
+  left.set_exposure(4 * kMs, 2.0);
+  EXPECT_EQ(rig.left.config().exposure, 4 * kMs);
+  EXPECT_EQ(left.config().gain, 2.0);
+  EXPECT_THROW(left.set_exposure(-1, 1.0), Error);
+  EXPECT_EQ(rig.left.config().exposure, 4 * kMs) << "refused: nothing changed";
+  int frames = 0;
+  while (rig.board.clock.now() < 20 * kPeriod) {
+    const AcquireResult r = left.acquire(2 * kPeriod);
+    if (r.status != AcquireStatus::ok) continue;
+    ++frames;
+    left.release(r.frame);
+  }
+  EXPECT_EQ(left.counters().reopens, 1u);
+  EXPECT_GT(frames, 10);
+  EXPECT_EQ(rig.left.config().exposure, 4 * kMs) << "the device forgot; the wrapper set it again";
+  EXPECT_EQ(rig.left.config().gain, 2.0);
+}
+
+TEST(StereoPairing, ARateChangeIsCheckedAgainstTheTolerances) {
+  Rig rig;
+  TriggerRecord record;
+  StereoPairer pairer(rig.left, rig.right,
+                      {.tolerance = kMs, .trigger_period = kPeriod, .edge_tolerance = 2 * kMs},
+                      &record);
+  pairer.set_trigger_period(5 * kMs);
+  EXPECT_EQ(pairer.config().trigger_period, 5 * kMs);
+  const auto refusal = [&](Nanoseconds period) {
+    try {
+      pairer.set_trigger_period(period);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  // The edge tolerance (2 ms) is not below half of 4 ms; the tolerance (1 ms) not below 1 ms.
+  EXPECT_NE(refusal(4 * kMs).find("edge tolerance 2000000 ns is not below half the trigger "
+                                  "period 4000000 ns"),
+            std::string::npos)
+      << refusal(4 * kMs);
+  EXPECT_NE(refusal(2 * kMs).find("timestamp tolerance 1000000 ns is not below half the "
+                                  "trigger period 2000000 ns"),
+            std::string::npos)
+      << refusal(2 * kMs);
+  EXPECT_EQ(pairer.config().trigger_period, 5 * kMs) << "a refused period changes nothing";
+  pairer.set_trigger_period(0);  // unknown: not checked
+}
+
+// --- Pairing by time, for free-running cameras ---
+
+// Frames the test hands to the pairer itself; release() counts what comes back.
+class HandCamera final : public CameraSource {
+ public:
+  explicit HandCamera(std::string name) : name_(std::move(name)) { config_.device = name_; }
+  const std::string& name() const override { return name_; }
+  const CameraConfig& config() const override { return config_; }
+  void start() override {}
+  void stop() override {}
+  bool streaming() const override { return true; }
+  AcquireResult acquire(Nanoseconds) override { return {}; }
+  void release(const Frame&) override { ++released; }
+  void reopen() override {}
+  void set_exposure(Nanoseconds, double) override {}
+  int released = 0;
+
+ private:
+  std::string name_;
+  CameraConfig config_;
+};
+
+Frame hand_frame(std::uint32_t sequence, Nanoseconds t, ClockId clock = ClockId::monotonic) {
+  Frame f;
+  f.sequence = sequence;
+  f.timestamp = t;
+  f.clock = clock;
+  f.buffer = 0;
+  return f;
+}
+
+TEST(PairingByTime, NearestWithinTheToleranceEachFrameOnce) {
+  HandCamera l("left"), r("right");
+  StereoPairer pairer(l, r,
+                      {.tolerance = 9 * kMs, .trigger_period = 20 * kMs, .match_sequences = false});
+  // Two right frames within the tolerance of one left frame: the nearer one pairs, the other is
+  // dropped; the pair carries the left frame's number.
+  EXPECT_FALSE(pairer.push(Side::right, hand_frame(1000, 95 * kMs)));
+  EXPECT_FALSE(pairer.push(Side::right, hand_frame(1001, 99 * kMs)));
+  ASSERT_TRUE(pairer.push(Side::left, hand_frame(7, 100 * kMs)));
+  StereoPair p = pairer.take();
+  EXPECT_EQ(p.left.sequence, 7u);
+  EXPECT_EQ(p.right.sequence, 1001u);
+  EXPECT_EQ(pairer.counters().unpaired_right, 1u);
+  pairer.release(p);
+  // Beyond the tolerance: the earlier frame can pair with nothing later, and goes.
+  EXPECT_FALSE(pairer.push(Side::left, hand_frame(8, 120 * kMs)));
+  EXPECT_FALSE(pairer.push(Side::right, hand_frame(1002, 130 * kMs + 1)));
+  EXPECT_EQ(pairer.counters().unpaired_left, 1u);
+  ASSERT_TRUE(pairer.push(Side::left, hand_frame(9, 139 * kMs)));
+  p = pairer.take();
+  EXPECT_EQ(p.left.sequence, 9u);
+  EXPECT_EQ(p.right.sequence, 1002u);
+  pairer.release(p);
+  // Frames on different clocks never pair.
+  EXPECT_FALSE(pairer.push(Side::left, hand_frame(10, 160 * kMs)));
+  EXPECT_FALSE(pairer.push(Side::right, hand_frame(1003, 160 * kMs, ClockId::other)));
+  EXPECT_EQ(pairer.counters().mismatched_left, 1u);
+  EXPECT_EQ(pairer.counters().mismatched_right, 1u);
+  // A timestamp or a sequence that does not increase on its side is refused.
+  EXPECT_FALSE(pairer.push(Side::left, hand_frame(11, 150 * kMs)));
+  EXPECT_FALSE(pairer.push(Side::left, hand_frame(10, 200 * kMs)));
+  EXPECT_EQ(pairer.counters().out_of_order_left, 2u);
+  // The earlier frame's successor is nearer to the later one: the successor pairs.
+  EXPECT_FALSE(pairer.push(Side::left, hand_frame(12, 200 * kMs)));
+  EXPECT_FALSE(pairer.push(Side::left, hand_frame(13, 207 * kMs)));
+  ASSERT_TRUE(pairer.push(Side::right, hand_frame(1004, 208 * kMs)));
+  p = pairer.take();
+  EXPECT_EQ(p.left.sequence, 13u);
+  EXPECT_EQ(p.right.sequence, 1004u);
+  pairer.release(p);
+  const PairingCounters& c = pairer.counters();
+  EXPECT_EQ(c.pairs, 3u);
+  EXPECT_EQ(c.unpaired_left, 2u);
+  EXPECT_EQ(c.pushed_left, 8u);
+  EXPECT_EQ(c.pushed_right, 5u);
+  expect_counters_add_up(pairer);
+  EXPECT_EQ(l.released, 8) << "every frame went back to its camera once";
+  EXPECT_EQ(r.released, 5);
+}
+
+TEST(PairingByTime, TheTriggerRecordAndTheToleranceAreChecked) {
+  HandCamera l("left"), r("right");
+  TriggerRecord record;
+  try {
+    StereoPairer pairer(l, r, {.match_sequences = false}, &record);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pairing by time alone"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(
+      StereoPairer(l, r,
+                   {.tolerance = 10 * kMs, .trigger_period = 20 * kMs, .match_sequences = false}),
+      Error)
+      << "the tolerance must be below half the frame period";
+}
+
+// A camera that notes every frame it lends: its trigger (ground truth) and its timestamp.
+class LoggingCamera final : public CameraSource {
+ public:
+  explicit LoggingCamera(SimCamera& camera) : camera_(camera) { log.reserve(8192); }
+  const std::string& name() const override { return camera_.name(); }
+  const CameraConfig& config() const override { return camera_.config(); }
+  void start() override { camera_.start(); }
+  void stop() override { camera_.stop(); }
+  bool streaming() const override { return camera_.streaming(); }
+  AcquireResult acquire(Nanoseconds timeout) override {
+    const AcquireResult r = camera_.acquire(timeout);
+    if (r.status == AcquireStatus::ok) {
+      log.push_back({camera_.true_sequence(r.frame), r.frame.timestamp});
+    }
+    return r;
+  }
+  void release(const Frame& frame) override { camera_.release(frame); }
+  void reopen() override { camera_.reopen(); }
+  void set_exposure(Nanoseconds exposure, double gain) override {
+    camera_.set_exposure(exposure, gain);
+  }
+  struct Seen {
+    std::uint32_t truth;
+    Nanoseconds timestamp;
+  };
+  std::vector<Seen> log;
+
+ private:
+  SimCamera& camera_;
+};
+
+// Two free-running simulated cameras on one clock: each its own trigger, rate, phase, jitter
+// and faults.
+struct FreeRig {
+  FreeRig(double left_fps, double right_fps, Nanoseconds right_phase, std::uint64_t seed)
+      : left_sim(free_config("left", left_fps), shared(), clock, free_timing(seed)),
+        right_sim(free_config("right", right_fps), shared(), clock, free_timing(seed + 100)),
+        left(left_sim),
+        right(right_sim) {
+    left.start();
+    clock.advance(right_phase);
+    right.start();
+  }
+  static CameraConfig free_config(const std::string& device, double fps) {
+    CameraConfig c = config_for(device);
+    c.trigger = TriggerMode::free_running;
+    c.fps = fps;
+    return c;
+  }
+  static SimCameraTiming free_timing(std::uint64_t seed) {
+    SimCameraTiming t = timing();  // +-0.3 ms of jitter
+    t.seed = seed;
+    return t;
+  }
+  static std::shared_ptr<const std::vector<GrayImage>> shared() {
+    return std::make_shared<const std::vector<GrayImage>>(images());
+  }
+  VirtualClock clock;
+  SimCamera left_sim, right_sim;
+  LoggingCamera left, right;
+};
+
+struct TimeTally {
+  std::uint64_t pairs = 0;
+  std::uint32_t longest_gap = 0;    // left frames between two pairs, by the left camera's truth
+  std::uint32_t truth_differs = 0;  // pairs whose cameras' frame counters disagree
+};
+
+// Runs a grabber pairing by time until the left camera has delivered `frames`, and checks each
+// pair: |dt| within the tolerance, each frame once (the truths increase on both sides), and
+// the two are each other's nearest among every frame the cameras delivered.
+TimeTally run_by_time(FreeRig& rig, StereoGrabber& grabber, std::size_t frames) {
+  TimeTally t;
+  const Nanoseconds tolerance = grabber.pairer().config().tolerance;
+  std::vector<std::pair<Nanoseconds, Nanoseconds>> pairs;
+  pairs.reserve(frames);
+  std::int64_t last_left = -1, last_right = -1;
+  while (rig.left.log.size() < frames) {
+    const PairResult r = grabber.next(100 * kMs);
+    if (r.status != PairStatus::ok) continue;
+    const StereoPair& p = r.pair;
+    const auto lt = static_cast<std::int64_t>(rig.left_sim.true_sequence(p.left));
+    const auto rt = static_cast<std::int64_t>(rig.right_sim.true_sequence(p.right));
+    EXPECT_GT(lt, last_left) << "a left frame paired twice";
+    EXPECT_GT(rt, last_right) << "a right frame paired twice";
+    if (last_left >= 0)
+      t.longest_gap = std::max(t.longest_gap, static_cast<std::uint32_t>(lt - last_left));
+    t.truth_differs += lt != rt ? 1 : 0;
+    last_left = lt;
+    last_right = rt;
+    const Nanoseconds dt = p.left.timestamp - p.right.timestamp;
+    EXPECT_LE(dt < 0 ? -dt : dt, tolerance) << "left frame " << lt;
+    EXPECT_EQ(p.left.sequence, static_cast<std::uint32_t>(lt)) << "the pair's number is left's";
+    pairs.emplace_back(p.left.timestamp, p.right.timestamp);
+    ++t.pairs;
+    grabber.release(p);
+  }
+  // Mutual nearest: no delivered frame of the other side is nearer to either frame of a pair.
+  // (Each log is in time order: frames are 20 ms apart, the jitter is 0.3 ms.)
+  const auto nearest = [](const std::vector<LoggingCamera::Seen>& log, Nanoseconds at) {
+    const auto it =
+        std::lower_bound(log.begin(), log.end(), at,
+                         [](const auto& s, Nanoseconds time) { return s.timestamp < time; });
+    Nanoseconds best = std::numeric_limits<Nanoseconds>::max();
+    if (it != log.end()) best = it->timestamp - at;
+    if (it != log.begin()) best = std::min(best, at - std::prev(it)->timestamp);
+    return best;
+  };
+  for (const auto& [l, r] : pairs) {
+    const Nanoseconds d = l > r ? l - r : r - l;
+    EXPECT_EQ(nearest(rig.right.log, l), d) << "a right frame nearer to the left one at " << l;
+    EXPECT_EQ(nearest(rig.left.log, r), d) << "a left frame nearer to the right one at " << r;
+  }
+  return t;
+}
+
+PairingConfig by_time() {
+  return {.tolerance = 9 * kMs, .trigger_period = kPeriod, .match_sequences = false};
+}
+
+TEST(PairingByTime, SameNominalRatePairsEveryFrameBothCamerasDelivered) {
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    // 50 Hz each, the right camera 3 ms behind, 4 % drops and some delays on either side.
+    FreeRig rig(50.0, 50.0, 3 * kMs, seed);
+    rig.left_sim.set_fault_rates({.drop = 0.04, .delay = 0.02, .max_delay = kPeriod, .seed = seed});
+    rig.right_sim.set_fault_rates(
+        {.drop = 0.04, .delay = 0.02, .max_delay = kPeriod, .seed = seed + 50});
+    StereoGrabber grabber(rig.left, rig.right, rig.clock, by_time());
+    const TimeTally t = run_by_time(rig, grabber, 3000);
+    // Frame k of one camera belongs with frame k of the other (3 ms apart): every k both
+    // delivered is a pair, and nothing else.
+    std::vector<char> right_has(4000, 0);
+    for (const auto& s : rig.right.log) right_has[s.truth] = 1;
+    std::uint64_t both = 0;
+    for (const auto& s : rig.left.log) both += right_has[s.truth];
+    EXPECT_EQ(t.truth_differs, 0u) << seed;
+    EXPECT_GE(t.pairs + 1, both) << seed;  // the last one may still be waiting
+    EXPECT_LE(t.pairs, both) << seed;
+    EXPECT_GT(t.pairs, 2600u) << seed;
+    expect_counters_add_up(grabber.pairer());
+    const PairingCounters& c = grabber.pairer().counters();
+    EXPECT_GT(c.unpaired_left + c.unpaired_right, 100u) << seed << ": the drops reach the pairer";
+    EXPECT_EQ(c.mismatched_left + c.mismatched_right, 0u) << seed;
+  }
+}
+
+TEST(PairingByTime, SlightlyDifferentRatesDriftButPairsKeepComing) {
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    // 50 Hz and 50.05 Hz: the right camera gains 19.98 us a frame, so over 3000 frames the
+    // phase goes round three times, each time through the band of 1.98 ms where no right frame
+    // is within 9 ms of a left one (a period of 19.98 ms - 2 x 9 ms): 99 frames, narrowed or
+    // widened by the jitter (+-0.3 ms each, +-1.2 ms on the band) to 39..159. 3 % drops.
+    FreeRig rig(50.0, 50.05, 3 * kMs, seed);
+    rig.left_sim.set_fault_rates({.drop = 0.03, .seed = seed});
+    rig.right_sim.set_fault_rates({.drop = 0.03, .seed = seed + 50});
+    StereoGrabber grabber(rig.left, rig.right, rig.clock, by_time());
+    const TimeTally t = run_by_time(rig, grabber, 3000);
+    EXPECT_GT(t.pairs, 2300u) << seed;
+    EXPECT_GT(t.truth_differs, 1000u) << seed << ": the frame counters drifted apart";
+    // The longest spell without a pair is that band (and a few drops beside it).
+    EXPECT_GE(t.longest_gap, 39u) << seed;
+    EXPECT_LE(t.longest_gap, 170u) << seed;
+    EXPECT_GE(rig.right.log.back().truth, rig.left.log.back().truth + 1) << "the faster camera";
+    expect_counters_add_up(grabber.pairer());
+  }
+}
+
 TEST(Registry, SimBoardTrigger) {
   SimBoard board(100.0, images(), images());
   const BackendContext context{&board.clock, &board};
@@ -544,6 +941,12 @@ TEST(Registry, SimBoardTrigger) {
   trigger->start();
   EXPECT_EQ(trigger->wait_edge(kMs).edge.sequence, 0u);
   EXPECT_EQ(trigger->wait_edge(20 * kMs).edge.timestamp, 10 * kMs);
+  // The handle sets the board's own trigger's rate: from edge 1 on, every 40 ms.
+  trigger->set_rate(25.0);
+  EXPECT_EQ(board.trigger.config().rate_hz, 25.0);
+  EXPECT_EQ(board.trigger.period(), 40 * kMs);
+  EXPECT_EQ(trigger->wait_edge(100 * kMs).edge.timestamp, 50 * kMs);
+  EXPECT_THROW(trigger->set_rate(0.0), Error);
   CameraConfig bad = config_for("middle");
   EXPECT_THROW(BackendRegistry::builtin().create_camera("sim", bad, context), Error);
 }

@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "epipole/core/error.hpp"
@@ -70,6 +72,88 @@ TEST(SimTrigger, EdgesAtTheRateOnTheVirtualClock) {
   EXPECT_EQ(clock.now(), 1000 + 41 * kMs);
 }
 
+TEST(SimTrigger, SetRateReanchorsAtTheLastEdge) {
+  VirtualClock clock(1000);
+  TriggerConfig config{
+      .line = "sim", .chip = {}, .role = TriggerRole::master, .rate_hz = 100.0, .pulse_width = kMs};
+  SimTrigger trigger(config, clock);
+  trigger.set_rate(50.0);  // before start: the schedule starts at the new rate
+  EXPECT_EQ(trigger.period(), 20 * kMs);
+  trigger.start();
+  EXPECT_EQ(trigger.wait_edge(kMs).edge.timestamp, 1000);
+  EXPECT_EQ(trigger.wait_edge(30 * kMs).edge.timestamp, 1000 + 20 * kMs);
+  trigger.set_rate(100.0);
+  EXPECT_EQ(trigger.config().rate_hz, 100.0);
+  EXPECT_EQ(trigger.period(), 10 * kMs);
+  std::vector<TriggerEdge> edges;
+  for (int i = 0; i < 4; ++i) {
+    const EdgeResult r = trigger.wait_edge(30 * kMs);
+    ASSERT_EQ(r.status, EdgeStatus::ok);
+    edges.push_back(r.edge);
+  }
+  // Edge 1 (20 ms) was the last one fired: 2, 3, ... come 10 ms apart from it.
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    EXPECT_EQ(edges[i].sequence, 2 + i);
+    EXPECT_EQ(edges[i].timestamp, 1000 + 20 * kMs + static_cast<Nanoseconds>(i + 1) * 10 * kMs);
+  }
+  // Impossible rates change nothing.
+  for (const double bad : {0.0, -5.0, 2000.0, 1000.0}) {  // 1000 Hz: the 1 ms pulse does not fit
+    try {
+      trigger.set_rate(bad);
+      FAIL() << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("trigger sim: "), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(trigger.config().rate_hz, 100.0);
+  EXPECT_EQ(trigger.wait_edge(30 * kMs).edge.timestamp, edges.back().timestamp + 10 * kMs);
+}
+
+TEST(SimTrigger, SetRateWhileCamerasHoldEdgesAheadKeepsEveryEdgeOnce) {
+  // The cameras are told of edges up to their acquire deadline, ahead of the clock, and the
+  // record lags behind it: a change must not renumber, repeat or move any of those edges.
+  Rig rig;  // 50 Hz, no jitter: a frame's timestamp is its edge + 5 ms
+  TriggerRecord record;
+  rig.board.trigger.record_to(&record);
+  std::vector<Nanoseconds> left, right;
+  const auto take = [&](SimCamera& camera, std::vector<Nanoseconds>& times, int frames) {
+    for (int i = 0; i < frames; ++i) {
+      const AcquireResult r = camera.acquire(200 * kMs);
+      ASSERT_EQ(r.status, AcquireStatus::ok);
+      EXPECT_EQ(r.frame.sequence, times.size()) << "every edge once, in order";
+      times.push_back(r.frame.timestamp - 5 * kMs);
+      camera.release(r.frame);
+    }
+  };
+  take(rig.left, left, 4);
+  take(rig.right, right, 2);
+  const Nanoseconds changed_at = rig.board.clock.now();
+  rig.board.trigger.set_rate(20.0);
+  for (int i = 0; i < 21; ++i) {  // in turn, so that neither camera's queue overflows
+    take(rig.left, left, 1);
+    take(rig.right, right, 1);
+  }
+  take(rig.right, right, 2);
+  ASSERT_EQ(left, right) << "both cameras saw the same edges";
+  EXPECT_EQ(rig.left.overruns() + rig.right.overruns(), 0u);
+  std::size_t first_new = 0;
+  for (std::size_t i = 1; i < left.size(); ++i) {
+    const Nanoseconds step = left[i] - left[i - 1];
+    if (first_new == 0 && step != 20 * kMs) first_new = i;
+    EXPECT_EQ(step, first_new == 0 ? 20 * kMs : 50 * kMs) << "edge " << i;
+  }
+  ASSERT_GT(first_new, 4u) << "edges already given to the cameras keep their time";
+  // The anchor is the last edge that existed at the change: ahead of the clock (the cameras were
+  // told of edges up to their deadline), by at most one acquire timeout.
+  EXPECT_GE(left[first_new - 1], changed_at);
+  EXPECT_LE(left[first_new - 1], changed_at + 200 * kMs);
+  for (std::uint32_t s = 0; s < 25; ++s) {
+    const auto edge = record.find(s);
+    ASSERT_TRUE(edge.has_value()) << s;
+    EXPECT_EQ(edge->timestamp, left[s]) << "the record holds the same edges";
+  }
+}
+
 TEST(SimTrigger, BadConfigurationNamesTheLine) {
   VirtualClock clock;
   TriggerConfig config{
@@ -124,6 +208,52 @@ TEST(SimCamera, FreeRunningWithoutATrigger) {
     EXPECT_EQ(r.frame.sequence, i);
     camera.release(r.frame);
   }
+}
+
+TEST(SimCamera, SetExposureScalesTheReplayedBrightness) {
+  VirtualClock clock;
+  CameraConfig config = config_for("solo");
+  config.trigger = TriggerMode::free_running;
+  config.exposure = 4 * kMs;
+  config.gain = 2.0;
+  SimCamera camera(config, std::make_shared<const std::vector<GrayImage>>(make_images(1)), clock);
+  camera.start();
+  // Row y of image 0 is y everywhere: 0..47.
+  const auto row_value = [&](int y) {
+    const AcquireResult r = camera.acquire(100 * kMs);
+    EXPECT_EQ(r.status, AcquireStatus::ok);
+    const int v = r.frame.gray(3, y);
+    camera.release(r.frame);
+    return v;
+  };
+  EXPECT_EQ(row_value(40), 40);
+  camera.set_exposure(8 * kMs, 2.0);  // twice the light
+  EXPECT_EQ(camera.config().exposure, 8 * kMs);
+  EXPECT_EQ(row_value(40), 80);
+  camera.set_exposure(8 * kMs, 6.0);  // six times: 40 * 6 saturates
+  EXPECT_EQ(row_value(40), 240);
+  EXPECT_EQ(row_value(45), 255);
+  camera.set_exposure(2 * kMs, 0.0);  // half, gain automatic (not scaled)
+  EXPECT_EQ(camera.config().gain, 0.0);
+  EXPECT_EQ(row_value(41), 21);
+  for (const auto& [exposure, gain] : {std::pair<Nanoseconds, double>{-1, 1.0},
+                                       {11'000 * kMs, 1.0},
+                                       {kMs, -1.0},
+                                       {kMs, 1e6},
+                                       {kMs, std::numeric_limits<double>::quiet_NaN()}}) {
+    try {
+      camera.set_exposure(exposure, gain);
+      FAIL() << exposure << " " << gain;
+    } catch (const Error& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("camera sim:solo: "), std::string::npos) << m;
+      EXPECT_NE(m.find(exposure < 0 || exposure > kMaxExposure ? "exposure" : "gain"),
+                std::string::npos)
+          << m;
+    }
+  }
+  EXPECT_EQ(camera.config().exposure, 2 * kMs) << "a refused value changes nothing";
+  EXPECT_EQ(row_value(41), 21);
 }
 
 TEST(SimCamera, BadInputNamesDeviceAndSetting) {

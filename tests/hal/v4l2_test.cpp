@@ -3,6 +3,7 @@
 #include <linux/videodev2.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "epipole/core/error.hpp"
@@ -104,6 +105,110 @@ TEST(V4l2Convert, TruncatedBuffersAndBadGeometryAreErrors) {
                Error)
       << "scratch of the wrong size";
   EXPECT_NO_THROW(gray_view(PixelFormat::grey, data.data(), data.size(), 10, 10, 10, {}));
+}
+
+// A UVC camera as `v4l2-ctl -L` lists one: auto_exposure (menu 0..3 offering 1 manual and 3
+// aperture priority), exposure_time_absolute 3..2047, gain 0..255, no automatic gain.
+V4l2ExposureControls uvc_camera() {
+  V4l2ExposureControls c;
+  c.exposure_auto = {true, 0, 3,
+                     (1u << V4L2_EXPOSURE_MANUAL) | (1u << V4L2_EXPOSURE_APERTURE_PRIORITY)};
+  c.exposure_absolute = {true, 3, 2047, 0};
+  c.gain = {true, 0, 255, 0};
+  return c;
+}
+
+std::vector<std::pair<std::uint32_t, std::int32_t>> controls_of(const V4l2ControlPlan& plan) {
+  std::vector<std::pair<std::uint32_t, std::int32_t>> out;
+  for (int i = 0; i < plan.count; ++i) {
+    out.emplace_back(plan.controls[static_cast<std::size_t>(i)].id,
+                     plan.controls[static_cast<std::size_t>(i)].value);
+  }
+  return out;
+}
+
+std::string plan_error(Nanoseconds exposure, double gain, const V4l2ExposureControls& c,
+                       bool starting = false) {
+  try {
+    plan_exposure_controls("/dev/video4", exposure, gain, c, starting);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(V4l2Controls, ManualAndAutomaticExposureAndGain) {
+  using C = std::vector<std::pair<std::uint32_t, std::int32_t>>;
+  const V4l2ExposureControls uvc = uvc_camera();
+  // 4 ms: manual mode first, then 40 x 100 us; gain in the driver's units.
+  EXPECT_EQ(controls_of(plan_exposure_controls("/dev/video4", 4'000'000, 12.4, uvc, false)),
+            (C{{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL},
+               {V4L2_CID_EXPOSURE_ABSOLUTE, 40},
+               {V4L2_CID_GAIN, 12}}));
+  // 0.33 ms rounds to 3 units; automatic exposure on a UVC camera is aperture priority.
+  EXPECT_EQ(controls_of(plan_exposure_controls("/dev/video4", 330'000, 1.0, uvc, false)),
+            (C{{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL},
+               {V4L2_CID_EXPOSURE_ABSOLUTE, 3},
+               {V4L2_CID_GAIN, 1}}));
+  // At start-up, automatic gain on a camera without V4L2_CID_AUTOGAIN leaves the gain alone.
+  EXPECT_EQ(controls_of(plan_exposure_controls("/dev/video4", 0, 0.0, uvc, true)),
+            (C{{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_APERTURE_PRIORITY}}));
+  // A sensor driver: fully automatic mode, automatic gain, no exposure menu.
+  V4l2ExposureControls sensor;
+  sensor.exposure_auto = {true, 0, 1, 0b11};
+  sensor.exposure_absolute = {true, 1, 100'000, 0};
+  sensor.autogain = {true, 0, 1, 0};
+  sensor.gain = {true, 16, 248, 0};
+  EXPECT_EQ(controls_of(plan_exposure_controls("/dev/video0", 0, 0.0, sensor, false)),
+            (C{{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_AUTO}, {V4L2_CID_AUTOGAIN, 1}}));
+  EXPECT_EQ(controls_of(plan_exposure_controls("/dev/video0", 10'000'000, 32.0, sensor, false)),
+            (C{{V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL},
+               {V4L2_CID_EXPOSURE_ABSOLUTE, 100},
+               {V4L2_CID_AUTOGAIN, 0},
+               {V4L2_CID_GAIN, 32}}));
+  sensor.exposure_auto = {};
+  EXPECT_EQ(controls_of(plan_exposure_controls("/dev/video0", 10'000'000, 0.0, sensor, false)),
+            (C{{V4L2_CID_EXPOSURE_ABSOLUTE, 100}, {V4L2_CID_AUTOGAIN, 1}}));
+  EXPECT_STREQ(v4l2_control_name(V4L2_CID_AUTOGAIN), "V4L2_CID_AUTOGAIN");
+}
+
+TEST(V4l2Controls, MissingControlsAndValuesOutOfRangeNameDeviceAndSetting) {
+  const V4l2ExposureControls uvc = uvc_camera();
+  EXPECT_NE(plan_error(0, 0.0, uvc)
+                .find("/dev/video4: automatic gain: the device has no "
+                      "V4L2_CID_AUTOGAIN control"),
+            std::string::npos)
+      << plan_error(0, 0.0, uvc);
+  EXPECT_NE(plan_error(1'000'000'000, 1.0, uvc)
+                .find("/dev/video4: exposure 1000000 us is outside the device's 3..2047 x 100 us"),
+            std::string::npos)
+      << plan_error(1'000'000'000, 1.0, uvc);
+  EXPECT_NE(plan_error(100'000, 1.0, uvc).find("exposure 100 us is outside"), std::string::npos)
+      << "1 unit is below the minimum of 3";
+  EXPECT_NE(plan_error(4'000'000, 300.0, uvc)
+                .find("/dev/video4: gain 300 is outside the device's 0..255"),
+            std::string::npos)
+      << plan_error(4'000'000, 300.0, uvc);
+  V4l2ExposureControls none;
+  EXPECT_NE(plan_error(4'000'000, 0.0, none, true)
+                .find("/dev/video4: exposure 4000 us: the device has no "
+                      "V4L2_CID_EXPOSURE_ABSOLUTE control"),
+            std::string::npos)
+      << plan_error(4'000'000, 0.0, none, true);
+  EXPECT_NE(plan_error(0, 2.0, none, true).find("gain 2: the device has no V4L2_CID_GAIN"),
+            std::string::npos);
+  EXPECT_NE(plan_error(0, 0.0, none)
+                .find("automatic exposure: the device has no "
+                      "V4L2_CID_EXPOSURE_AUTO control"),
+            std::string::npos)
+      << plan_error(0, 0.0, none);
+  EXPECT_EQ(plan_exposure_controls("/dev/video4", 0, 0.0, none, true).count, 0)
+      << "at start-up automatic leaves a device without the controls as it is";
+  V4l2ExposureControls manual_only = uvc;
+  manual_only.exposure_auto.menu = 1u << V4L2_EXPOSURE_MANUAL;
+  EXPECT_NE(plan_error(0, 1.0, manual_only).find("offers no automatic mode"), std::string::npos);
+  manual_only.exposure_auto.menu = 1u << V4L2_EXPOSURE_APERTURE_PRIORITY;
+  EXPECT_NE(plan_error(4'000'000, 1.0, manual_only).find("has no manual mode"), std::string::npos);
 }
 
 TEST(V4l2Camera, MissingDeviceAndNonCameraAreNamed) {

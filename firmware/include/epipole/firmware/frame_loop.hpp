@@ -40,6 +40,13 @@ struct RunSummary {
   StageMask stages = 0;  // the stages enabled at the end
 };
 
+// How the frame loop pairs the board's frames: by trigger sequence, checked against the
+// trigger's edges when the delay from edge to frame is known (the board file's
+// pairing.edge_delay_us, or the simulated board's `sim`); without a trigger (trigger.backend
+// none: free-running cameras) by time alone, the tolerance checked against the cameras' frame
+// period.
+hal::PairingConfig pairing_config(const BoardConfig& config, const hal::SimBoard* sim = nullptr);
+
 // The firmware's frame loop: trigger -> capture pair -> rectify -> corners -> dense stereo ->
 // obstacles -> publish, with health once a second and the robot's commands applied between
 // pairs. Everything it needs is allocated by its constructor (and those of its parts): run()
@@ -63,6 +70,8 @@ class FrameLoop {
   void start();
   void finish();
   void apply_commands();
+  protocol::AckStatus set_trigger_rate(const protocol::SetTriggerRate& command);
+  protocol::AckStatus set_exposure(const protocol::SetExposure& command);
   void publish(const FrameResult& result, hal::Nanoseconds latency);
   void send(const protocol::Message& message);
   FaultCounts faults();

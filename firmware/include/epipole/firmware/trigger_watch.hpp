@@ -25,6 +25,9 @@ class TriggerWatch {
   void start();
   void stop();
 
+  // The line's rate changed (hal::TriggerLine::set_rate): losses are judged by the new period.
+  void set_period(hal::Nanoseconds period) { period_.store(period); }
+
   const hal::TriggerRecord& record() const { return record_; }
   // Times the line went quiet for more than three periods, or reported itself lost.
   std::uint64_t losses() const { return losses_.load(); }
@@ -34,7 +37,7 @@ class TriggerWatch {
 
   hal::TriggerLine& line_;
   hal::SimTrigger* sim_;
-  hal::Nanoseconds period_;
+  std::atomic<hal::Nanoseconds> period_;
   hal::TriggerRecord record_;
   std::atomic<std::uint64_t> losses_{0};
   std::atomic<bool> stopping_{false};

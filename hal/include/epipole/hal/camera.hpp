@@ -50,14 +50,23 @@ struct CameraConfig {
   int height = 480;
   PixelFormat format = PixelFormat::grey;
   double fps = 30.0;         // free-running rate
-  Nanoseconds exposure = 0;  // 0: automatic
-  double gain = 0.0;         // 0: automatic
+  Nanoseconds exposure = 0;  // 0: automatic; at most kMaxExposure
+  // The sensor's gain as a multiplier (1.0: unity, 2.0: +6 dB), as libcamera's AnalogueGain;
+  // 0: automatic; at most kMaxGain. V4L2 defines no unit for its gain control: the v4l2 backend
+  // sends the value rounded, in the driver's own units (docs/hal.md).
+  double gain = 0.0;
   TriggerMode trigger = TriggerMode::free_running;
   int buffer_count = 4;  // the fixed ring of frame buffers
 };
 
+inline constexpr Nanoseconds kMaxExposure = 10'000'000'000;  // 10 s
+inline constexpr double kMaxGain = 1000.0;
+
 // Throws Error naming the device and the setting when a configuration cannot be valid.
 void validate(const CameraConfig& config);
+// The part of validate() that set_exposure() checks: 0 <= exposure <= kMaxExposure,
+// 0 <= gain <= kMaxGain (finite). Throws Error naming the device and the value.
+void validate_exposure(const std::string& device, Nanoseconds exposure, double gain);
 
 // A frame lent by a camera: a zero-copy gray view into one of its buffers, valid until it is
 // released (or the camera is stopped or reopened).
@@ -100,8 +109,15 @@ class CameraSource {
   // Gives a frame's buffer back. Frames of an earlier generation (before a reopen) are ignored.
   virtual void release(const Frame& frame) = 0;
   // Closes and opens the device again and restarts streaming if it was streaming; throws Error
-  // naming the device when it cannot be opened.
+  // naming the device when it cannot be opened. The exposure and gain of config() are applied
+  // again.
   virtual void reopen() = 0;
+  // Changes exposure and gain, streaming or not (0: automatic, as in CameraConfig); config()
+  // holds the new values. Throws Error naming the device and the setting when the camera cannot
+  // take them (a control it lacks, a value outside the range it states); config() then keeps the
+  // old ones. Called from the thread that calls acquire(); the backend's own code does not
+  // allocate (libcamera may, when it queues the request that carries the controls).
+  virtual void set_exposure(Nanoseconds exposure, double gain) = 0;
 };
 
 }  // namespace epipole::hal

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <string>
 
 #include "epipole/hal/clock.hpp"
@@ -16,6 +17,9 @@ class BackendRegistry;
 // name (in config.chip when given, else on every chip). A master drives the line: wait_edge()
 // sleeps on the monotonic clock to the next period, raises the line for pulse_width and reports
 // the edge. A slave requests rising-edge events and reports each with the kernel's timestamp.
+// set_rate() (a master only) may come from another thread while one waits in wait_edge(): the
+// new period is an atomic that wait_edge() reads before each edge, re-anchoring the schedule at
+// the last edge it fired.
 // libgpiod 2.x has a different API; it would be another class behind the same TriggerLine.
 // Built only when the libgpiod 1.x headers and library are found (epipole_hal_gpiod).
 class GpiodTrigger final : public TriggerLine {
@@ -29,6 +33,7 @@ class GpiodTrigger final : public TriggerLine {
   void start() override;
   void stop() override;
   EdgeResult wait_edge(Nanoseconds timeout) override;
+  void set_rate(double rate_hz) override;
 
  private:
   TriggerConfig config_;
@@ -36,8 +41,8 @@ class GpiodTrigger final : public TriggerLine {
   gpiod_line* line_ = nullptr;
   bool requested_ = false;
   MonotonicClock clock_;
-  Nanoseconds period_ = 0;
-  Nanoseconds start_ = 0;
+  std::atomic<Nanoseconds> period_;  // written by set_rate(), read by wait_edge()
+  EdgeSchedule schedule_;            // wait_edge()'s thread only
   std::uint32_t next_ = 0;
 };
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -73,6 +74,41 @@ GrayView gray_view(LibcameraLayout layout, const std::uint8_t* data, std::size_t
 std::size_t select_camera(std::string_view device, std::span<const std::string> ids);
 // "0: <id>, 1: <id>" or "none", for errors.
 std::string list_cameras(std::span<const std::string> ids);
+
+// Exposure and gain: what the camera states about its controls (ControlInfoMap), and the
+// controls that set them (on Camera::start(), or on the next request queued).
+struct LibcameraControlRange {
+  bool present = false;
+  bool bounded = false;  // the camera states min and max
+  double min = 0.0, max = 0.0;
+};
+struct LibcameraExposureLimits {
+  LibcameraControlRange exposure_time;  // ExposureTime, in us
+  LibcameraControlRange analogue_gain;  // AnalogueGain, a multiplier
+  bool ae_enable = false;               // AeEnable (what turns the AE on before libcamera 0.5)
+  bool exposure_time_mode = false;      // ExposureTimeMode (libcamera 0.5 on)
+  bool analogue_gain_mode = false;      // AnalogueGainMode (libcamera 0.5 on)
+};
+// The controls to send; those not set are not sent.
+struct LibcameraExposureControls {
+  std::optional<std::int32_t> exposure_time_us;
+  std::optional<float> analogue_gain;
+  std::optional<bool> ae_enable;
+  std::optional<bool> exposure_time_manual;  // ExposureTimeMode manual (true) or auto (false)
+  std::optional<bool> analogue_gain_manual;  // AnalogueGainMode
+};
+// The controls for an exposure and a gain (0: automatic). A manual value is ExposureTime (us,
+// at least 1) or AnalogueGain, within the range the camera states. With the mode controls
+// (`modes`: libcamera 0.5 on) each value's mode is set manual or auto; before 0.5 AeEnable is
+// off when both are manual and on otherwise (a manual value set then fixes its half). Throws Error
+// naming the device, the camera and the setting for a control the camera lacks or a value
+// outside its range; at start-up (`starting`) automatic on a camera without the control that
+// turns it on leaves the camera as it is.
+LibcameraExposureControls plan_libcamera_exposure(const std::string& device,
+                                                  const std::string& camera_id,
+                                                  Nanoseconds exposure, double gain,
+                                                  const LibcameraExposureLimits& limits, bool modes,
+                                                  bool starting);
 
 // One request libcamera completed, as its completion thread hands it over.
 struct RequestCompletion {
@@ -183,13 +219,13 @@ class LibcameraStream {
 // index (select_camera), acquired, and configured for one stream of the best format
 // (choose_libcamera_format) at the configured size; exposure (ExposureTime), gain (AnalogueGain)
 // and the frame rate (FrameDurationLimits, free running only) are set when the camera has the
-// controls. start() allocates the buffers (FrameBufferAllocator), maps their first planes and
-// queues one request per buffer; completed requests come from libcamera's thread through the
-// LibcameraStream; release() queues the request again. Camera::disconnected makes acquire()
-// report device_lost; reopen() looks the camera up again. libcamera has no external-trigger
-// control: in TriggerMode::external the sensor must be put into trigger mode by its driver
-// (module parameter, device tree or sub-device control) and the frame rate is left to the
-// trigger.
+// controls (set_exposure() changes the first two on the next request queued). start() allocates the
+// buffers (FrameBufferAllocator), maps their first planes and queues one request per buffer;
+// completed requests come from libcamera's thread through the LibcameraStream; release() queues the
+// request again. Camera::disconnected makes acquire() report device_lost; reopen() looks the camera
+// up again. libcamera has no external-trigger control: in TriggerMode::external the sensor must be
+// put into trigger mode by its driver (module parameter, device tree or sub-device control) and the
+// frame rate is left to the trigger.
 class LibcameraCamera final : public CameraSource {
  public:
   explicit LibcameraCamera(CameraConfig config);
@@ -205,6 +241,9 @@ class LibcameraCamera final : public CameraSource {
   AcquireResult acquire(Nanoseconds timeout) override;
   void release(const Frame& frame) override;
   void reopen() override;
+  // The controls of plan_libcamera_exposure(); while streaming they go with the next request
+  // queued, else with Camera::start().
+  void set_exposure(Nanoseconds exposure, double gain) override;
 
   const LibcameraFormat& negotiated_format() const;
   const std::string& camera_id() const;

@@ -51,7 +51,8 @@ struct RecoveryConfig {
 // out, without restarting anything else. While it is recovering, acquire() waits for the next
 // attempt (at most the timeout) and reports device_lost; once reopened, frames flow again. A
 // corrupt frame is counted apart and passed on: the device still streams, so it ends a run of
-// timeouts and never makes it reopen.
+// timeouts and never makes it reopen. set_exposure() goes to the camera, and the last values
+// set are applied again after every reopen.
 class RecoveringCamera final : public CameraSource {
  public:
   RecoveringCamera(CameraSource& camera, Clock& clock, RecoveryConfig config = {});
@@ -63,6 +64,7 @@ class RecoveringCamera final : public CameraSource {
   AcquireResult acquire(Nanoseconds timeout) override;
   void release(const Frame& frame) override { camera_.release(frame); }
   void reopen() override;
+  void set_exposure(Nanoseconds exposure, double gain) override;
 
   const RecoveryCounters& counters() const { return counters_; }
   bool recovering() const { return lost_; }
@@ -78,6 +80,9 @@ class RecoveringCamera final : public CameraSource {
   RecoveryCounters counters_;
   int timeouts_in_a_row_ = 0;
   bool lost_ = false;
+  bool exposure_set_ = false;  // set_exposure() was called: its values outlive a reopen
+  Nanoseconds exposure_ = 0;
+  double gain_ = 0.0;
   std::string last_error_;
 };
 

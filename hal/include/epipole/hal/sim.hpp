@@ -17,7 +17,9 @@ class SimCamera;
 // The simulated board's trigger master: edges every 1/rate_hz on a VirtualClock, from the
 // time of start(). Edges are generated lazily, as the clock passes them: wait_edge() sleeps
 // (jumps) to the next one, and a camera's acquire() asks for all edges up to its deadline. Every
-// edge reaches every connected camera exactly once.
+// edge reaches every connected camera exactly once. set_rate() re-anchors the schedule at the
+// last edge generated (given to a camera, reported or recorded) or passed by the clock: the
+// edges after it come at the new period.
 class SimTrigger final : public TriggerLine {
  public:
   SimTrigger(TriggerConfig config, VirtualClock& clock);
@@ -25,6 +27,7 @@ class SimTrigger final : public TriggerLine {
   void start() override;
   void stop() override;
   EdgeResult wait_edge(Nanoseconds timeout) override;
+  void set_rate(double rate_hz) override;
 
   // Connects a camera (at most 4); it is told of every edge from then on.
   void connect(SimCamera& camera);
@@ -40,7 +43,7 @@ class SimTrigger final : public TriggerLine {
   TriggerConfig config_;
   VirtualClock& clock_;
   Nanoseconds period_;
-  Nanoseconds start_ = 0;
+  EdgeSchedule schedule_;
   bool running_ = false;
   std::uint32_t next_emit_ = 0;    // the next edge to give the cameras
   std::uint32_t next_report_ = 0;  // the next edge wait_edge() reports
@@ -107,6 +110,9 @@ class SimCamera final : public CameraSource {
   AcquireResult acquire(Nanoseconds timeout) override;
   void release(const Frame& frame) override;
   void reopen() override;
+  // Stores them; a frame's brightness is scaled by exposure x gain relative to the configured
+  // values (each where both it and the configured one are not automatic), saturating at 255.
+  void set_exposure(Nanoseconds exposure, double gain) override;
 
   void inject(const SimFault& fault);
   void set_fault_rates(const SimFaultRates& rates) { rates_ = rates; }
@@ -134,6 +140,9 @@ class SimCamera final : public CameraSource {
   void pull_edges(Nanoseconds until);
 
   CameraConfig config_;
+  Nanoseconds configured_exposure_;
+  double configured_gain_;
+  std::uint32_t brightness_q16_ = 1u << 16;  // the scale of the replayed pixels
   std::string name_;
   std::shared_ptr<const std::vector<GrayImage>> images_;
   VirtualClock& clock_;
@@ -162,8 +171,12 @@ class SimCamera final : public CameraSource {
 // The simulated board: a virtual clock, the trigger master and the images of the left and
 // right cameras. The registry's "sim" backends create cameras ("left", "right") on it.
 struct SimBoard {
+  // The trigger at rate_hz, its pulses a quarter period long.
   SimBoard(double rate_hz, std::vector<GrayImage> left_images, std::vector<GrayImage> right_images,
            SimCameraTiming camera_timing = {});
+  // The trigger as configured (the board file's rate and pulse width; a master).
+  SimBoard(TriggerConfig trigger_config, std::vector<GrayImage> left_images,
+           std::vector<GrayImage> right_images, SimCameraTiming camera_timing = {});
   VirtualClock clock;
   SimTrigger trigger;
   std::shared_ptr<const std::vector<GrayImage>> left;

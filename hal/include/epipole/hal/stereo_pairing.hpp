@@ -22,9 +22,13 @@ struct StereoPair {
 struct PairingCounters {
   std::uint64_t pairs = 0;
   std::uint64_t pushed_left = 0, pushed_right = 0;
-  std::uint64_t unpaired_left = 0, unpaired_right = 0;      // the other side never had that trigger
-  std::uint64_t mismatched_left = 0, mismatched_right = 0;  // same sequence, |dt| > tolerance
-  std::uint64_t out_of_order_left = 0, out_of_order_right = 0;  // sequence not increasing
+  // The other side never had that trigger (by time: no frame of the other side was nearest
+  // within the tolerance).
+  std::uint64_t unpaired_left = 0, unpaired_right = 0;
+  // Same sequence, |dt| > tolerance; or the two frames are on different clocks.
+  std::uint64_t mismatched_left = 0, mismatched_right = 0;
+  // The sequence (by time: or the timestamp) did not increase on its side.
+  std::uint64_t out_of_order_left = 0, out_of_order_right = 0;
   // Same sequence and |dt| within the tolerance, but the trigger record has no edge of that
   // sequence at the frames' time (both cameras garbled the sequence the same way).
   std::uint64_t off_trigger_left = 0, off_trigger_right = 0;
@@ -34,9 +38,9 @@ struct PairingCounters {
 
 struct PairingConfig {
   Nanoseconds tolerance = 2'000'000;  // |t_left - t_right| allowed for one trigger
-  // The trigger period, when known: the tolerance (and the edge tolerance) must be below half
-  // of it, so that frames of neighbouring triggers can never pass a timestamp check. 0: not
-  // checked.
+  // The trigger period (free running: the cameras' frame period), when known: the tolerance
+  // (and the edge tolerance) must be below half of it, so that frames of neighbouring triggers
+  // can never pass a timestamp check. 0: not checked.
   Nanoseconds trigger_period = 0;
   // With a trigger record: a pair of sequence s is accepted only when the record holds edge s
   // and both frame timestamps lie within edge_tolerance of (edge s + edge_delay). edge_delay is
@@ -44,14 +48,21 @@ struct PairingConfig {
   // stamps it).
   Nanoseconds edge_delay = 0;
   Nanoseconds edge_tolerance = 2'000'000;
+  // true: frames pair by trigger sequence (one trigger fires both cameras). false: by time
+  // alone, for free-running cameras that count their frames each on its own: a left and a
+  // right frame pair when their timestamps lie within the tolerance, the nearest in time
+  // winning; each frame pairs at most once; older frames left without a partner are dropped
+  // (unpaired); frames on different clocks never pair (mismatched). The pair's number is the
+  // left frame's sequence. No trigger record is used.
+  bool match_sequences = true;
 };
 
-// Pairs left and right frames by trigger sequence. A left and a right frame become a pair only
-// when their sequences are equal AND their timestamps lie within the tolerance AND, when a
-// trigger record is given, the trigger's own edge of that sequence lies where their timestamps
-// say; a frame whose sequence does not increase on its side is refused; a frame for which the
-// other side has moved past its sequence is dropped. Dropped frames go back to their camera at
-// once and are counted. Fixed memory; never allocates.
+// Pairs left and right frames by trigger sequence (or by time alone: match_sequences). A left and a
+// right frame become a pair only when their sequences are equal AND their timestamps lie within the
+// tolerance AND, when a trigger record is given, the trigger's own edge of that sequence lies where
+// their timestamps say; a frame whose sequence does not increase on its side is refused; a frame
+// for which the other side has moved past its sequence is dropped. Dropped frames go back to their
+// camera at once and are counted. Fixed memory; never allocates.
 class StereoPairer {
  public:
   // `trigger`: the edges of the trigger line (optional; it must outlive the pairer). Without it,
@@ -71,6 +82,9 @@ class StereoPairer {
   void reset(Side side);
   // Counts a damaged frame a camera reported (it never reaches the pairer).
   void count_corrupt(Side side);
+  // The trigger's rate changed: the tolerances are checked against the new period as the
+  // constructor checks them. Throws Error (and keeps the old period) when they do not fit.
+  void set_trigger_period(Nanoseconds period);
   std::size_t waiting(Side side) const { return queue(side).size; }
   const PairingCounters& counters() const { return counters_; }
   const PairingConfig& config() const { return config_; }
@@ -82,7 +96,9 @@ class StereoPairer {
     std::size_t head = 0, size = 0;
     bool has_last = false;
     std::uint32_t last = 0;
+    Nanoseconds last_time = 0;
     const Frame& front() const { return frames[head]; }
+    const Frame& second() const { return frames[(head + 1) % kCapacity]; }
   };
   Queue& queue(Side side) { return side == Side::left ? left_q_ : right_q_; }
   const Queue& queue(Side side) const { return side == Side::left ? left_q_ : right_q_; }
@@ -90,6 +106,9 @@ class StereoPairer {
   void drop_front(Side side, std::uint64_t& counter);
   bool on_trigger(const Frame& left, const Frame& right) const;
   void match();
+  void match_by_time();
+  void take_fronts();
+  void check_period(Nanoseconds period) const;
 
   CameraSource& left_;
   CameraSource& right_;

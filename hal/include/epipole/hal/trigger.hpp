@@ -32,6 +32,12 @@ struct TriggerConfig {
 
 // Throws Error naming the line and the setting when the configuration cannot be valid.
 void validate(const TriggerConfig& config);
+// The configuration with another rate, checked as validate() checks it (0 < rate <= 1000 Hz,
+// the pulse width fits the period); a slave line cannot change its rate (the master sets it).
+// Throws Error naming the line and the rate.
+TriggerConfig with_rate(const TriggerConfig& config, double rate_hz);
+// The period of a rate, rounded to the nanosecond.
+Nanoseconds period_of(double rate_hz);
 
 enum class EdgeStatus { ok, timeout, lost };
 
@@ -49,6 +55,41 @@ class TriggerLine {
   virtual void start() = 0;
   virtual void stop() = 0;
   virtual EdgeResult wait_edge(Nanoseconds timeout) = 0;
+  // Changes the rate, running or not: the edges after the last one fired come at the new
+  // period, sequence numbers go on without a gap and times keep increasing; config().rate_hz
+  // holds the new rate. Throws Error naming the line and the rate when the rate is impossible
+  // (with_rate()); nothing changes then. May be called while another thread waits in
+  // wait_edge(); config() belongs to the thread that calls set_rate(). Never allocates.
+  virtual void set_rate(double rate_hz) = 0;
+};
+
+// The edge times of a master line whose rate may change: edge n comes at the time of the
+// period it falls in. A rate change re-anchors the schedule at an edge already fired, so that
+// sequence numbers stay contiguous and times increase. Remembers the last kSegments rates (for
+// edges of an old rate that some reader has not reached yet); fixed memory.
+class EdgeSchedule {
+ public:
+  static constexpr std::size_t kSegments = 8;
+  // Edge 0 at `first_edge`, then one every `period`.
+  void start(Nanoseconds first_edge, Nanoseconds period);
+  // Edges after `anchor` (an edge already fired) come every `period` from its time.
+  void change_period(std::uint32_t anchor, Nanoseconds period);
+  Nanoseconds time(std::uint32_t sequence) const;
+  // The number of edges at or before `t`.
+  std::uint32_t edges_until(Nanoseconds t) const;
+  Nanoseconds period() const { return newest().period; }
+  // The oldest sequence whose time is still known (older rates are forgotten).
+  std::uint32_t oldest() const { return segments_[first_].first; }
+
+ private:
+  struct Segment {
+    std::uint32_t first = 0;  // the sequence of ...
+    Nanoseconds time = 0;     // ... this edge, from which edges come every
+    Nanoseconds period = 1;
+  };
+  const Segment& newest() const { return segments_[(first_ + count_ - 1) % kSegments]; }
+  std::array<Segment, kSegments> segments_{};
+  std::size_t first_ = 0, count_ = 1;
 };
 
 // The recent edges of a trigger line: written by whoever waits on the line (the master's timer,

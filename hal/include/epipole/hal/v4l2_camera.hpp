@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -29,6 +30,39 @@ ClockId timestamp_clock(std::uint32_t buffer_flags);
 AcquireStatus buffer_status(std::uint32_t buffer_flags, std::size_t bytes_used, std::size_t length,
                             std::size_t needed);
 
+// What a device says about one of its controls (VIDIOC_QUERYCTRL; menus: VIDIOC_QUERYMENU).
+struct V4l2ControlInfo {
+  bool present = false;  // offered and not disabled
+  std::int32_t minimum = 0, maximum = 0;
+  std::uint64_t menu = 0;  // a menu control: bit i set when item i is offered
+};
+// The controls exposure and gain are set with.
+struct V4l2ExposureControls {
+  V4l2ControlInfo exposure_auto;      // V4L2_CID_EXPOSURE_AUTO (menu)
+  V4l2ControlInfo exposure_absolute;  // V4L2_CID_EXPOSURE_ABSOLUTE, in 100 us
+  V4l2ControlInfo autogain;           // V4L2_CID_AUTOGAIN (boolean)
+  V4l2ControlInfo gain;               // V4L2_CID_GAIN, in the driver's units
+};
+struct V4l2ControlValue {
+  std::uint32_t id = 0;
+  std::int32_t value = 0;
+};
+struct V4l2ControlPlan {
+  std::array<V4l2ControlValue, 4> controls{};
+  int count = 0;
+};
+// The controls to set, in order, for an exposure and a gain (0: automatic). Manual exposure:
+// V4L2_CID_EXPOSURE_AUTO to manual (when the device has it), then V4L2_CID_EXPOSURE_ABSOLUTE
+// (rounded to 100 us, at least 1); automatic: V4L2_CID_EXPOSURE_AUTO to auto, else aperture
+// priority (UVC cameras offer only that). Manual gain: V4L2_CID_AUTOGAIN off (when the device
+// has it), then V4L2_CID_GAIN (rounded); automatic: V4L2_CID_AUTOGAIN on. Throws Error naming
+// the device and the setting for a control the device lacks or a value outside its range; at
+// start-up (`starting`), automatic on a device without the automatic control leaves it as it is.
+V4l2ControlPlan plan_exposure_controls(const std::string& device, Nanoseconds exposure, double gain,
+                                       const V4l2ExposureControls& controls, bool starting);
+// "V4L2_CID_EXPOSURE_AUTO" and the like, for messages.
+const char* v4l2_control_name(std::uint32_t id);
+
 // --- The backend ---
 
 // A V4L2 capture device (linux/videodev2.h only): single- or multi-planar, mmap streaming,
@@ -49,6 +83,8 @@ class V4l2Camera final : public CameraSource {
   AcquireResult acquire(Nanoseconds timeout) override;
   void release(const Frame& frame) override;
   void reopen() override;
+  // Sets the controls of plan_exposure_controls() (the ones used at start-up) at once.
+  void set_exposure(Nanoseconds exposure, double gain) override;
 
   PixelFormat negotiated_format() const { return format_; }
   bool multiplanar() const { return multiplanar_; }
@@ -60,6 +96,8 @@ class V4l2Camera final : public CameraSource {
   };
   void open_device();
   void negotiate();
+  V4l2ControlInfo query_control(std::uint32_t id) const;
+  void apply_exposure(Nanoseconds exposure, double gain, bool starting);
   void close_device();
   [[noreturn]] void fail(const char* what, int error) const;
 
