@@ -3,10 +3,11 @@
 #include <cstdint>
 #include <span>
 
-namespace epipole::protocol {
+namespace epipole {
 
 // CRC-32 as in Ethernet, zlib and PNG (reflected polynomial 0xEDB88320, initial and final
-// value 0xFFFFFFFF): crc32("123456789") = 0xCBF43926.
+// value 0xFFFFFFFF): crc32("123456789") = 0xCBF43926. Used by the serial protocol's frames and
+// the compiled cascade format.
 std::uint32_t crc32(std::span<const std::uint8_t> bytes);
 
-}  // namespace epipole::protocol
+}  // namespace epipole

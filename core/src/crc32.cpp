@@ -1,8 +1,8 @@
-#include "epipole/firmware/protocol/crc32.hpp"
+#include "epipole/core/crc32.hpp"
 
 #include <array>
 
-namespace epipole::protocol {
+namespace epipole {
 
 namespace {
 constexpr std::array<std::uint32_t, 256> make_table() {
@@ -23,4 +23,4 @@ std::uint32_t crc32(std::span<const std::uint8_t> bytes) {
   return c ^ 0xFFFFFFFFu;
 }
 
-}  // namespace epipole::protocol
+}  // namespace epipole
