@@ -125,12 +125,24 @@ TEST(CascadeModelChecks, InconsistentModelsAreErrors) {
   CascadeData d = good;
   d.leaves.pop_back();
   expect_model_error(d, "leaf count mismatch");
+  // The first node of the first real tree, and the first stump.
+  std::size_t tree = 0;
+  std::size_t stump = 0;
+  for (std::size_t w = 0, first = 0; w < good.node_counts.size(); first += good.node_counts[w++]) {
+    if (good.node_counts[w] > 1 && tree == 0) tree = first + 1;
+    if (good.node_counts[w] == 1 && stump == 0) stump = first + 1;
+  }
+  ASSERT_GT(tree, 0u);
+  ASSERT_GT(stump, 0u);
   d = good;
-  d.nodes[0].left = 5;
+  d.nodes[tree - 1].left = 5;
   expect_model_error(d, "points nowhere");
   d = good;
-  d.nodes[0].right = -1000;
+  d.nodes[tree - 1].right = -1000;
   expect_model_error(d, "points nowhere");
+  d = good;
+  std::swap(d.nodes[stump - 1].left, d.nodes[stump - 1].right);
+  expect_model_error(d, "must have children 0 -1");
   d = good;
   d.nodes[1].feature = static_cast<int>(d.haar_features.size());
   expect_model_error(d, "out of range");

@@ -65,6 +65,10 @@ void check_lbp_feature(const LbpFeature& f, std::size_t index, int width, int he
 void check_tree(std::span<const CascadeNode> nodes, std::size_t weak, std::size_t feature_count,
                 bool lbp, std::string_view source) {
   const int n = static_cast<int>(nodes.size());
+  // OpenCV evaluates stump-based cascades as "left leaf when below the threshold"; a stump
+  // with other children would mean something else there.
+  require(n > 1 || (nodes[0].left == 0 && nodes[0].right == -1), source, ": weak classifier ", weak,
+          ": a single-node tree must have children 0 -1, not ", nodes[0].left, " ", nodes[0].right);
   for (int i = 0; i < n; ++i) {
     const CascadeNode& node = nodes[i];
     for (const int child : {node.left, node.right}) {
