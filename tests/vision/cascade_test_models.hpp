@@ -19,8 +19,8 @@ struct RandomCascadeShape {
   int first_stage_weaks = 3;  // stage s has first_stage_weaks + 2 s weak classifiers
   int max_nodes = 1;          // > 1: trees of 1..max_nodes nodes
   bool tilted = false;        // Haar: about a third of the features tilted
-  // Stage thresholds: the stage sum of a random window passes about this often.
-  double pass_rate = 0.5;
+  // Stage thresholds: a random window passes a stage about this often.
+  double pass_rate = 0.75;
 };
 
 // Leaves with varied exponents (as trained cascades have), thresholds around the values the
@@ -71,15 +71,20 @@ inline vision::CascadeData random_cascade(const RandomCascadeShape& shape, std::
     }
     return feature_count++;
   };
-  // Leaves like 0.83, -0.0061, 1.7e-4: exponents from -13 to 0.
+  // Leaves like 0.83, -0.61 and, one in five, tiny ones like 1.7e-4 (exponents down to -13),
+  // as trained cascades have.
   const auto leaf = [&] {
-    const double magnitude = std::ldexp(uniform(0.5, 1.0), pick(-13, 0));
+    const double magnitude =
+        pick(0, 4) == 0 ? std::ldexp(uniform(0.5, 1.0), pick(-13, -3)) : uniform(0.2, 1.0);
     return static_cast<float>(pick(0, 1) == 0 ? magnitude : -magnitude);
   };
   for (int s = 0; s < shape.stages; ++s) {
     const int weaks = shape.first_stage_weaks + 2 * s;
-    double spread = 0.0;
-    double mean = 0.0;
+    // The stage passes when the leaves it took are at least a fraction q of the way from the
+    // worst to the best sum: about pass_rate of random windows for q = 1 - pass_rate, varied a
+    // little from stage to stage.
+    double worst = 0.0;
+    double range = 0.0;
     for (int k = 0; k < weaks; ++k) {
       const int nodes = pick(1, shape.max_nodes);
       d.node_counts.push_back(nodes);
@@ -93,23 +98,24 @@ inline vision::CascadeData random_cascade(const RandomCascadeShape& shape, std::
         d.nodes.push_back(node);
         if (lbp) {
           for (int word = 0; word < vision::CascadeData::kLbpSubsetWords; ++word) {
-            d.subsets.push_back(static_cast<std::uint32_t>(rng()) &
-                                static_cast<std::uint32_t>(rng()));
+            d.subsets.push_back(static_cast<std::uint32_t>(rng()) ^
+                                static_cast<std::uint32_t>(rng() << 7));
           }
         }
       }
-      double biggest = 0.0;
+      double low = 1e9;
+      double high = -1e9;
       for (int i = 0; i <= nodes; ++i) {
         const float v = leaf();
         d.leaves.push_back(v);
-        mean += static_cast<double>(v) / (nodes + 1);
-        biggest = std::max(biggest, std::abs(static_cast<double>(v)));
+        low = std::min(low, static_cast<double>(v));
+        high = std::max(high, static_cast<double>(v));
       }
-      spread += biggest * biggest;
+      worst += low;
+      range += high - low;
     }
-    // Roughly the pass_rate quantile of a sum of independent leaves.
-    const double z = (0.5 - shape.pass_rate) * 2.5;
-    d.stages.push_back({weaks, static_cast<float>(mean + z * std::sqrt(spread) * 0.6)});
+    const double q = (1.0 - shape.pass_rate) * (0.6 + 0.2 * ((s * 7) % 5));
+    d.stages.push_back({weaks, static_cast<float>(worst + q * range)});
   }
   return d;
 }

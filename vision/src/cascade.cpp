@@ -21,31 +21,17 @@ namespace kernels {
 void integral_row_ref(const std::uint8_t* row, int width, const std::uint32_t* sum_above,
                       const std::uint32_t* square_above, std::uint32_t* sum, std::uint32_t* square,
                       std::uint32_t* prefix) {
-  std::uint32_t s = 0;
-  std::uint32_t q = 0;
   sum[0] = sum_above[0];
   square[0] = square_above[0];
   if (prefix != nullptr) prefix[0] = prefix[1] = 0;
-  for (int x = 0; x < width; ++x) {
-    const std::uint32_t v = row[x];
-    s += v;
-    q += v * v;
-    sum[x + 1] = sum_above[x + 1] + s;
-    square[x + 1] = square_above[x + 1] + q;
-    if (prefix != nullptr) prefix[x + 2] = s;
-  }
+  integral_columns(row, 0, width, sum_above, square_above, sum, square, prefix, 0, 0);
 }
 
 void tilted_row_ref(const std::uint32_t* prefix, int width, const std::uint32_t* left_above,
                     const std::uint32_t* right_above, std::uint32_t* left, std::uint32_t* right,
                     std::uint32_t* tilted) {
   right[0] = 0;
-  for (int x = 0; x <= width; ++x) {
-    left[x] = left_above[x + 1] + prefix[x + 1];
-    right[x + 1] = right_above[x] + prefix[x];
-    tilted[x] = left[x] - right[x + 1];
-  }
-  left[width + 1] = left_above[width + 1] + prefix[width + 1];
+  tilted_columns(prefix, 0, width, left_above, right_above, left, right, tilted);
 }
 
 void resize_columns_ref(const std::uint8_t* row, int source_width, const std::int32_t* offsets,
@@ -144,13 +130,14 @@ struct CascadeDetector::State {
         path(p),
         stride((c.max_width + 1 + kRowSlack + 15) / 16 * 16),
         plane((static_cast<std::ptrdiff_t>(c.max_height) + 2) * stride),
-        program(model, stride, plane, 2 * plane),
+        programs{kernels::CascadeProgram(model, {stride, 0}, plane, 2 * plane),
+                 kernels::CascadeProgram(model, {stride / 2, plane / 2}, plane, 2 * plane)},
         tilted(model.has_tilted_features()),
         level(c.max_width, c.max_height) {
     require(3 * plane < std::numeric_limits<std::int32_t>::max() / 2, "cascade detector size ",
             c.max_width, "x", c.max_height, " is too large");
     windows = kernels::cascade_row_ref;
-    if (program.fixed_point_exact && path != SimdPath::reference) {
+    if (programs[0].fixed_point_exact && path != SimdPath::reference) {
       static constexpr KernelSet<kernels::CascadeRowKernel> kKernels{
           kernels::cascade_row_ref, kernels::cascade_row_neon,
           EPIPOLE_AVX2_KERNEL(kernels::cascade_row_avx2)};
@@ -160,6 +147,7 @@ struct CascadeDetector::State {
     tilted_row = kernels::tilted_row_kernel(path);
     resize_columns = kernels::resize_columns_kernel(path);
     resize_rows = kernels::resize_rows_kernel(path);
+    split_row = path == SimdPath::reference ? kernels::split_row_ref : kernels::split_row_neon;
 
     const auto w = static_cast<std::size_t>(c.max_width);
     const auto h = static_cast<std::size_t>(c.max_height);
@@ -168,6 +156,9 @@ struct CascadeDetector::State {
       prefix = std::make_unique<std::uint32_t[]>(w + 2);
       for (auto& r : tilted_rows) r = std::make_unique<std::uint32_t[]>(w + 2);
     }
+    // Split levels: two rows of sums and squares (by row parity), and one tilted row.
+    for (auto& r : scratch)
+      r = std::make_unique<std::uint32_t[]>(2 * static_cast<std::size_t>(stride));
     column_offsets = std::make_unique<std::int32_t[]>(w);
     column_weights = std::make_unique<std::uint16_t[]>(2 * w);
     row_offsets = std::make_unique<std::int32_t[]>(h);
@@ -197,13 +188,14 @@ struct CascadeDetector::State {
     const auto h = static_cast<std::size_t>(config.max_height);
     const auto hits = static_cast<std::size_t>(config.max_raw_hits);
     return level.size_bytes() + static_cast<std::size_t>((tilted ? 3 : 2) * plane) * 4 +
-           (tilted ? 5 * (w + 2) * 4 : 0) + w * (4 + 4 + 2 * 4 + 4) + h * (4 + 4) +
-           static_cast<std::size_t>(max_levels) * 4 + hits * (2 * sizeof(Detection) + 3 * 4) +
+           (tilted ? 5 * (w + 2) * 4 : 0) + 3 * 2 * static_cast<std::size_t>(stride) * 4 +
+           w * (4 + 4 + 2 * 2 + 4) + h * (4 + 4) + static_cast<std::size_t>(max_levels) * 4 +
+           hits * (2 * sizeof(Detection) + 3 * 4) +
            static_cast<std::size_t>(config.max_detections) * sizeof(Detection);
   }
 
   void resize_level(GrayView image, int width, int height);
-  void integrate(GrayView image);
+  void integrate(GrayView image, bool split);
   void scan(GrayView image);
   void group(int image_width, int image_height);
 
@@ -211,18 +203,20 @@ struct CascadeDetector::State {
   SimdPath path;
   std::ptrdiff_t stride;
   std::ptrdiff_t plane;
-  kernels::CascadeProgram program;
+  kernels::CascadeProgram programs[2];  // levels searched at step 1, and at step 2 (split)
   bool tilted;
   kernels::CascadeRowKernel* windows = nullptr;
   kernels::IntegralRowKernel* integral_row = nullptr;
   kernels::TiltedRowKernel* tilted_row = nullptr;
   kernels::ResizeColumnsKernel* resize_columns = nullptr;
   kernels::ResizeRowsKernel* resize_rows = nullptr;
+  void (*split_row)(const std::uint32_t*, int, std::uint32_t*, std::uint32_t*) = nullptr;
 
   GrayImage level;
   std::unique_ptr<std::uint32_t[]> planes;
   std::unique_ptr<std::uint32_t[]> prefix;
   std::unique_ptr<std::uint32_t[]> tilted_rows[4];
+  std::unique_ptr<std::uint32_t[]> scratch[3];
   std::unique_ptr<std::int32_t[]> column_offsets;
   std::unique_ptr<std::uint16_t[]> column_weights;
   std::unique_ptr<std::int32_t[]> row_offsets;
@@ -274,37 +268,58 @@ void CascadeDetector::State::resize_level(GrayView image, int width, int height)
 }
 
 // The integral images of one level into the planes: row 0 is zero, row Y + 1 holds the sums
-// over image rows 0..Y.
-void CascadeDetector::State::integrate(GrayView image) {
+// over image rows 0..Y. With `split`, rows are computed in the scratch rows and stored with
+// their even and odd columns apart (programs[1]'s layout).
+void CascadeDetector::State::integrate(GrayView image, bool split) {
   const int width = image.width();
-  const auto entries = static_cast<std::size_t>(width + 1) * sizeof(std::uint32_t);
+  const int entries = width + 1;
+  const std::ptrdiff_t row_stride = split ? stride / 2 : stride;
   std::uint32_t* sum = planes.get();
   std::uint32_t* square = sum + plane;
-  std::memset(sum, 0, entries);
-  std::memset(square, 0, entries);
   std::uint32_t* tilted_plane = tilted ? sum + 2 * plane : nullptr;
+  const auto clear = [](std::uint32_t* row, std::size_t n) { std::memset(row, 0, n * 4); };
+  for (std::uint32_t* p : {sum, square, tilted_plane}) {
+    if (p == nullptr) continue;
+    clear(p, static_cast<std::size_t>(entries));
+    if (split) clear(p + plane / 2, static_cast<std::size_t>(entries));
+  }
   if (tilted) {
-    std::memset(tilted_plane, 0, entries);
-    for (int k = 0; k < 2; ++k) {
-      std::memset(tilted_rows[k].get(), 0, (static_cast<std::size_t>(width) + 2) * 4);
-    }
+    for (int k = 0; k < 2; ++k) clear(tilted_rows[k].get(), static_cast<std::size_t>(width) + 2);
+  }
+  if (split) {
+    for (int k = 0; k < 2; ++k) clear(scratch[k].get(), static_cast<std::size_t>(entries));
   }
   for (int y = 0; y < image.height(); ++y) {
-    const std::ptrdiff_t above = y * stride;
-    integral_row(image.row(y), width, sum + above, square + above, sum + above + stride,
-                 square + above + stride, tilted ? prefix.get() : nullptr);
+    const std::ptrdiff_t above = y * row_stride;
+    const std::ptrdiff_t here = above + row_stride;
+    std::uint32_t* prefix_row = tilted ? prefix.get() : nullptr;
+    if (split) {
+      // Scratch rows: sums at 0 / 1 and squares at 2 / 3 by row parity; the tilted row at 4.
+      std::uint32_t* sums_above = scratch[y & 1].get();
+      std::uint32_t* sums = scratch[1 - (y & 1)].get();
+      std::uint32_t* squares_above = sums_above + stride;
+      std::uint32_t* squares = sums + stride;
+      integral_row(image.row(y), width, sums_above, squares_above, sums, squares, prefix_row);
+      split_row(sums, entries, sum + here, sum + plane / 2 + here);
+      split_row(squares, entries, square + here, square + plane / 2 + here);
+    } else {
+      integral_row(image.row(y), width, sum + above, square + above, sum + here, square + here,
+                   prefix_row);
+    }
     if (tilted) {
       const int from = (y & 1) * 2;
       const int to = 2 - from;
+      std::uint32_t* out = split ? scratch[2].get() : tilted_plane + here;
       tilted_row(prefix.get(), width, tilted_rows[from].get(), tilted_rows[from + 1].get(),
-                 tilted_rows[to].get(), tilted_rows[to + 1].get(), tilted_plane + above + stride);
+                 tilted_rows[to].get(), tilted_rows[to + 1].get(), out);
+      if (split) split_row(out, entries, tilted_plane + here, tilted_plane + plane / 2 + here);
     }
   }
 }
 
 void CascadeDetector::State::scan(GrayView image) {
-  const int window_width = program.window_width;
-  const int window_height = program.window_height;
+  const int window_width = programs[0].window_width;
+  const int window_height = programs[0].window_height;
   // The scales: factor 1, scale_factor, scale_factor^2, ... (in double, as OpenCV) while the
   // window fits the image and the maximum size; those below the minimum size are skipped.
   int max_w = config.max_object_width;
@@ -351,10 +366,12 @@ void CascadeDetector::State::scan(GrayView image) {
       resize_level(image, width, height);
       level_view = GrayView(level.view().data(), width, height, level.stride());
     }
-    integrate(level_view);
+    const kernels::CascadeProgram& program = programs[step == 2 ? 1 : 0];
+    integrate(level_view, program.layout.split());
     const int positions = (work_w + step - 1) / step;
     for (int y = 0; y < rows_end; y += step) {
-      const int hits = windows(program, planes.get() + y * stride, positions, step, row_hits.get());
+      const int hits =
+          windows(program, planes.get() + y * program.layout.row_stride, positions, row_hits.get());
       for (int k = 0; k < hits; ++k) {
         if (raw_count == config.max_raw_hits) {
           truncated = true;

@@ -13,12 +13,11 @@ namespace epipole::vision::kernels {
 
 namespace {
 
-HaarTerms haar_terms(const HaarFeature& f, std::ptrdiff_t stride, std::ptrdiff_t tilted_offset) {
+HaarTerms haar_terms(const HaarFeature& f, const IntegralLayout& layout,
+                     std::ptrdiff_t tilted_offset) {
   HaarTerms t;
   t.rect_count = f.rect_count == 3 ? 3 : 2;
-  const auto at = [stride](std::ptrdiff_t x, std::ptrdiff_t y) {
-    return static_cast<std::int32_t>(y * stride + x);
-  };
+  const auto at = [&layout](int x, int y) { return layout.at(x, y); };
   for (int r = 0; r < f.rect_count; ++r) {
     const HaarRect& rect = f.rects[r];
     t.weights[r] = rect.weight;
@@ -39,12 +38,11 @@ HaarTerms haar_terms(const HaarFeature& f, std::ptrdiff_t stride, std::ptrdiff_t
   return t;
 }
 
-LbpTerms lbp_terms(const LbpFeature& f, std::ptrdiff_t stride) {
+LbpTerms lbp_terms(const LbpFeature& f, const IntegralLayout& layout) {
   LbpTerms t;
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) {
-      t.offsets[4 * r + c] =
-          static_cast<std::int32_t>((f.y + r * f.block_height) * stride + f.x + c * f.block_width);
+      t.offsets[4 * r + c] = layout.at(f.x + c * f.block_width, f.y + r * f.block_height);
     }
   }
   return t;
@@ -91,25 +89,26 @@ inline int lbp_code(const LbpTerms& t, const std::uint32_t* w) {
 
 }  // namespace
 
-CascadeProgram::CascadeProgram(const CascadeModel& model, std::ptrdiff_t stride_,
+CascadeProgram::CascadeProgram(const CascadeModel& model, IntegralLayout layout_,
                                std::ptrdiff_t square_offset_, std::ptrdiff_t tilted_offset)
     : type(model.feature_type()),
       window_width(model.window_width()),
       window_height(model.window_height()),
-      stride(stride_),
+      layout(layout_),
+      position_step(layout_.split() ? 2 : 1),
       square_offset(square_offset_),
       stump_based(model.stump_based()) {
   const CascadeData& d = model.data();
   const int w = window_width;
   const int h = window_height;
-  const auto at = [this](int x, int y) { return static_cast<std::int32_t>(y * stride + x); };
+  const auto at = [this](int x, int y) { return layout.at(x, y); };
   norm_offsets[0] = at(1, 1);
   norm_offsets[1] = at(w - 1, 1);
   norm_offsets[2] = at(1, h - 1);
   norm_offsets[3] = at(w - 1, h - 1);
   norm_area = static_cast<double>(w - 2) * (h - 2);
-  for (const HaarFeature& f : d.haar_features) haar.push_back(haar_terms(f, stride, tilted_offset));
-  for (const LbpFeature& f : d.lbp_features) lbp.push_back(lbp_terms(f, stride));
+  for (const HaarFeature& f : d.haar_features) haar.push_back(haar_terms(f, layout, tilted_offset));
+  for (const LbpFeature& f : d.lbp_features) lbp.push_back(lbp_terms(f, layout));
 
   int weak = 0;
   int node = 0;
@@ -172,6 +171,12 @@ CascadeProgram::CascadeProgram(const CascadeModel& model, std::ptrdiff_t stride_
     }
     stage.fixed_threshold = static_cast<std::int64_t>(threshold) - base;
   }
+  // The SIMD kernels compute nf = area * squares - sum^2 exactly in int64 and convert it to
+  // double; OpenCV's double arithmetic is exact too (so the two agree) while these fit 2^52.
+  if (type == CascadeFeatureType::haar &&
+      !(norm_area * 4294967295.0 < 0x1p52 && (255.0 * norm_area) * (255.0 * norm_area) < 0x1p52)) {
+    fixed_point_exact = false;
+  }
   if (!fixed_point_exact) {
     haar_stumps.clear();
     lbp_stumps.clear();
@@ -223,14 +228,18 @@ int evaluate_window_ref(const CascadeProgram& p, const std::uint32_t* window) {
 }
 
 int cascade_row_ref(const CascadeProgram& program, const std::uint32_t* row, int positions,
-                    int step, std::int32_t* hits) {
+                    std::int32_t* hits) {
   int count = 0;
   for (int i = 0; i < positions; ++i) {
-    const int result = evaluate_window_ref(program, row + static_cast<std::ptrdiff_t>(i) * step);
-    if (result > 0) hits[count++] = i * step;
+    const int result = evaluate_window_ref(program, row + i);
+    if (result > 0) hits[count++] = i * program.position_step;
     if (result == 0) ++i;  // rejected by the first stage: the next position is skipped
   }
   return count;
+}
+
+void split_row_ref(const std::uint32_t* row, int count, std::uint32_t* even, std::uint32_t* odd) {
+  for (int x = 0; x < count; ++x) (x % 2 == 0 ? even : odd)[x / 2] = row[x];
 }
 
 }  // namespace epipole::vision::kernels
