@@ -201,7 +201,8 @@ TEST(CascadeXml, BadFilesAreOneLineErrors) {
                "leaf count mismatch");
   expect_error(replaced(haar, "0 -1 1 1.2e-02", "0 -1 1 1.2e-02 7"), "not a multiple of 4");
   expect_error(replaced(haar, "0 -1 1 1.2e-02", "0 -1 9 1.2e-02"), "feature 9 out of range");
-  expect_error(replaced(haar, "0 -1 1 1.2e-02", "0 -5 1 1.2e-02"), "points nowhere");
+  expect_error(replaced(haar, "0 -1 1 1.2e-02", "0 -5 1 1.2e-02"), "must have children 0 -1");
+  expect_error(replaced(haar, "-2 -3 0 1.0e-02", "-2 -9 0 1.0e-02"), "points nowhere");
   expect_error(replaced(haar, "2 1 2 -2.5e-02 0 -1 3", "2 1 2 -2.5e-02 0 1 3"), "points nowhere");
   expect_error(replaced(haar, "0 -1 0 -3.1e-02", "0 -1 0 abc"), "'abc' is not a number");
   expect_error(replaced(haar, "0 -1 0 -3.1e-02", "0.5 -1 0 -3.1e-02"), "not an integer");

@@ -2,6 +2,7 @@
 
 #include "allocation_counter.hpp"
 #include "cascade_test_models.hpp"
+#include "epipole/vision/box_disparity.hpp"
 #include "epipole/vision/cascade.hpp"
 #include "random_image.hpp"
 
@@ -38,6 +39,20 @@ TEST(CascadeAllocations, DetectNeverAllocates) {
       EXPECT_GT(boxes, 0u);
     }
   }
+}
+
+TEST(CascadeAllocations, BoxDisparityNeverAllocates) {
+  Image<std::int16_t> disparity(160, 120);
+  for (int y = 0; y < 120; ++y) {
+    for (int x = 0; x < 160; ++x) disparity(x, y) = static_cast<std::int16_t>((x * 31 + y) % 1000);
+  }
+  BoxDisparity median(64);
+  long sum = 0;
+  test::AllocationCounter counter;
+  for (int i = 0; i < 100; ++i)
+    sum += median.median(disparity.view(), i, i / 2, 40, 30).value_or(0);
+  EXPECT_EQ(counter.count(), 0u);
+  EXPECT_GT(sum, 0);
 }
 
 }  // namespace

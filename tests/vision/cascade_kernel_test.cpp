@@ -197,6 +197,10 @@ struct DetectionCase {
   std::size_t min_hits = 20;  // windows that pass, over both images and all scale factors
 };
 
+void PrintTo(const DetectionCase& c, std::ostream* out) {
+  *out << c.name;
+}
+
 class CascadeDetection : public ::testing::TestWithParam<DetectionCase> {};
 
 // Whole detections: the raw hits and the grouped boxes of every path equal the reference's, on

@@ -187,10 +187,10 @@ struct CascadeDetector::State {
     const auto w = static_cast<std::size_t>(config.max_width);
     const auto h = static_cast<std::size_t>(config.max_height);
     const auto hits = static_cast<std::size_t>(config.max_raw_hits);
-    return level.size_bytes() + static_cast<std::size_t>((tilted ? 3 : 2) * plane) * 4 +
-           (tilted ? 5 * (w + 2) * 4 : 0) + 3 * 2 * static_cast<std::size_t>(stride) * 4 +
-           w * (4 + 4 + 2 * 2 + 4) + h * (4 + 4) + static_cast<std::size_t>(max_levels) * 4 +
-           hits * (2 * sizeof(Detection) + 3 * 4) +
+    return programs[0].bytes() + programs[1].bytes() + level.size_bytes() +
+           static_cast<std::size_t>((tilted ? 3 : 2) * plane) * 4 + (tilted ? 5 * (w + 2) * 4 : 0) +
+           3 * 2 * static_cast<std::size_t>(stride) * 4 + w * (4 + 4 + 2 * 2 + 4) + h * (4 + 4) +
+           static_cast<std::size_t>(max_levels) * 4 + hits * (2 * sizeof(Detection) + 3 * 4) +
            static_cast<std::size_t>(config.max_detections) * sizeof(Detection);
   }
 

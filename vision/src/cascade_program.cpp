@@ -183,6 +183,12 @@ CascadeProgram::CascadeProgram(const CascadeModel& model, IntegralLayout layout_
   }
 }
 
+std::size_t CascadeProgram::bytes() const {
+  const auto size = [](const auto& v) { return v.size() * sizeof(v[0]); };
+  return size(haar) + size(lbp) + size(stages) + size(weak_first_node) + size(weak_first_leaf) +
+         size(nodes) + size(leaves) + size(subsets) + size(haar_stumps) + size(lbp_stumps);
+}
+
 bool variance_factor(const CascadeProgram& p, const std::uint32_t* window, float& factor) {
   const std::int32_t* o = p.norm_offsets;
   const auto sum =

@@ -76,6 +76,8 @@ struct IntegralLayout {
 struct CascadeProgram {
   CascadeProgram(const CascadeModel& model, IntegralLayout layout, std::ptrdiff_t square_offset,
                  std::ptrdiff_t tilted_offset);
+  // The tables' bytes.
+  std::size_t bytes() const;
 
   CascadeFeatureType type;
   int window_width;

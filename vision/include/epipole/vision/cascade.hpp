@@ -26,7 +26,7 @@ struct CascadeConfig {
   int min_object_height = 0;
   int max_object_width = 0;  // larger windows are not searched (0: the image size)
   int max_object_height = 0;
-  int max_raw_hits = 20'000;  // bounds: hits beyond them are dropped and truncated() says so
+  int max_raw_hits = 5'000;  // bounds: hits beyond them are dropped and truncated() says so
   int max_detections = 1'000;
 };
 
@@ -72,6 +72,8 @@ class CascadeDetector {
   // False when the cascade is not stump-based (or its leaves cannot be summed exactly in fixed
   // point): every path then evaluates windows with the reference code.
   bool simd_windows() const;
+  // Everything the constructor allocated: evaluation tables (two layouts), pyramid level,
+  // integral planes, scratch rows, coefficients, hit lists and grouping scratch.
   std::size_t working_set_bytes() const;
 
  private:
