@@ -22,7 +22,7 @@ void integral_row_ref(const std::uint8_t* row, int width, const std::uint32_t* s
                       const std::uint32_t* square_above, std::uint32_t* sum, std::uint32_t* square,
                       std::uint32_t* prefix) {
   sum[0] = sum_above[0];
-  square[0] = square_above[0];
+  if (square != nullptr) square[0] = square_above[0];
   if (prefix != nullptr) prefix[0] = prefix[1] = 0;
   integral_columns(row, 0, width, sum_above, square_above, sum, square, prefix, 0, 0);
 }
@@ -133,6 +133,7 @@ struct CascadeDetector::State {
         programs{kernels::CascadeProgram(model, {stride, 0}, plane, 2 * plane),
                  kernels::CascadeProgram(model, {stride / 2, plane / 2}, plane, 2 * plane)},
         tilted(model.has_tilted_features()),
+        squares(model.feature_type() == CascadeFeatureType::haar),
         level(c.max_width, c.max_height) {
     require(3 * plane < std::numeric_limits<std::int32_t>::max() / 2, "cascade detector size ",
             c.max_width, "x", c.max_height, " is too large");
@@ -151,7 +152,7 @@ struct CascadeDetector::State {
 
     const auto w = static_cast<std::size_t>(c.max_width);
     const auto h = static_cast<std::size_t>(c.max_height);
-    planes = std::make_unique<std::uint32_t[]>(static_cast<std::size_t>((tilted ? 3 : 2) * plane));
+    planes = std::make_unique<std::uint32_t[]>(static_cast<std::size_t>(plane_count() * plane));
     if (tilted) {
       prefix = std::make_unique<std::uint32_t[]>(w + 2);
       for (auto& r : tilted_rows) r = std::make_unique<std::uint32_t[]>(w + 2);
@@ -188,12 +189,14 @@ struct CascadeDetector::State {
     const auto h = static_cast<std::size_t>(config.max_height);
     const auto hits = static_cast<std::size_t>(config.max_raw_hits);
     return programs[0].bytes() + programs[1].bytes() + level.size_bytes() +
-           static_cast<std::size_t>((tilted ? 3 : 2) * plane) * 4 + (tilted ? 5 * (w + 2) * 4 : 0) +
+           static_cast<std::size_t>(plane_count() * plane) * 4 + (tilted ? 5 * (w + 2) * 4 : 0) +
            3 * 2 * static_cast<std::size_t>(stride) * 4 + w * (4 + 4 + 2 * 2 + 4) + h * (4 + 4) +
            static_cast<std::size_t>(max_levels) * 4 + hits * (2 * sizeof(Detection) + 3 * 4) +
            static_cast<std::size_t>(config.max_detections) * sizeof(Detection);
   }
 
+  // Sums, then squares (Haar), then tilted sums (when the cascade has tilted features).
+  std::ptrdiff_t plane_count() const { return tilted ? 3 : squares ? 2 : 1; }
   void resize_level(GrayView image, int width, int height);
   void integrate(GrayView image, bool split);
   void scan(GrayView image);
@@ -205,6 +208,7 @@ struct CascadeDetector::State {
   std::ptrdiff_t plane;
   kernels::CascadeProgram programs[2];  // levels searched at step 1, and at step 2 (split)
   bool tilted;
+  bool squares;  // Haar: the variance normalisation needs the squares' plane
   kernels::CascadeRowKernel* windows = nullptr;
   kernels::IntegralRowKernel* integral_row = nullptr;
   kernels::TiltedRowKernel* tilted_row = nullptr;
@@ -275,7 +279,7 @@ void CascadeDetector::State::integrate(GrayView image, bool split) {
   const int entries = width + 1;
   const std::ptrdiff_t row_stride = split ? stride / 2 : stride;
   std::uint32_t* sum = planes.get();
-  std::uint32_t* square = sum + plane;
+  std::uint32_t* square = squares ? sum + plane : nullptr;
   std::uint32_t* tilted_plane = tilted ? sum + 2 * plane : nullptr;
   const auto clear = [](std::uint32_t* row, std::size_t n) { std::memset(row, 0, n * 4); };
   for (std::uint32_t* p : {sum, square, tilted_plane}) {
@@ -297,14 +301,14 @@ void CascadeDetector::State::integrate(GrayView image, bool split) {
       // Scratch rows: sums at 0 / 1 and squares at 2 / 3 by row parity; the tilted row at 4.
       std::uint32_t* sums_above = scratch[y & 1].get();
       std::uint32_t* sums = scratch[1 - (y & 1)].get();
-      std::uint32_t* squares_above = sums_above + stride;
-      std::uint32_t* squares = sums + stride;
-      integral_row(image.row(y), width, sums_above, squares_above, sums, squares, prefix_row);
+      std::uint32_t* squares_above = squares ? sums_above + stride : nullptr;
+      std::uint32_t* square_row = squares ? sums + stride : nullptr;
+      integral_row(image.row(y), width, sums_above, squares_above, sums, square_row, prefix_row);
       split_row(sums, entries, sum + here, sum + plane / 2 + here);
-      split_row(squares, entries, square + here, square + plane / 2 + here);
+      if (squares) split_row(square_row, entries, square + here, square + plane / 2 + here);
     } else {
-      integral_row(image.row(y), width, sum + above, square + above, sum + here, square + here,
-                   prefix_row);
+      integral_row(image.row(y), width, sum + above, squares ? square + above : nullptr, sum + here,
+                   squares ? square + here : nullptr, prefix_row);
     }
     if (tilted) {
       const int from = (y & 1) * 2;

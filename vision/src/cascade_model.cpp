@@ -275,32 +275,34 @@ CascadeModel CascadeModel::from_binary(std::span<const std::uint8_t> bytes,
   require(bytes.size() - kHeaderSize == payload_length, source, ": ", bytes.size() - kHeaderSize,
           " payload bytes, the header says ", payload_length,
           bytes.size() - kHeaderSize < payload_length ? " (truncated)" : " (trailing bytes)");
+  // From here on every count is bounded by the file's size.
   const std::span<const std::uint8_t> payload_bytes = bytes.subspan(kHeaderSize);
   const std::uint32_t actual_crc = checksum(bytes);
   require(actual_crc == crc, source, ": CRC-32 mismatch (computed 0x", std::hex, actual_crc,
           ", stored 0x", crc, ")");
 
   ByteReader payload(payload_bytes);
-  d.stages.resize(counts.stages);
+  d.stages.resize(static_cast<std::size_t>(counts.stages));
   for (CascadeStage& s : d.stages) {
     s.weak_count = checked_int(payload.u32(), "weak classifier count", source);
     s.threshold = payload.f32();
   }
-  d.node_counts.resize(counts.weaks);
+  d.node_counts.resize(static_cast<std::size_t>(counts.weaks));
   for (int& n : d.node_counts) n = checked_int(payload.u32(), "node count", source);
-  d.nodes.resize(counts.nodes);
+  d.nodes.resize(static_cast<std::size_t>(counts.nodes));
   for (CascadeNode& n : d.nodes) {
     n.left = payload.i32();
     n.right = payload.i32();
     n.feature = checked_int(payload.u32(), "feature index", source);
     n.threshold = payload.f32();
   }
-  d.subsets.resize(counts.lbp ? counts.nodes * CascadeData::kLbpSubsetWords : 0);
+  d.subsets.resize(
+      static_cast<std::size_t>(counts.lbp ? counts.nodes * CascadeData::kLbpSubsetWords : 0));
   for (std::uint32_t& word : d.subsets) word = payload.u32();
-  d.leaves.resize(counts.leaves);
+  d.leaves.resize(static_cast<std::size_t>(counts.leaves));
   for (float& leaf : d.leaves) leaf = payload.f32();
   if (counts.lbp) {
-    d.lbp_features.resize(counts.features);
+    d.lbp_features.resize(static_cast<std::size_t>(counts.features));
     for (LbpFeature& f : d.lbp_features) {
       f.x = payload.i16();
       f.y = payload.i16();
@@ -308,7 +310,7 @@ CascadeModel CascadeModel::from_binary(std::span<const std::uint8_t> bytes,
       f.block_height = payload.i16();
     }
   } else {
-    d.haar_features.resize(counts.features);
+    d.haar_features.resize(static_cast<std::size_t>(counts.features));
     for (HaarFeature& f : d.haar_features) {
       f.rect_count = payload.u8();
       const std::uint8_t tilted = payload.u8();

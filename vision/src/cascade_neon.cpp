@@ -16,7 +16,7 @@ void integral_row_neon(const std::uint8_t* row, int width, const std::uint32_t* 
                        const std::uint32_t* square_above, std::uint32_t* sum, std::uint32_t* square,
                        std::uint32_t* prefix) {
   sum[0] = sum_above[0];
-  square[0] = square_above[0];
+  if (square != nullptr) square[0] = square_above[0];
   if (prefix != nullptr) prefix[0] = prefix[1] = 0;
   std::uint32_t running = 0;
   std::uint32_t running_squares = 0;
@@ -40,6 +40,7 @@ void integral_row_neon(const std::uint8_t* row, int width, const std::uint32_t* 
       vst1q_u32(prefix + x + 2, low);
       vst1q_u32(prefix + x + 6, high);
     }
+    if (square == nullptr) continue;
     // Squares (at most 65025) in 32 bits, 4 lanes at a time.
     const uint16x8_t squares = vmull_u8(pixels, pixels);
     uint32x4_t q0 = vmovl_u16(vget_low_u16(squares));

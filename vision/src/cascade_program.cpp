@@ -153,10 +153,9 @@ CascadeProgram::CascadeProgram(const CascadeModel& model, IntegralLayout layout_
         stump.terms = lbp[nodes[i].feature];
         stump.delta = left_fixed - right_fixed;
         for (int word = 0; word < 8; ++word) {
-          stump.words[word] = subsets[8 * i + word];
           for (int byte = 0; byte < 4; ++byte) {
             stump.subset[4 * word + byte] =
-                static_cast<std::uint8_t>(stump.words[word] >> (8 * byte));
+                static_cast<std::uint8_t>(subsets[8 * i + word] >> (8 * byte));
           }
         }
         lbp_stumps.push_back(stump);
@@ -245,7 +244,12 @@ int cascade_row_ref(const CascadeProgram& program, const std::uint32_t* row, int
 }
 
 void split_row_ref(const std::uint32_t* row, int count, std::uint32_t* even, std::uint32_t* odd) {
-  for (int x = 0; x < count; ++x) (x % 2 == 0 ? even : odd)[x / 2] = row[x];
+  int k = 0;
+  for (; 2 * k + 1 < count; ++k) {
+    even[k] = row[2 * k];
+    odd[k] = row[2 * k + 1];
+  }
+  if (2 * k < count) even[k] = row[2 * k];
 }
 
 }  // namespace epipole::vision::kernels

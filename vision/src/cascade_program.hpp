@@ -56,7 +56,6 @@ struct HaarStump {
 struct LbpStump {
   LbpTerms terms;
   std::uint8_t subset[32] = {};  // bit c & 7 of byte c >> 3: the left leaf for code c
-  std::uint32_t words[8] = {};   // the same bits as OpenCV's words
   std::int64_t delta = 0;
 };
 
@@ -132,7 +131,7 @@ inline void integral_columns(const std::uint8_t* row, int from, int width,
     running += v;
     running_squares += v * v;
     sum[x + 1] = sum_above[x + 1] + running;
-    square[x + 1] = square_above[x + 1] + running_squares;
+    if (square != nullptr) square[x + 1] = square_above[x + 1] + running_squares;
     if (prefix != nullptr) prefix[x + 2] = running;
   }
 }

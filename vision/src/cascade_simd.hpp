@@ -87,7 +87,7 @@ typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const
                                  V::add(bit(top_right, 32), bit(right, 16))),
                           V::add(V::add(bit(bottom_right, 8), bit(bottom, 4)),
                                  V::add(bit(bottom_left, 2), bit(left, 1))));
-    V::acc_add(acc, V::subset_bit(s.subset, s.words, code), s.delta);
+    V::acc_add(acc, V::subset_bit(s.subset, code), s.delta);
   }
   return V::acc_at_least(acc, stage.fixed_threshold);
 }

@@ -79,14 +79,27 @@ struct Avx2Cascade {
     ok = _mm256_set_m128i(pass[1], pass[0]);
   }
 
-  // Bit `code` of a 256-bit subset (eight 32-bit words) for 8 codes in 0..255.
-  static M subset_bit(const std::uint8_t* /*bytes*/, const std::uint32_t* words, I code) {
-    const __m256i word =
-        _mm256_i32gather_epi32(reinterpret_cast<const int*>(words), _mm256_srli_epi32(code, 5), 4);
-    const __m256i bit =
-        _mm256_and_si256(_mm256_srlv_epi32(word, _mm256_and_si256(code, _mm256_set1_epi32(31))),
-                         _mm256_set1_epi32(1));
-    return _mm256_cmpeq_epi32(bit, _mm256_set1_epi32(1));
+  // Bit `code` of a 256-bit subset (32 bytes) for 8 codes in 0..255: byte code >> 3 by two
+  // 16-byte table lookups (pshufb), tested against the bit code & 7 (a third lookup).
+  static M subset_bit(const std::uint8_t* bytes, I code) {
+    const __m256i low_table =
+        _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(bytes)));
+    const __m256i high_table =
+        _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(bytes + 16)));
+    const __m256i bit_table =
+        _mm256_setr_epi8(1, 2, 4, 8, 16, 32, 64, -128, 0, 0, 0, 0, 0, 0, 0, 0, 1, 2, 4, 8, 16, 32,
+                         64, -128, 0, 0, 0, 0, 0, 0, 0, 0);
+    // Indices in the low byte of each lane; the other three bytes 0x80 (pshufb gives 0).
+    const __m256i upper_zero = _mm256_set1_epi32(static_cast<int>(0xFFFFFF00u));
+    const __m256i byte_index = _mm256_srli_epi32(code, 3);
+    const __m256i index =
+        _mm256_or_si256(_mm256_and_si256(byte_index, _mm256_set1_epi32(15)), upper_zero);
+    const __m256i from_high = _mm256_cmpgt_epi32(byte_index, _mm256_set1_epi32(15));
+    const __m256i byte = _mm256_blendv_epi8(_mm256_shuffle_epi8(low_table, index),
+                                            _mm256_shuffle_epi8(high_table, index), from_high);
+    const __m256i bit = _mm256_shuffle_epi8(
+        bit_table, _mm256_or_si256(_mm256_and_si256(code, _mm256_set1_epi32(7)), upper_zero));
+    return _mm256_cmpgt_epi32(_mm256_and_si256(byte, bit), _mm256_setzero_si256());
   }
 
   static Acc acc_zero() { return {_mm256_setzero_si256(), _mm256_setzero_si256()}; }

@@ -76,7 +76,7 @@ struct NeonCascade {
 
   // Bit `code` of a 256-bit subset (32 bytes) for 4 codes in 0..255: byte code >> 3 by table
   // lookup, tested against the bit code & 7 (from a second table).
-  static M subset_bit(const std::uint8_t* subset, const std::uint32_t* /*words*/, I code) {
+  static M subset_bit(const std::uint8_t* subset, I code) {
     static constexpr std::uint8_t kBit[8] = {1, 2, 4, 8, 16, 32, 64, 128};
     const uint8x8x4_t table = {
         {vld1_u8(subset), vld1_u8(subset + 8), vld1_u8(subset + 16), vld1_u8(subset + 24)}};

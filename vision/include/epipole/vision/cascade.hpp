@@ -86,7 +86,8 @@ namespace kernels {
 // One row of the integral images of an 8-bit row of `width` pixels: with P(X) the sum of
 // row[0..X-1], sum[X] = sum_above[X] + P(X) and square[X] = square_above[X] + (sum of squares)
 // for X in [0, width], modulo 2^32 (as OpenCV's CV_32S sums wrap). When `prefix` is not null it
-// receives width + 2 entries: 0, P(0), P(1), ..., P(width) (the tilted kernel's input).
+// receives width + 2 entries: 0, P(0), P(1), ..., P(width) (the tilted kernel's input). With
+// `square` null no squares are summed (LBP cascades need none).
 void integral_row_ref(const std::uint8_t* row, int width, const std::uint32_t* sum_above,
                       const std::uint32_t* square_above, std::uint32_t* sum, std::uint32_t* square,
                       std::uint32_t* prefix);
