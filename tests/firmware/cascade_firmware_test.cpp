@@ -1,15 +1,40 @@
-// The depth of a detection from a disparity map and the sample calibration's Q: the median
-// disparity in the box, through Triangulator::depth, equals f * B / d for the rig.
+// The firmware's side of the cascade: a compiled cascade file loaded with no XML library, and the
+// depth of a detection from a disparity map and the sample calibration's Q (the median disparity
+// in the box, through Triangulator::depth, equals f * B / d for the rig).
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include <fstream>
+
+#include "cascade_test_models.hpp"
+#include "epipole/firmware/cascade_file.hpp"
 #include "epipole/firmware/detection_depth.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "sample_calibration.hpp"
 
 namespace epipole::firmware {
 namespace {
+
+TEST(CascadeFile, LoadsACompiledCascadeAndNamesBadFiles) {
+  const vision::CascadeModel model(test::random_cascade({}, 8), "random");
+  const std::vector<std::uint8_t> bytes = model.to_binary();
+  const std::string file = ::testing::TempDir() + "epipole-firmware-cascade.bin";
+  std::ofstream(file, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()),
+             static_cast<std::streamsize>(bytes.size()));
+  EXPECT_EQ(load_compiled_cascade(file).data(), model.data());
+  std::ofstream(file, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()),
+             static_cast<std::streamsize>(bytes.size() - 1));
+  try {
+    load_compiled_cascade(file);
+    ADD_FAILURE() << "no error for a truncated file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(file + ": "), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(load_compiled_cascade(file + ".missing"), Error);
+}
 
 TEST(DetectionDepth, MedianDisparityInTheBoxToMetres) {
   const calib::StereoCalibration calibration = test::sample_calibration();
