@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <limits>
 
 #include "cascade_program.hpp"
 #include "epipole/core/error.hpp"
@@ -107,7 +106,8 @@ int round_even(float v) {
 // SIMD kernels may read up to this many columns past a level's last window (masked lanes).
 constexpr int kRowSlack = 64;
 
-CascadeConfig checked(const CascadeModel& model, const CascadeConfig& c) {
+CascadeConfig checked(const CascadeConfig& c) {
+  // (At most 16384 keeps every offset into the three integral planes within int32.)
   require(c.max_width >= 1 && c.max_height >= 1 && c.max_width <= 16384 && c.max_height <= 16384,
           "cascade detector size ", c.max_width, "x", c.max_height, " (1 to 16384 allowed)");
   require(std::isfinite(c.scale_factor) && c.scale_factor > 1.0 && c.scale_factor <= 100.0,
@@ -118,7 +118,6 @@ CascadeConfig checked(const CascadeModel& model, const CascadeConfig& c) {
           "cascade object sizes must not be negative");
   require(c.max_raw_hits >= 1 && c.max_detections >= 1, "cascade bounds max_raw_hits ",
           c.max_raw_hits, " and max_detections ", c.max_detections, " must be positive");
-  (void)model;
   return c;
 }
 
@@ -126,7 +125,7 @@ CascadeConfig checked(const CascadeModel& model, const CascadeConfig& c) {
 
 struct CascadeDetector::State {
   State(const CascadeModel& model, const CascadeConfig& c, SimdPath p)
-      : config(checked(model, c)),
+      : config(checked(c)),
         path(p),
         stride((c.max_width + 1 + kRowSlack + 15) / 16 * 16),
         plane((static_cast<std::ptrdiff_t>(c.max_height) + 2) * stride),
@@ -135,8 +134,6 @@ struct CascadeDetector::State {
         tilted(model.has_tilted_features()),
         squares(model.feature_type() == CascadeFeatureType::haar),
         level(c.max_width, c.max_height) {
-    require(3 * plane < std::numeric_limits<std::int32_t>::max() / 2, "cascade detector size ",
-            c.max_width, "x", c.max_height, " is too large");
     windows = kernels::cascade_row_ref;
     if (programs[0].fixed_point_exact && path != SimdPath::reference) {
       static constexpr KernelSet<kernels::CascadeRowKernel> kKernels{
