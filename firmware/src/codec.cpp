@@ -2,9 +2,9 @@
 
 #include <type_traits>
 
+#include "epipole/core/bytes.hpp"
+#include "epipole/core/crc32.hpp"
 #include "epipole/core/error.hpp"
-#include "epipole/firmware/protocol/bytes.hpp"
-#include "epipole/firmware/protocol/crc32.hpp"
 #include "epipole/firmware/protocol/fields.hpp"
 
 namespace epipole::protocol {

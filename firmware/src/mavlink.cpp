@@ -4,8 +4,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "epipole/core/bytes.hpp"
 #include "epipole/core/error.hpp"
-#include "epipole/firmware/protocol/bytes.hpp"
 
 namespace epipole::mavlink {
 
@@ -64,7 +64,7 @@ std::uint16_t crc16_x25(std::span<const std::uint8_t> bytes, std::uint16_t crc) 
 std::size_t encode_heartbeat(const Identity& identity, std::uint8_t sequence,
                              std::span<std::uint8_t> out) {
   std::array<std::uint8_t, 9> payload{};
-  protocol::ByteWriter w(payload);
+  ByteWriter w(payload);
   w.u32(0);                         // custom_mode
   w.u8(kMavTypeOnboardController);  // type
   w.u8(kMavAutopilotInvalid);       // autopilot: not a flight controller
@@ -77,7 +77,7 @@ std::size_t encode_heartbeat(const Identity& identity, std::uint8_t sequence,
 std::size_t encode_obstacle_distance(const ObstacleDistance& m, const Identity& identity,
                                      std::uint8_t sequence, std::span<std::uint8_t> out) {
   std::array<std::uint8_t, 167> payload{};
-  protocol::ByteWriter w(payload);
+  ByteWriter w(payload);
   // Base fields sorted by type size, as MAVLink orders them on the wire; then the extensions
   // in their declared order.
   w.u64(m.time_usec);

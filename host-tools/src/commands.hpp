@@ -17,5 +17,7 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global);
 void add_rectify_command(CLI::App& app, const GlobalOptions& global);
 void add_link_command(CLI::App& app, const GlobalOptions& global);
 void add_sim_command(CLI::App& app, const GlobalOptions& global);
+void add_detect_command(CLI::App& app, const GlobalOptions& global);
+void add_cascade_compile_command(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace epipole::tools

@@ -26,6 +26,8 @@ int main(int argc, char** argv) {
   tools::add_rectify_command(app, global);
   tools::add_link_command(app, global);
   tools::add_sim_command(app, global);
+  tools::add_detect_command(app, global);
+  tools::add_cascade_compile_command(app, global);
 
   try {
     app.parse(argc, argv);

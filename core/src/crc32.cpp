@@ -1,8 +1,8 @@
-#include "epipole/firmware/protocol/crc32.hpp"
+#include "epipole/core/crc32.hpp"
 
 #include <array>
 
-namespace epipole::protocol {
+namespace epipole {
 
 namespace {
 constexpr std::array<std::uint32_t, 256> make_table() {
@@ -17,10 +17,10 @@ constexpr std::array<std::uint32_t, 256> make_table() {
 constexpr std::array<std::uint32_t, 256> kTable = make_table();
 }  // namespace
 
-std::uint32_t crc32(std::span<const std::uint8_t> bytes) {
-  std::uint32_t c = 0xFFFFFFFFu;
+std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t previous) {
+  std::uint32_t c = previous ^ 0xFFFFFFFFu;
   for (const std::uint8_t b : bytes) c = kTable[(c ^ b) & 0xFF] ^ (c >> 8);
   return c ^ 0xFFFFFFFFu;
 }
 
-}  // namespace epipole::protocol
+}  // namespace epipole

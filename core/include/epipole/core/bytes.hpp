@@ -1,10 +1,14 @@
 #pragma once
 
+// Little-endian bytes of untrusted or portable data: the serial protocol, the compiled cascade
+// format.
+
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <span>
 
-namespace epipole::protocol {
+namespace epipole {
 
 // Little-endian writing into a fixed buffer. Writing past the end sets !ok() and writes nothing
 // more; the caller checks ok() once at the end.
@@ -15,7 +19,9 @@ class ByteWriter {
   void u16(std::uint16_t v) { put(v, 2); }
   void u32(std::uint32_t v) { put(v, 4); }
   void u64(std::uint64_t v) { put(v, 8); }
+  void i16(std::int16_t v) { put(static_cast<std::uint16_t>(v), 2); }
   void i32(std::int32_t v) { put(static_cast<std::uint32_t>(v), 4); }
+  void f32(float v) { put(std::bit_cast<std::uint32_t>(v), 4); }
   bool ok() const { return ok_; }
   std::size_t size() const { return size_; }
 
@@ -40,7 +46,9 @@ class ByteReader {
   std::uint16_t u16() { return static_cast<std::uint16_t>(get(2)); }
   std::uint32_t u32() { return static_cast<std::uint32_t>(get(4)); }
   std::uint64_t u64() { return get(8); }
+  std::int16_t i16() { return static_cast<std::int16_t>(static_cast<std::uint16_t>(get(2))); }
   std::int32_t i32() { return static_cast<std::int32_t>(static_cast<std::uint32_t>(get(4))); }
+  float f32() { return std::bit_cast<float>(static_cast<std::uint32_t>(get(4))); }
   bool ok() const { return ok_; }
   std::size_t remaining() const { return in_.size() - position_; }
 
@@ -59,4 +67,4 @@ class ByteReader {
   bool ok_ = true;
 };
 
-}  // namespace epipole::protocol
+}  // namespace epipole

@@ -1,0 +1,255 @@
+// The cascade's evaluation tables and the reference window kernel: OpenCV 4.6's
+// CascadeClassifier arithmetic (HaarEvaluator, LBPEvaluator, predictOrdered(Stump),
+// predictCategorical(Stump)), written out for one window at a time.
+#include "cascade_program.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "epipole/core/error.hpp"
+#include "kernel_set.hpp"
+
+namespace epipole::vision::kernels {
+
+namespace {
+
+HaarTerms haar_terms(const HaarFeature& f, const IntegralLayout& layout,
+                     std::ptrdiff_t tilted_offset) {
+  HaarTerms t;
+  t.rect_count = f.rect_count == 3 ? 3 : 2;
+  const auto at = [&layout](int x, int y) { return layout.at(x, y); };
+  for (int r = 0; r < f.rect_count; ++r) {
+    const HaarRect& rect = f.rects[r];
+    t.weights[r] = rect.weight;
+    std::int32_t* o = t.offsets[r];
+    if (f.tilted) {
+      const auto base = static_cast<std::int32_t>(tilted_offset);
+      o[0] = base + at(rect.x, rect.y);
+      o[1] = base + at(rect.x - rect.height, rect.y + rect.height);
+      o[2] = base + at(rect.x + rect.width, rect.y + rect.width);
+      o[3] = base + at(rect.x + rect.width - rect.height, rect.y + rect.width + rect.height);
+    } else {
+      o[0] = at(rect.x, rect.y);
+      o[1] = at(rect.x + rect.width, rect.y);
+      o[2] = at(rect.x, rect.y + rect.height);
+      o[3] = at(rect.x + rect.width, rect.y + rect.height);
+    }
+  }
+  return t;
+}
+
+LbpTerms lbp_terms(const LbpFeature& f, const IntegralLayout& layout) {
+  LbpTerms t;
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) {
+      t.offsets[4 * r + c] = layout.at(f.x + c * f.block_width, f.y + r * f.block_height);
+    }
+  }
+  return t;
+}
+
+// The smallest shift that makes v * 2^shift an integer (floats carry 24 significant bits).
+int exact_shift(float v) {
+  if (v == 0.0f) return 0;
+  int exponent = 0;
+  std::frexp(v, &exponent);
+  return 24 - exponent;
+}
+
+inline std::int32_t corner_sum(const std::uint32_t* w, const std::int32_t* o) {
+  return static_cast<std::int32_t>(w[o[0]] - w[o[1]] - w[o[2]] + w[o[3]]);
+}
+
+inline float haar_value(const HaarTerms& t, const std::uint32_t* w) {
+  float v = t.weights[0] * static_cast<float>(corner_sum(w, t.offsets[0])) +
+            t.weights[1] * static_cast<float>(corner_sum(w, t.offsets[1]));
+  if (t.rect_count == 3) v += t.weights[2] * static_cast<float>(corner_sum(w, t.offsets[2]));
+  return v;
+}
+
+inline std::int32_t block(const std::uint32_t* w, const std::int32_t* o, int a, int b, int c,
+                          int d) {
+  return static_cast<std::int32_t>(w[o[a]] - w[o[b]] - w[o[c]] + w[o[d]]);
+}
+
+// The 8-bit LBP code: each of the 8 outer blocks compared with the centre, clockwise from the
+// top-left (bit 7) to the middle-left (bit 0).
+inline int lbp_code(const LbpTerms& t, const std::uint32_t* w) {
+  const std::int32_t* o = t.offsets;
+  const std::int32_t centre = block(w, o, 5, 6, 9, 10);
+  return (block(w, o, 0, 1, 4, 5) >= centre ? 128 : 0) |
+         (block(w, o, 1, 2, 5, 6) >= centre ? 64 : 0) |
+         (block(w, o, 2, 3, 6, 7) >= centre ? 32 : 0) |
+         (block(w, o, 6, 7, 10, 11) >= centre ? 16 : 0) |
+         (block(w, o, 10, 11, 14, 15) >= centre ? 8 : 0) |
+         (block(w, o, 9, 10, 13, 14) >= centre ? 4 : 0) |
+         (block(w, o, 8, 9, 12, 13) >= centre ? 2 : 0) |
+         (block(w, o, 4, 5, 8, 9) >= centre ? 1 : 0);
+}
+
+}  // namespace
+
+CascadeProgram::CascadeProgram(const CascadeModel& model, IntegralLayout layout_,
+                               std::ptrdiff_t square_offset_, std::ptrdiff_t tilted_offset)
+    : type(model.feature_type()),
+      window_width(model.window_width()),
+      window_height(model.window_height()),
+      layout(layout_),
+      position_step(layout_.split() ? 2 : 1),
+      square_offset(square_offset_),
+      stump_based(model.stump_based()) {
+  const CascadeData& d = model.data();
+  const int w = window_width;
+  const int h = window_height;
+  const auto at = [this](int x, int y) { return layout.at(x, y); };
+  norm_offsets[0] = at(1, 1);
+  norm_offsets[1] = at(w - 1, 1);
+  norm_offsets[2] = at(1, h - 1);
+  norm_offsets[3] = at(w - 1, h - 1);
+  norm_area = static_cast<double>(w - 2) * (h - 2);
+  for (const HaarFeature& f : d.haar_features) haar.push_back(haar_terms(f, layout, tilted_offset));
+  for (const LbpFeature& f : d.lbp_features) lbp.push_back(lbp_terms(f, layout));
+
+  int weak = 0;
+  int node = 0;
+  int leaf = 0;
+  for (const CascadeStage& s : d.stages) {
+    stages.push_back({weak, s.weak_count, s.threshold, 0});
+    for (int k = 0; k < s.weak_count; ++k, ++weak) {
+      weak_first_node.push_back(node);
+      weak_first_leaf.push_back(leaf);
+      node += d.node_counts[weak];
+      leaf += d.node_counts[weak] + 1;
+    }
+  }
+  for (const CascadeNode& n : d.nodes) nodes.push_back({n.feature, n.threshold, n.left, n.right});
+  leaves = d.leaves;
+  subsets = d.subsets;
+
+  // Fixed point for the SIMD kernels (stumps only).
+  if (!stump_based) return;
+  for (const float v : leaves) fixed_shift = std::max(fixed_shift, exact_shift(v));
+  fixed_point_exact = true;
+  for (ProgramStage& stage : stages) {
+    double magnitude = 0.0;
+    std::int64_t base = 0;
+    for (int k = 0; k < stage.weak_count; ++k) {
+      const int i = stage.first_weak + k;
+      const double left = std::ldexp(static_cast<double>(leaves[2 * i]), fixed_shift);
+      const double right = std::ldexp(static_cast<double>(leaves[2 * i + 1]), fixed_shift);
+      magnitude += std::max(std::abs(left), std::abs(right));
+      if (!(magnitude < 0x1p52)) {
+        fixed_point_exact = false;
+        continue;
+      }
+      const auto left_fixed = static_cast<std::int64_t>(left);
+      const auto right_fixed = static_cast<std::int64_t>(right);
+      base += right_fixed;
+      if (type == CascadeFeatureType::haar) {
+        haar_stumps.push_back(
+            {haar[nodes[i].feature], nodes[i].threshold, left_fixed - right_fixed});
+      } else {
+        LbpStump stump;
+        stump.terms = lbp[nodes[i].feature];
+        stump.delta = left_fixed - right_fixed;
+        for (int word = 0; word < 8; ++word) {
+          for (int byte = 0; byte < 4; ++byte) {
+            stump.subset[4 * word + byte] =
+                static_cast<std::uint8_t>(subsets[8 * i + word] >> (8 * byte));
+          }
+        }
+        lbp_stumps.push_back(stump);
+      }
+    }
+    // sum < T  <=>  base + selected < ceil(T * 2^shift) for integer sums.
+    const double threshold =
+        std::ceil(std::ldexp(static_cast<double>(stage.threshold), fixed_shift));
+    if (!(std::abs(threshold) < 0x1p62)) {
+      fixed_point_exact = false;
+      continue;
+    }
+    stage.fixed_threshold = static_cast<std::int64_t>(threshold) - base;
+  }
+  // The SIMD kernels compute nf = area * squares - sum^2 exactly in int64 and convert it to
+  // double; OpenCV's double arithmetic is exact too (so the two agree) while these fit 2^52.
+  if (type == CascadeFeatureType::haar &&
+      !(norm_area * 4294967295.0 < 0x1p52 && (255.0 * norm_area) * (255.0 * norm_area) < 0x1p52)) {
+    fixed_point_exact = false;
+  }
+  if (!fixed_point_exact) {
+    haar_stumps.clear();
+    lbp_stumps.clear();
+  }
+}
+
+std::size_t CascadeProgram::bytes() const {
+  const auto size = [](const auto& v) { return v.size() * sizeof(v[0]); };
+  return size(haar) + size(lbp) + size(stages) + size(weak_first_node) + size(weak_first_leaf) +
+         size(nodes) + size(leaves) + size(subsets) + size(haar_stumps) + size(lbp_stumps);
+}
+
+bool variance_factor(const CascadeProgram& p, const std::uint32_t* window, float& factor) {
+  const std::int32_t* o = p.norm_offsets;
+  const auto sum =
+      static_cast<std::int32_t>(window[o[0]] - window[o[1]] - window[o[2]] + window[o[3]]);
+  const std::uint32_t* squares = window + p.square_offset;
+  const std::uint32_t square_sum = squares[o[0]] - squares[o[1]] - squares[o[2]] + squares[o[3]];
+  const double nf = p.norm_area * static_cast<double>(square_sum) -
+                    static_cast<double>(sum) * static_cast<double>(sum);
+  if (!(nf > 0.0)) return false;
+  factor = static_cast<float>(1.0 / std::sqrt(nf));
+  return p.norm_area * static_cast<double>(factor) < 0.1;
+}
+
+int evaluate_window_ref(const CascadeProgram& p, const std::uint32_t* window) {
+  const bool lbp = p.type == CascadeFeatureType::lbp;
+  float factor = 1.0f;
+  if (!lbp && !variance_factor(p, window, factor)) return -1;
+  const int stage_count = static_cast<int>(p.stages.size());
+  for (int s = 0; s < stage_count; ++s) {
+    const ProgramStage& stage = p.stages[s];
+    double sum = 0.0;
+    for (int k = 0; k < stage.weak_count; ++k) {
+      const int weak = stage.first_weak + k;
+      const int root = p.weak_first_node[weak];
+      int index = 0;
+      do {
+        const ProgramNode& node = p.nodes[root + index];
+        bool left = false;
+        if (lbp) {
+          const int code = lbp_code(p.lbp[node.feature], window);
+          const std::uint32_t* subset = &p.subsets[8 * static_cast<std::size_t>(root + index)];
+          left = (subset[code >> 5] & (1u << (code & 31))) != 0;
+        } else {
+          left = haar_value(p.haar[node.feature], window) * factor < node.threshold;
+        }
+        index = left ? node.left : node.right;
+      } while (index > 0);
+      sum += static_cast<double>(p.leaves[p.weak_first_leaf[weak] - index]);
+    }
+    if (sum < static_cast<double>(stage.threshold)) return -s;
+  }
+  return 1;
+}
+
+int cascade_row_ref(const CascadeProgram& program, const std::uint32_t* row, int positions,
+                    std::int32_t* hits) {
+  int count = 0;
+  for (int i = 0; i < positions; ++i) {
+    const int result = evaluate_window_ref(program, row + i);
+    if (result > 0) hits[count++] = i * program.position_step;
+    if (result == 0) ++i;  // rejected by the first stage: the next position is skipped
+  }
+  return count;
+}
+
+void split_row_ref(const std::uint32_t* row, int count, std::uint32_t* even, std::uint32_t* odd) {
+  int k = 0;
+  for (; 2 * k + 1 < count; ++k) {
+    even[k] = row[2 * k];
+    odd[k] = row[2 * k + 1];
+  }
+  if (2 * k < count) even[k] = row[2 * k];
+}
+
+}  // namespace epipole::vision::kernels

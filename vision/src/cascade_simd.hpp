@@ -1,0 +1,151 @@
+#pragma once
+
+// The cascade window kernel, written once over a small vector vocabulary (simd/neon_cascade.hpp:
+// 4 lanes, simd/avx2_cascade.hpp: 8 lanes). Lanes are neighbouring window positions of one row
+// of one level (consecutive entries of its integral layout), so every corner of every feature is
+// one vector load. Per
+// group of lanes: the variance normalisation, then the stages; the group stops at the first
+// stage that rejects all its lanes. OpenCV's rule "a window rejected by the first stage skips
+// the next position" is applied after the first stage, lane by lane in order, so the same
+// windows are evaluated as in cascade_row_ref.
+//
+// Arithmetic is the reference's: the same float operations in the same order for Haar feature
+// values (cascade_simd files are compiled with -ffp-contract=off), the same integer LBP codes,
+// and stage sums in int64 fixed point, which equal the reference's double sums exactly (see
+// CascadeProgram::fixed_point_exact; the detector uses this kernel only then).
+#include <algorithm>
+#include <cstdint>
+
+#include "cascade_program.hpp"
+
+namespace epipole::vision::kernels {
+
+template <typename V>
+typename V::I corner_sum(const std::uint32_t* w, const std::int32_t* o) {
+  return V::add(V::sub(V::sub(V::load(w + o[0]), V::load(w + o[1])), V::load(w + o[2])),
+                V::load(w + o[3]));
+}
+
+template <typename V>
+typename V::M haar_stage(const ProgramStage& stage, const HaarStump* stumps, const std::uint32_t* w,
+                         typename V::F factor) {
+  typename V::Acc acc = V::acc_zero();
+  for (int k = 0; k < stage.weak_count; ++k) {
+    const HaarStump& s = stumps[k];
+    const HaarTerms& t = s.terms;
+    typename V::F value =
+        V::add(V::mul(V::splat(t.weights[0]), V::to_float(corner_sum<V>(w, t.offsets[0]))),
+               V::mul(V::splat(t.weights[1]), V::to_float(corner_sum<V>(w, t.offsets[1]))));
+    if (t.rect_count == 3) {
+      value = V::add(value,
+                     V::mul(V::splat(t.weights[2]), V::to_float(corner_sum<V>(w, t.offsets[2]))));
+    }
+    V::acc_add(acc, V::less(V::mul(value, factor), V::splat(s.threshold)), s.delta);
+  }
+  return V::acc_at_least(acc, stage.fixed_threshold);
+}
+
+// LBP stumps. The 4 x 4 corners are read row by row: horizontal differences of each corner row,
+// then each band of three blocks as the difference of two rows' differences (the same integer
+// sums as OpenCV's p0 - p1 - p2 + p3), so few vectors are live at a time.
+template <typename V>
+typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const std::uint32_t* w) {
+  using I = typename V::I;
+  typename V::Acc acc = V::acc_zero();
+  for (int k = 0; k < stage.weak_count; ++k) {
+    const LbpStump& s = stumps[k];
+    const std::int32_t* o = s.terms.offsets;
+    I above[3];
+    I below[3];
+    const auto differences = [&](int r, I* d) {
+      const I c0 = V::load(w + o[4 * r]);
+      const I c1 = V::load(w + o[4 * r + 1]);
+      const I c2 = V::load(w + o[4 * r + 2]);
+      const I c3 = V::load(w + o[4 * r + 3]);
+      d[0] = V::sub(c0, c1);
+      d[1] = V::sub(c1, c2);
+      d[2] = V::sub(c2, c3);
+    };
+    differences(0, above);
+    differences(1, below);
+    const I top_left = V::sub(above[0], below[0]);
+    const I top = V::sub(above[1], below[1]);
+    const I top_right = V::sub(above[2], below[2]);
+    differences(2, above);
+    const I left = V::sub(below[0], above[0]);
+    const I centre = V::sub(below[1], above[1]);
+    const I right = V::sub(below[2], above[2]);
+    differences(3, below);
+    const I bottom_left = V::sub(above[0], below[0]);
+    const I bottom = V::sub(above[1], below[1]);
+    const I bottom_right = V::sub(above[2], below[2]);
+    // Clockwise from the top-left block (bit 7) to the middle-left one (bit 0).
+    const auto bit = [&centre](I block, int weight) {
+      return V::mask_to(V::greater_equal(block, centre), weight);
+    };
+    const I code = V::add(V::add(V::add(bit(top_left, 128), bit(top, 64)),
+                                 V::add(bit(top_right, 32), bit(right, 16))),
+                          V::add(V::add(bit(bottom_right, 8), bit(bottom, 4)),
+                                 V::add(bit(bottom_left, 2), bit(left, 1))));
+    V::acc_add(acc, V::subset_bit(s.subset, code), s.delta);
+  }
+  return V::acc_at_least(acc, stage.fixed_threshold);
+}
+
+template <typename V>
+int cascade_row_simd(const CascadeProgram& p, const std::uint32_t* row, int positions,
+                     std::int32_t* hits) {
+  constexpr int kLanes = V::kLanes;
+  const bool lbp = p.type == CascadeFeatureType::lbp;
+  const int stage_count = static_cast<int>(p.stages.size());
+  int count = 0;
+  bool skip = false;  // the previous position was rejected by the first stage
+  for (int first = 0; first < positions; first += kLanes) {
+    const std::uint32_t* w = row + first;
+    const int lanes = std::min(kLanes, positions - first);
+    typename V::F factor = V::splat(1.0f);
+    unsigned ok = (1u << lanes) - 1;
+    if (!lbp) {
+      typename V::M variance_ok;
+      V::variance(corner_sum<V>(w, p.norm_offsets),
+                  corner_sum<V>(w + p.square_offset, p.norm_offsets), p.norm_area, factor,
+                  variance_ok);
+      ok &= V::bits(variance_ok);
+    }
+    const auto run_stage = [&](int s) {
+      const ProgramStage& st = p.stages[s];
+      const auto first_stump = static_cast<std::size_t>(st.first_weak);
+      return lbp ? V::bits(lbp_stage<V>(st, &p.lbp_stumps[first_stump], w))
+                 : V::bits(haar_stage<V>(st, &p.haar_stumps[first_stump], w, factor));
+    };
+    unsigned alive = 0;
+    if (ok != 0) {
+      const unsigned pass = run_stage(0);
+      // OpenCV's order: an evaluated window that the first stage rejects skips the next one.
+      for (int l = 0; l < lanes; ++l) {
+        const unsigned bit = 1u << l;
+        if (skip) {
+          skip = false;
+          continue;
+        }
+        if ((ok & bit) == 0) continue;  // variance too low: -1, no skip
+        if ((pass & bit) == 0) {
+          skip = true;
+        } else {
+          alive |= bit;
+        }
+      }
+    } else {
+      skip = false;
+    }
+    for (int stage = 1; alive != 0 && stage < stage_count; ++stage) {
+      alive &= run_stage(stage);
+    }
+    for (int l = 0; alive != 0; ++l, alive >>= 1) {
+      if ((alive & 1u) != 0) hits[count++] = (first + l) * p.position_step;
+    }
+  }
+  return count;
+}
+
+}  // namespace epipole::vision::kernels
