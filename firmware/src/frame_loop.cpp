@@ -237,7 +237,27 @@ void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency) {
   s.corners_right = saturate<std::uint16_t>(r.corners_right.size());
   s.valid_disparity_permille = static_cast<std::uint16_t>(r.valid_disparity_permille);
   s.points = static_cast<std::uint16_t>(r.best_points.size());
+  s.detections = static_cast<std::uint8_t>(r.detections.size());
   send(s);
+  if ((r.stages & stage_bit(Stage::detect)) != 0) {
+    protocol::Detections d;
+    d.frame = r.frame;
+    d.count = static_cast<std::uint8_t>(r.detections.size());
+    for (std::size_t i = 0; i < r.detections.size(); ++i) {
+      const vision::Detection& box = r.detections[i];
+      const DetectionDepth& depth = r.detection_depths[i];
+      protocol::Detection& out = d.items[i];
+      out.x = static_cast<std::uint16_t>(box.x);
+      out.y = static_cast<std::uint16_t>(box.y);
+      out.width = static_cast<std::uint16_t>(box.width);
+      out.height = static_cast<std::uint16_t>(box.height);
+      out.neighbors = saturate<std::uint8_t>(static_cast<std::uint64_t>(box.neighbors));
+      out.depth_mm = depth.valid && depth.depth > 0 && depth.depth < 65.5
+                         ? static_cast<std::uint16_t>(std::lround(depth.depth * 1000))
+                         : protocol::kUnknownDepth;
+    }
+    send(d);
+  }
   if (r.obstacles != nullptr) send(*r.obstacles);
   if (!r.best_points.empty()) {
     protocol::Points points;

@@ -5,6 +5,7 @@
 #include <variant>
 
 #include "epipole/core/error.hpp"
+#include "epipole/firmware/cascade_file.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"
 #include "epipole/vision/fast.hpp"
 #include "epipole/vision/harris.hpp"
@@ -99,8 +100,38 @@ struct Pipeline::Stages {
   }
 };
 
+namespace {
+
+vision::CascadeModel board_cascade(const BoardConfig& board) {
+  const std::filesystem::path& file = board.detector.cascade;
+  if (file.extension() == ".xml") {
+    throw Error(cat("detector.cascade: ", file.string(),
+                    " is OpenCV's cascade XML; the firmware reads compiled cascades: run "
+                    "`epipole cascade-compile ",
+                    file.string(), " ",
+                    std::filesystem::path(file).replace_extension(".bin").string(),
+                    "` and name the .bin"));
+  }
+  return load_compiled_cascade(file);
+}
+
+vision::CascadeConfig cascade_config(const BoardConfig& board) {
+  vision::CascadeConfig c;
+  c.max_width = board.width();
+  c.max_height = board.height();
+  c.scale_factor = board.detector.scale_factor;
+  c.min_neighbors = board.detector.min_neighbors;
+  c.min_object_width = c.min_object_height = board.detector.min_size;
+  c.max_object_width = c.max_object_height = board.detector.max_size;
+  c.max_detections = protocol::kMaxDetections;
+  return c;
+}
+
+}  // namespace
+
 Pipeline::Pipeline(const BoardConfig& board,
-                   const std::optional<calib::StereoCalibration>& calibration, SimdPath path)
+                   const std::optional<calib::StereoCalibration>& calibration, SimdPath path,
+                   const vision::CascadeModel* cascade)
     : stages_(std::make_unique<Stages>(board, path)),
       calibration_health_(board.sparse.max_matches) {
   available_ = stage_bit(Stage::capture) | stage_bit(Stage::publish) | stage_bit(Stage::corners) |
@@ -137,6 +168,17 @@ Pipeline::Pipeline(const BoardConfig& board,
     const auto& P1 = calibration->left.projection;
     obstacles_ = std::make_unique<ObstacleSectors>(o, *triangulator_, P1(0, 0), P1(0, 2));
   }
+  // The detector, when the board has a cascade (or one is given) and detection is on.
+  if (cascade != nullptr || (board.stages.detect && !board.detector.cascade.empty())) {
+    const vision::CascadeModel model = cascade != nullptr ? *cascade : board_cascade(board);
+    detector_ = std::make_unique<vision::CascadeDetector>(model, cascade_config(board), path);
+    depths_.resize(static_cast<std::size_t>(protocol::kMaxDetections));
+    if (triangulator_) {
+      depth_estimator_ =
+          std::make_unique<DetectionDepthEstimator>(*triangulator_, stereo.max_disparity);
+    }
+    available_ |= stage_bit(Stage::detect);
+  }
 }
 
 Pipeline::~Pipeline() = default;
@@ -153,6 +195,7 @@ std::size_t Pipeline::working_set_bytes() const {
          stages_->rectifiers->right.working_set_bytes();
   }
   if (obstacles_) n += obstacles_->working_set_bytes();
+  if (detector_) n += detector_->working_set_bytes() + depths_.size() * sizeof(DetectionDepth);
   return n;
 }
 
@@ -175,6 +218,8 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   r.points = {};
   r.best_points = {};
   r.calibration_health.reset();
+  r.detections = {};
+  r.detection_depths = {};
 
   hal::Nanoseconds t = steady_now();
   const auto lap = [&](Stage s) {
@@ -231,6 +276,16 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
           calibration_health_.measure({rectified_matches_.data(), r.matches.size()});
     }
     lap(Stage::sparse);
+  }
+  if (on(Stage::detect)) {
+    r.detections = detector_->detect(r.left);
+    for (std::size_t i = 0; i < r.detections.size(); ++i) {
+      depths_[i] = depth_estimator_ && !r.disparity.empty()
+                       ? depth_estimator_->estimate(r.detections[i], r.disparity)
+                       : DetectionDepth{};
+    }
+    r.detection_depths = {depths_.data(), r.detections.size()};
+    lap(Stage::detect);
   }
   return r;
 }

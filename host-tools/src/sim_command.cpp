@@ -4,6 +4,7 @@
 // summary.
 #include <algorithm>
 #include <atomic>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -21,6 +22,7 @@
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/hal/serial_port.hpp"
+#include "epipole/tools/cascade_xml.hpp"
 #include "message_json.hpp"
 #include "pictures.hpp"
 #include "stereo_preview.hpp"
@@ -92,6 +94,29 @@ class LinkRecorder {
   std::thread thread_;
 };
 
+// The rectified left image with each detection's box and, when known, its distance.
+RgbImage detections_picture(const firmware::FrameResult& r) {
+  RgbImage picture(r.left.width(), r.left.height());
+  gray_to_rgb(r.left, picture.view());
+  const Rgb8 green{0, 255, 0};
+  for (std::size_t i = 0; i < r.detections.size(); ++i) {
+    const vision::Detection& d = r.detections[i];
+    for (int t = 0; t < 2; ++t) {
+      draw_rectangle(picture.view(), d.x - t, d.y - t, d.width + 2 * t, d.height + 2 * t, green);
+    }
+    const firmware::DetectionDepth& depth = r.detection_depths[i];
+    char label[32];
+    if (depth.valid) {
+      std::snprintf(label, sizeof label, "%.2fm", depth.depth);
+    } else {
+      std::snprintf(label, sizeof label, "-");
+    }
+    const int y = d.y >= kTextHeight + 3 ? d.y - kTextHeight - 3 : d.y + d.height + 3;
+    draw_text(picture.view(), d.x, y, label, green);
+  }
+  return picture;
+}
+
 // Writes the pictures of the first frames that show distinct images of the scene.
 class PictureWriter final : public firmware::FrameObserver {
  public:
@@ -127,6 +152,9 @@ class PictureWriter final : public firmware::FrameObserver {
       }
       save_image(file("corners.png"), corners.view());
     }
+    if ((r.stages & firmware::stage_bit(protocol::Stage::detect)) != 0) {
+      save_image(file("detections.png"), detections_picture(r).view());
+    }
     if (!r.disparity.empty()) {
       save_image(file("disparity.png"), disparity_picture(r.disparity, max_disparity_).view());
       Image<std::uint16_t> png(r.disparity.width(), r.disparity.height());
@@ -159,6 +187,15 @@ nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& 
   // The pty's robot end: a link in the output folder, so the firmware's link is easy to find.
   if (config.serial.backend == "pty" && config.serial.port.device.empty()) {
     config.serial.port.device = (directory / "link").string();
+  }
+  // The firmware reads compiled cascades: an XML cascade of the board is compiled here first.
+  if (config.stages.detect && config.detector.cascade.extension() == ".xml") {
+    const std::vector<std::uint8_t> binary = load_cascade(config.detector.cascade).to_binary();
+    const fs::path compiled = directory / "cascade.bin";
+    std::ofstream(compiled, std::ios::binary)
+        .write(reinterpret_cast<const char*>(binary.data()),
+               static_cast<std::streamsize>(binary.size()));
+    config.detector.cascade = compiled;
   }
   firmware::Firmware fw(config);
   const int images = static_cast<int>(fw.board().sim()->left->size());

@@ -20,9 +20,12 @@ namespace {
 struct Sampler final : FrameObserver {
   std::uint32_t first, last;
   std::size_t at_first = 0, at_last = 0;
+  std::size_t detections = 0, points = 0;  // the stages did work
   std::function<void(std::uint32_t)> each;
   Sampler(std::uint32_t a, std::uint32_t b) : first(a), last(b) {}
   void on_frame(const FrameResult& r) override {
+    detections += r.detections.size();
+    points += r.points.size();
     if (r.frame == first) at_first = test::allocations_in_all_threads();
     if (r.frame == last) at_last = test::allocations_in_all_threads();
     if (each) each(r.frame);
@@ -43,6 +46,8 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   test::SimRig rig(128, 64, 6);
   BoardConfig config = rig.parse("threads: {count: 2}\n");
   config.stereo.max_disparity = 16;
+  config.stages.sparse = true;
+  rig.add_cascade(config);
   config.serial.backend = "pty";
   config.serial.protocol = GetParam();
   config.serial.port.baud = 4'000'000;
@@ -79,6 +84,8 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   EXPECT_GT(s.link.messages_sent, 100u);
   EXPECT_GE(s.link.messages_sent + s.link.messages_dropped, 1030u);
   EXPECT_GT(sampler.at_first, 0u);
+  EXPECT_GT(sampler.detections, 0u);
+  EXPECT_GT(sampler.points, 0u);
   EXPECT_EQ(sampler.at_last - sampler.at_first, 0u)
       << "operator new calls between frames 20 and 1020";
   if (GetParam() == BoardConfig::LinkProtocol::epipole) {

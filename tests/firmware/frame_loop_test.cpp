@@ -136,6 +136,52 @@ TEST(FrameLoop, PublishesSparsePointsAtTheRigsDepthAndTheCalibrationHealth) {
   EXPECT_EQ(health[0].median_offset_centipx, 0) << "an ideal rig: matches on the same rows";
 }
 
+TEST(FrameLoop, DetectionsCarryTheirDepth) {
+  test::SimRig rig;
+  BoardConfig config = rig.config;
+  rig.add_cascade(config);
+  Firmware fw(config, rig.images());
+  Recorder recorder;
+  fw.frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  fw.run(30, stop);
+  const auto summaries = recorder.all<protocol::FrameSummary>();
+  const auto detections = recorder.all<protocol::Detections>();
+  ASSERT_EQ(detections.size(), summaries.size()) << "a detections message every frame";
+  int boxes = 0;
+  int with_depth = 0;
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    EXPECT_EQ(detections[i].frame, summaries[i].frame);
+    EXPECT_EQ(detections[i].count, summaries[i].detections);
+    for (int k = 0; k < detections[i].count; ++k) {
+      const protocol::Detection& d = detections[i].items[static_cast<std::size_t>(k)];
+      ++boxes;
+      EXPECT_LE(d.x + d.width, rig.width);
+      EXPECT_LE(d.y + d.height, rig.height);
+      EXPECT_GE(d.width, 20);
+      if (d.depth_mm == protocol::kUnknownDepth) continue;
+      ++with_depth;
+      // The scene is one plane at the rig's depth.
+      EXPECT_NEAR(d.depth_mm, rig.depth() * 1000, 0.03 * rig.depth() * 1000);
+    }
+  }
+  EXPECT_GT(boxes, 0) << "the random cascade fires on the textured images";
+  EXPECT_GT(with_depth, boxes / 2);
+}
+
+TEST(FrameLoop, AnXmlCascadeIsRefusedWithTheCommandToCompileIt) {
+  test::SimRig rig;
+  BoardConfig config = rig.config;
+  config.stages.detect = true;
+  config.detector.cascade = rig.dir.path() / "faces.xml";
+  try {
+    Firmware fw(config, rig.images());
+    FAIL() << "the firmware reads compiled cascades only";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("epipole cascade-compile"), std::string::npos) << e.what();
+  }
+}
+
 TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
   // A trigger far faster than the host can process: the loop takes the freshest pair and
   // counts the ones it skipped; latency stays bounded instead of growing.

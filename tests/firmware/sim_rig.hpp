@@ -10,6 +10,9 @@
 #include <stdexcept>
 #include <string>
 
+#include <fstream>
+
+#include "cascade_test_models.hpp"
 #include "epipole/calib/calibration.hpp"
 #include "epipole/firmware/board.hpp"
 #include "epipole/firmware/board_config.hpp"
@@ -83,6 +86,24 @@ struct SimRig {
     return s;
   }
   double depth() const { return kFocal * kBaseline / disparity; }
+
+  // Detection on, with a random cascade compiled into the rig's folder (it fires on the
+  // textured images often enough to exercise the stage; the boxes mean nothing).
+  void add_cascade(firmware::BoardConfig& c) const {
+    RandomCascadeShape shape;
+    shape.window_width = shape.window_height = 20;
+    shape.stages = 5;
+    shape.pass_rate = 0.6;
+    const std::vector<std::uint8_t> binary =
+        vision::CascadeModel(random_cascade(shape, 3), "random").to_binary();
+    const std::filesystem::path file = dir.path() / "cascade.bin";
+    std::ofstream(file, std::ios::binary)
+        .write(reinterpret_cast<const char*>(binary.data()),
+               static_cast<std::streamsize>(binary.size()));
+    c.stages.detect = true;
+    c.detector.cascade = file;
+    c.detector.min_size = 20;
+  }
 
   // The board file's text; `extra` is appended (more top-level keys).
   std::string yaml(const std::string& extra = "") const {

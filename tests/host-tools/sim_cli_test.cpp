@@ -162,6 +162,28 @@ TEST(SimCli, FacesSceneHasItsKnownDisparity) {
   EXPECT_NEAR(values[values.size() / 2] / 16.0, 32.0, 0.25);
 }
 
+// The faces scene: OpenCV's face cascade (compiled by epipole sim) finds the player, and the
+// box's depth is the scene's: 700 px * 0.12 m / 32 px = 2.625 m.
+TEST(SimCli, FacesAreDetectedAtTheirKnownDepth) {
+  ASSERT_EQ(sim_run().exit_code, 0) << sim_run().out;
+  EXPECT_TRUE(fs::exists(out_dir() / "faces" / "frame0-detections.png"));
+  std::ifstream lines(out_dir() / "faces" / "serial.jsonl");
+  std::string line;
+  int messages = 0, boxes = 0;
+  while (std::getline(lines, line)) {
+    const nlohmann::json m = nlohmann::json::parse(line);
+    if (m["type"] != "detections") continue;
+    ++messages;
+    for (const auto& box : m["boxes"]) {
+      ++boxes;
+      EXPECT_NEAR(box["depth_mm"].get<int>(), 2625, 60) << box.dump();
+      EXPECT_GE(box["width"].get<int>(), 30);
+    }
+  }
+  EXPECT_EQ(messages, kFrames);
+  EXPECT_GE(boxes, kFrames) << "a face in every frame";
+}
+
 TEST(SimCli, BadArgumentsAreOneLineErrors) {
   const auto r = run_tool("sim --board /nowhere --out '" + out_dir().string() + "-bad'");
   ASSERT_FALSE(fs::exists(out_dir().string() + "-bad/summary.json"));

@@ -12,10 +12,12 @@
 #include "epipole/core/image.hpp"
 #include "epipole/core/simd.hpp"
 #include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/detection_depth.hpp"
 #include "epipole/firmware/health_monitor.hpp"
 #include "epipole/firmware/obstacles.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/firmware/sparse_points.hpp"
+#include "epipole/vision/cascade.hpp"
 #include "epipole/vision/corner.hpp"
 #include "epipole/vision/sparse_stereo.hpp"
 #include "epipole/vision/stereo.hpp"
@@ -49,6 +51,10 @@ struct FrameResult {
   // How well the rectification holds: the vertical offsets of the sparse matches (only when the
   // images were rectified with a calibration).
   std::optional<calib::HealthFigure> calibration_health;
+  // Viola-Jones detections in the rectified left image, and each one's depth (valid when the
+  // disparity ran and the box holds valid disparities).
+  std::span<const vision::Detection> detections;
+  std::span<const DetectionDepth> detection_depths;
   StageTimes times{};
 };
 
@@ -56,10 +62,11 @@ struct FrameResult {
 // calibration, when there is one) with all their memory; process() never allocates.
 class Pipeline {
  public:
-  // Throws Error when the calibration does not fit the board (size) or a stage's configuration
-  // is not valid.
+  // Throws Error when the calibration does not fit the board (size), a stage's configuration
+  // is not valid, or the detector's cascade (a compiled file, epipole cascade-compile) cannot
+  // be read. `cascade`: the model to use instead of the board's file (tests, the host tool).
   Pipeline(const BoardConfig& board, const std::optional<calib::StereoCalibration>& calibration,
-           SimdPath path = best_simd_path());
+           SimdPath path = best_simd_path(), const vision::CascadeModel* cascade = nullptr);
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
@@ -83,6 +90,9 @@ class Pipeline {
   std::vector<SparsePoint> points_;
   std::vector<std::uint32_t> point_order_;
   std::vector<calib::RectifiedMatch> rectified_matches_;
+  std::unique_ptr<vision::CascadeDetector> detector_;
+  std::unique_ptr<DetectionDepthEstimator> depth_estimator_;
+  std::vector<DetectionDepth> depths_;
   calib::CalibrationHealth calibration_health_;
   int max_points_ = 0;
   StageMask available_ = 0;
