@@ -22,16 +22,23 @@ for preset in $presets; do
   esac
 done
 
+timings=""
 for preset in $presets; do
   echo "=== $preset: configure and build"
+  phase=$SECONDS
   cmake --preset "$preset" >/dev/null
   cmake --build --preset "$preset"
+  built=$((SECONDS - phase))
   echo "=== $preset: test"
+  phase=$SECONDS
   ctest --preset "$preset" --output-junit "junit-$preset.xml"
   case $preset in
     aarch64) ./scripts/check-package.sh build/aarch64 arm64 ;;
     armhf) ./scripts/check-package.sh build/armhf armhf ;;
   esac
+  timings+="  $preset: built in $built s, tested in $((SECONDS - phase)) s"$'\n'
 done
+
+printf "%s" "$timings"
 
 echo "run-tests: all presets passed ($presets) in $((SECONDS - start)) s"
