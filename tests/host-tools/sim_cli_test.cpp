@@ -199,4 +199,17 @@ TEST(SimCli, BadArgumentsAreOneLineErrors) {
   EXPECT_NE(r3.out.find("'moon' is not a scene"), std::string::npos) << r3.out;
 }
 
+// The board folder as shipped, under the firmware program itself (the cascade it names is
+// compiled into the data cache by the build).
+TEST(SimCli, TheFirmwareRunsTheShippedSimulatedBoard) {
+  epipole::test::data_file("compiled/haarcascade_frontalface_default.bin");
+  const std::string command = std::string(EPIPOLE_FW) + " --board '" + EPIPOLE_SOURCE_DIR +
+                              "/board/sim' --scene faces --frames 10 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  const auto r = epipole::test::finish_tool(pipe);
+  EXPECT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("stopped after 10 pairs"), std::string::npos) << r.out;
+}
+
 }  // namespace
