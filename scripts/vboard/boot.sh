@@ -33,7 +33,7 @@ case $uart in
     ;;
 esac
 
-common=(-accel tcg -m 512 -smp 2 -nodefaults -no-user-config -display none -no-reboot
+common=(-accel tcg -m 512 -smp ${EPIPOLE_VBOARD_CPUS:-1} -nodefaults -no-user-config -display none -no-reboot
   -serial stdio -chardev "$chardev" -initrd "$initramfs")
 if [[ $arch == amd64 ]]; then
   exec qemu-system-x86_64 -M pc -cpu max "${common[@]}" -kernel "$root/vmlinux" \

@@ -84,7 +84,8 @@ std::string read_file(const std::string& path) {
   return text.str();
 }
 
-// The trigger driver's "vboard-trigger: edge N BEFORE AFTER" and the init's "epipole-fw exit N".
+// The trigger driver's "vboard-trigger: edge N BEFORE AFTER" and "vboard-trigger: pause", and the
+// init's "epipole-fw exit N".
 void parse_console(BoardRun& run) {
   std::istringstream in(run.console);
   for (std::string line; std::getline(in, line);) {
@@ -95,6 +96,8 @@ void parse_console(BoardRun& run) {
         std::sscanf(line.c_str() + at, "vboard-trigger: edge %lld %lld %lld", &number, &before,
                     &after) == 3) {
       run.edges[number] = TriggerEdge{before, after};
+    } else if (line.find("vboard-trigger: pause") != std::string::npos) {
+      run.pauses.push_back(static_cast<std::int64_t>(run.edges.size()));
     } else if (const auto exit = line.find("epipole-fw exit ");
                exit != std::string::npos &&
                std::sscanf(line.c_str() + exit, "epipole-fw exit %d", &code) == 1) {

@@ -26,6 +26,7 @@ struct BoardRun {
   std::vector<protocol::DecodedMessage> messages;
   protocol::DecoderStats decoder;
   std::map<std::int64_t, TriggerEdge> edges;  // the trigger driver's edges by number
+  std::vector<std::int64_t> pauses;           // the edges made before each of the driver's pauses
   int firmware_exit = -1;                     // epipole-fw's exit code, as the init reports it
 
   template <typename T>

@@ -1,16 +1,23 @@
-// vboard-trigger: the virtual board's trigger source, run inside the guest. It waits until a
-// consumer (the firmware) has requested the gpio-sim line, then pulls the line up and down at a
-// fixed rate through gpio-sim's sysfs `pull` attribute, as an external trigger would, and prints
-// each rising edge with the CLOCK_MONOTONIC times just before and after it was made, so the host
-// can check the edge times the firmware reports. It can stop after every N edges for a while and
+// vboard-trigger: the virtual board's trigger source, run inside the guest. vivid's cameras have
+// no trigger input and run free, so the trigger follows them instead: the driver reads the left
+// camera's frame completions from the kernel's vb2_buf_done trace events (tracefs, on the
+// CLOCK_MONOTONIC trace clock, from before the camera streams: the Nth completion is frame N-1,
+// as long as vivid never finds its queue empty, which the firmware's spare buffers see to), and
+// makes the edge of each frame half a period before it is due,
+// by pulling the gpio-sim line up and down through its sysfs `pull` attribute. A slave trigger
+// numbers the edges it sees from 0, so edge N comes before frame N as on a triggered board; edges
+// the driver is behind on (at start, after a pause) come at once, 1 ms apart. Each edge is
+// printed with the CLOCK_MONOTONIC times just before and after it was made, so the host can
+// check the edge times the firmware reports. It can stop after every N edges for a while and
 // start again (the trigger-loss fault).
 //
-//   vboard-trigger CHIP OFFSET PULL RATE_HZ [--pause-every N --pause-ms MS] [--count N]
+//   vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ [--pause-every N --pause-ms MS]
 #include <fcntl.h>
 #include <linux/gpio.h>
 #include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <array>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -67,27 +74,65 @@ void pull(int fd, const char* direction, const char* path) {
   }
 }
 
+// One "vivid-000-vid-c-PID [CPU] FLAGS TIME: vb2_buf_done: ..." line of the trace: a buffer of
+// the first vivid instance (the left camera, /dev/video0) completed at TIME.
+bool parse_frame(const char* line, std::int64_t& time_ns) {
+  const char* event = std::strstr(line, ": vb2_buf_done: ");
+  const char* task = std::strstr(line, "vivid-000-vid-c-");
+  if (event == nullptr || task == nullptr || task > event) return false;
+  const char* start = event;
+  while (start > line && start[-1] != ' ') --start;
+  time_ns = static_cast<std::int64_t>(std::strtod(start, nullptr) * 1e9);
+  return true;
+}
+
+class Line {
+ public:
+  explicit Line(const char* pull_path) : path_(pull_path) {
+    fd_ = open(pull_path, O_WRONLY | O_CLOEXEC);
+    if (fd_ < 0) fail(std::string(pull_path) + ": " + std::strerror(errno));
+    pull(fd_, "pull-down", path_);
+  }
+  // A 1 ms pulse: the rising edge is the trigger.
+  void pulse() {
+    const std::int64_t before = now_ns();
+    pull(fd_, "pull-up", path_);
+    const std::int64_t after = now_ns();
+    std::printf("vboard-trigger: edge %ld %lld %lld\n", edges_++, static_cast<long long>(before),
+                static_cast<long long>(after));
+    std::fflush(stdout);
+    sleep_until(after + 1'000'000);
+    pull(fd_, "pull-down", path_);
+    sleep_until(now_ns() + 1'000'000);
+  }
+  long edges() const { return edges_; }
+
+ private:
+  const char* path_;
+  int fd_ = -1;
+  long edges_ = 0;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 5)
+  if (argc < 6) {
     fail(
-        "usage: vboard-trigger CHIP OFFSET PULL RATE_HZ [--pause-every N --pause-ms MS] [--count "
-        "N]");
+        "usage: vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ [--pause-every N --pause-ms "
+        "MS]");
+  }
   const char* chip_path = argv[1];
   const auto offset = static_cast<unsigned>(number(argv[2], "OFFSET"));
-  const char* pull_path = argv[3];
-  const long rate = number(argv[4], "RATE_HZ");
+  const char* trace_path = argv[4];
+  const long rate = number(argv[5], "RATE_HZ");
   if (rate < 1 || rate > 1000) fail("RATE_HZ: " + std::to_string(rate) + " is not within 1..1000");
-  long pause_every = 0, pause_ms = 0, count = 0;
-  for (int i = 5; i + 1 < argc; i += 2) {
+  long pause_every = 0, pause_ms = 0;
+  for (int i = 6; i + 1 < argc; i += 2) {
     const std::string option = argv[i];
     if (option == "--pause-every") {
       pause_every = number(argv[i + 1], "--pause-every");
     } else if (option == "--pause-ms") {
       pause_ms = number(argv[i + 1], "--pause-ms");
-    } else if (option == "--count") {
-      count = number(argv[i + 1], "--count");
     } else {
       fail("unknown option '" + option + "'");
     }
@@ -95,32 +140,40 @@ int main(int argc, char** argv) {
 
   const int chip = open(chip_path, O_RDONLY | O_CLOEXEC);
   if (chip < 0) fail(std::string(chip_path) + ": " + std::strerror(errno));
-  const int fd = open(pull_path, O_WRONLY | O_CLOEXEC);
-  if (fd < 0) fail(std::string(pull_path) + ": " + std::strerror(errno));
-  pull(fd, "pull-down", pull_path);
+  FILE* trace = std::fopen(trace_path, "r");
+  if (trace == nullptr) fail(std::string(trace_path) + ": " + std::strerror(errno));
+  Line line(argv[3]);
   while (!line_used(chip, offset)) sleep_until(now_ns() + 2'000'000);
-  std::printf("vboard-trigger: line %u requested, %ld Hz\n", offset, rate);
+  std::printf("vboard-trigger: line %u requested, following the left camera at %ld Hz\n", offset,
+              rate);
   std::fflush(stdout);
+  // Frame 0's edge: the cameras started streaming just before the line was requested, and
+  // their first frame comes about a period later. The line shows as used before its interrupt is
+  // set up in the same call: an edge at once could go unseen.
+  sleep_until(now_ns() + 20'000'000);
+  line.pulse();
 
   const std::int64_t period = kPerSecond / rate;
-  std::int64_t next = now_ns() + period / 4;
-  for (long edge = 0; count == 0 || edge < count; ++edge) {
-    if (pause_every > 0 && edge > 0 && edge % pause_every == 0) {
+  std::int64_t resume = 0;
+  long paused_at = 0;
+  std::array<char, 1024> text{};
+  long sequence = -1;
+  while (std::fgets(text.data(), text.size(), trace) != nullptr) {
+    std::int64_t done = 0;
+    if (!parse_frame(text.data(), done)) continue;
+    ++sequence;
+    if (now_ns() < resume) continue;
+    if (pause_every > 0 && line.edges() > 0 && line.edges() % pause_every == 0 &&
+        paused_at != line.edges()) {
+      paused_at = line.edges();
+      resume = now_ns() + pause_ms * 1'000'000;
       std::printf("vboard-trigger: pause %ld ms\n", pause_ms);
       std::fflush(stdout);
-      next += pause_ms * 1'000'000;
+      continue;
     }
-    sleep_until(next);
-    const std::int64_t before = now_ns();
-    pull(fd, "pull-up", pull_path);
-    const std::int64_t after = now_ns();
-    std::printf("vboard-trigger: edge %ld %lld %lld\n", edge, static_cast<long long>(before),
-                static_cast<long long>(after));
-    std::fflush(stdout);
-    sleep_until(after + period / 2);
-    pull(fd, "pull-down", pull_path);
-    next += period;
-    if (next < now_ns()) next = now_ns();  // late: the next edge at once, never a burst
+    while (line.edges() <= sequence) line.pulse();  // behind: the edges of frames already done
+    sleep_until(done + period / 2);                 // the next frame's edge, half a period early
+    line.pulse();
   }
-  return 0;
+  fail(std::string(trace_path) + ": the trace ended");
 }
