@@ -84,8 +84,8 @@ std::string read_file(const std::string& path) {
   return text.str();
 }
 
-// The trigger driver's "vboard-trigger: edge N BEFORE AFTER" and "vboard-trigger: pause", and the
-// init's "epipole-fw exit N".
+// The trigger driver's "vboard-trigger: edge N BEFORE AFTER", "vboard-trigger: frame N DONE" and
+// "vboard-trigger: pause", and the init's "epipole-fw exit N".
 void parse_console(BoardRun& run) {
   std::istringstream in(run.console);
   for (std::string line; std::getline(in, line);) {
@@ -96,6 +96,11 @@ void parse_console(BoardRun& run) {
         std::sscanf(line.c_str() + at, "vboard-trigger: edge %lld %lld %lld", &number, &before,
                     &after) == 3) {
       run.edges[number] = TriggerEdge{before, after};
+    } else if (const auto frame = line.find("vboard-trigger: frame ");
+               frame != std::string::npos &&
+               std::sscanf(line.c_str() + frame, "vboard-trigger: frame %lld %lld", &number,
+                           &before) == 2) {
+      run.frames_done[number] = before;
     } else if (line.find("vboard-trigger: pause") != std::string::npos) {
       run.pauses.push_back(static_cast<std::int64_t>(run.edges.size()));
     } else if (const auto exit = line.find("epipole-fw exit ");

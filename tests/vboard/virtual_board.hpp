@@ -25,9 +25,10 @@ struct BoardRun {
   std::vector<std::uint8_t> link;  // every byte the firmware sent on its UART
   std::vector<protocol::DecodedMessage> messages;
   protocol::DecoderStats decoder;
-  std::map<std::int64_t, TriggerEdge> edges;  // the trigger driver's edges by number
-  std::vector<std::int64_t> pauses;           // the edges made before each of the driver's pauses
-  int firmware_exit = -1;                     // epipole-fw's exit code, as the init reports it
+  std::map<std::int64_t, TriggerEdge> edges;         // the trigger driver's edges by number
+  std::map<std::int64_t, std::int64_t> frames_done;  // the left camera's completions by frame
+  std::vector<std::int64_t> pauses;  // the edges made before each of the driver's pauses
+  int firmware_exit = -1;            // epipole-fw's exit code, as the init reports it
 
   template <typename T>
   std::vector<T> all() const {

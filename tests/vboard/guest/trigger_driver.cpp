@@ -8,7 +8,8 @@
 // numbers the edges it sees from 0, so edge N comes before frame N as on a triggered board; edges
 // the driver is behind on (at start, after a pause) come at once, 1 ms apart. Each edge is
 // printed with the CLOCK_MONOTONIC times just before and after it was made, so the host can
-// check the edge times the firmware reports. It can stop after every N edges for a while and
+// check the edge times the firmware reports; and each frame of the left camera with its completion
+// time. It can stop after every N edges for a while and
 // start again (the trigger-loss fault).
 //
 //   vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ [--pause-every N --pause-ms MS]
@@ -162,6 +163,7 @@ int main(int argc, char** argv) {
     std::int64_t done = 0;
     if (!parse_frame(text.data(), done)) continue;
     ++sequence;
+    std::printf("vboard-trigger: frame %ld %lld\n", sequence, static_cast<long long>(done));
     if (now_ns() < resume) continue;
     if (pause_every > 0 && line.edges() > 0 && line.edges() % pause_every == 0 &&
         paused_at != line.edges()) {
