@@ -20,7 +20,13 @@ arch=${1:?usage: boot.sh amd64|arm64 INITRAMFS [KERNEL ARGUMENTS...]}
 initramfs=${2:?usage: boot.sh amd64|arm64 INITRAMFS [KERNEL ARGUMENTS...]}
 shift 2
 vboard_check_arch "$arch"
-kver=$(vboard_kernel_version "$arch")
+# The kernel the initramfs was made for: its modules' folder says which.
+kver=$(cpio -t --quiet <"$initramfs" | sed -n 's|^\(\./\)\{0,1\}lib/modules/\([^/]*\)$|\2|p')
+kver=${kver%%$'\n'*}
+[[ -n $kver ]] || {
+  echo "boot: $initramfs has no lib/modules/VERSION (make it with make-initramfs.sh)" >&2
+  exit 1
+}
 root=$(vboard_cache "$kver")
 
 uart=${EPIPOLE_VBOARD_UART:-pty}
