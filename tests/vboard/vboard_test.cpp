@@ -145,6 +145,43 @@ TEST(EPIPOLE_VBOARD_SUITE, TriggerStopsAndRestarts) {
   };
   EXPECT_GT(std::count_if(first_after, frames.end(), carries_its_edge), 0) << context(run);
 }
+// The robot's end of the UART goes away for a second and comes back. A UART without modem lines
+// tells the firmware nothing, so it sends on (health counts no link reopen and no dropped
+// message: the UART took every byte); what it sent meanwhile is lost, and the robot's decoder
+// resynchronises at the next frame boundary and counts the gap. Pairs and health go on after it.
+TEST(EPIPOLE_VBOARD_SUITE, LinkClosedAndReopened) {
+  const BoardRun run = boot_virtual_board(kArch, kInitramfs, "epipole.frames=0 epipole.seconds=7",
+                                          kTimeoutSeconds, 2.5);
+  ASSERT_EQ(run.exit_code, 0) << context(run);
+  ASSERT_EQ(run.firmware_exit, 0) << context(run);
+  ASSERT_GT(run.reconnected_at, 0u) << context(run);
+  ASSERT_GT(run.link.size(), run.reconnected_at) << "nothing after the reconnection";
+  EXPECT_GT(run.decoder.lost, 0u) << "the messages sent while the host was away";
+  // At most the frame cut by each end of the gap.
+  EXPECT_LE(run.decoder.bad_cobs + run.decoder.bad_crc + run.decoder.bad_body, 2u);
+
+  protocol::FrameDecoder before;
+  std::size_t decoded_before = 0;
+  for (std::size_t i = 0; i < run.reconnected_at; ++i)
+    decoded_before += before.push(run.link[i]) ? 1 : 0;
+  ASSERT_GT(decoded_before, 0u);
+  ASSERT_GT(run.messages.size(), decoded_before + 2) << "no messages after the reconnection";
+  std::uint32_t last_frame = 0;
+  bool frame_after = false, health_after = false;
+  for (std::size_t i = decoded_before; i < run.messages.size(); ++i) {
+    if (const auto* f = std::get_if<FrameSummary>(&run.messages[i].message)) {
+      EXPECT_GT(f->frame, last_frame);
+      last_frame = f->frame;
+      frame_after = true;
+    } else if (const auto* h = std::get_if<Health>(&run.messages[i].message)) {
+      health_after = true;
+      EXPECT_EQ(h->camera_reopens, 0);
+      EXPECT_EQ(h->trigger_losses, 0);
+    }
+  }
+  EXPECT_TRUE(frame_after);
+  EXPECT_TRUE(health_after);
+}
 #endif
 
 }  // namespace

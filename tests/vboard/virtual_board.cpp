@@ -66,9 +66,11 @@ int connect_link(const std::string& path, pid_t qemu, Clock::time_point deadline
   return -1;
 }
 
-void read_until_closed(int fd, std::vector<std::uint8_t>& out, Clock::time_point deadline) {
+// Reads until QEMU closes the link, the deadline, or (when given) the time to stop.
+void read_until_closed(int fd, std::vector<std::uint8_t>& out, Clock::time_point deadline,
+                       Clock::time_point stop = Clock::time_point::max()) {
   std::array<std::uint8_t, 4096> buffer{};
-  while (Clock::now() < deadline) {
+  while (Clock::now() < deadline && Clock::now() < stop) {
     pollfd p{fd, POLLIN, 0};
     if (poll(&p, 1, 100) <= 0) continue;
     const ssize_t n = read(fd, buffer.data(), buffer.size());
@@ -114,7 +116,8 @@ void parse_console(BoardRun& run) {
 }  // namespace
 
 BoardRun boot_virtual_board(const std::string& arch, const std::string& initramfs,
-                            const std::string& kernel_arguments, int timeout_s) {
+                            const std::string& kernel_arguments, int timeout_s,
+                            double disconnect_after_s) {
   BoardRun run;
   const std::string base = ::testing::TempDir() + "vboard-" + std::to_string(getpid()) + "-" + arch;
   const std::string socket_path = base + ".sock", console_path = base + ".console";
@@ -123,9 +126,22 @@ BoardRun boot_virtual_board(const std::string& arch, const std::string& initramf
   const auto deadline = start + std::chrono::seconds(timeout_s);
 
   const pid_t qemu = start_board(arch, initramfs, kernel_arguments, socket_path, console_path);
-  if (const int fd = connect_link(socket_path, qemu, deadline); fd >= 0) {
-    read_until_closed(fd, run.link, deadline);
-    close(fd);
+  if (int fd = connect_link(socket_path, qemu, deadline); fd >= 0) {
+    if (disconnect_after_s > 0) {
+      while (run.link.empty() && Clock::now() < deadline)
+        read_until_closed(fd, run.link, deadline, Clock::now() + std::chrono::milliseconds(100));
+      read_until_closed(fd, run.link, deadline,
+                        Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(disconnect_after_s)));
+      close(fd);
+      run.reconnected_at = run.link.size();
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+      fd = connect_link(socket_path, qemu, deadline);
+    }
+    if (fd >= 0) {
+      read_until_closed(fd, run.link, deadline);
+      close(fd);
+    }
   }
   int status = 0;
   while (waitpid(qemu, &status, WNOHANG) == 0) {

@@ -29,6 +29,7 @@ struct BoardRun {
   std::map<std::int64_t, std::int64_t> frames_done;  // the left camera's completions by frame
   std::vector<std::int64_t> pauses;  // the edges made before each of the driver's pauses
   int firmware_exit = -1;            // epipole-fw's exit code, as the init reports it
+  std::size_t reconnected_at = 0;    // with a reconnection: the link bytes read before it
 
   template <typename T>
   std::vector<T> all() const {
@@ -41,8 +42,11 @@ struct BoardRun {
 };
 
 // Boots ARCH ("amd64", "arm64") with INITRAMFS (scripts/vboard/prepare.sh made it) and the
-// extra kernel arguments, waits at most timeout_s for the guest to power off.
+// extra kernel arguments, waits at most timeout_s for the guest to power off. With
+// disconnect_after_s, the host closes its end of the link that long after the first byte and
+// connects again a second later (what the guest sends meanwhile is lost, as on a UART).
 BoardRun boot_virtual_board(const std::string& arch, const std::string& initramfs,
-                            const std::string& kernel_arguments, int timeout_s);
+                            const std::string& kernel_arguments, int timeout_s,
+                            double disconnect_after_s = 0);
 
 }  // namespace epipole::test
