@@ -107,14 +107,14 @@ TEST(EPIPOLE_VBOARD_SUITE, FirmwareRunsOnVividCamerasAndGpioSimTrigger) {
 // One architecture is enough for the faults (the amd64 board's program): the firmware's code for
 // them is the same on both.
 #if EPIPOLE_VBOARD_FAULTS
-// The trigger stops for 1.5 s after every 8 edges and starts again. Each quiet spell is one
+// The trigger stops for 1.5 s after every 6 edges and starts again. Each quiet spell is one
 // trigger loss in health, and only an edge after it ends the spell, so two losses mean the line
 // came back in between. vivid's cameras run free meanwhile, so pairs go on, without edges of their
 // own; when the line comes back the driver makes the missed edges at once (a slave counts the
 // edges it sees), and the frames after that carry their own edges again.
 TEST(EPIPOLE_VBOARD_SUITE, TriggerStopsAndRestarts) {
   const BoardRun run = boot_virtual_board(kArch, kInitramfs,
-                                          "epipole.frames=0 epipole.pause=8:1500 epipole.seconds=8",
+                                          "epipole.frames=0 epipole.pause=6:1500 epipole.seconds=8",
                                           kTimeoutSeconds);
   ASSERT_EQ(run.exit_code, 0) << context(run);
   ASSERT_EQ(run.firmware_exit, 0) << context(run);
