@@ -1,16 +1,15 @@
 // vboard-trigger: the virtual board's trigger source, run inside the guest. vivid's cameras have
-// no trigger input and run free, so the trigger follows them instead: the driver reads the left
-// camera's frame completions from the kernel's vb2_buf_done trace events (tracefs, on the
-// CLOCK_MONOTONIC trace clock, from before the camera streams: the Nth completion is frame N-1,
-// as long as vivid never finds its queue empty, which the firmware's spare buffers see to), and
-// makes the edge of each frame half a period before it is due,
-// by pulling the gpio-sim line up and down through its sysfs `pull` attribute. A slave trigger
-// numbers the edges it sees from 0, so edge N comes before frame N as on a triggered board; edges
-// the driver is behind on (at start, after a pause) come at once, 1 ms apart. Each edge is
-// printed with the CLOCK_MONOTONIC times just before and after it was made, so the host can
-// check the edge times the firmware reports; and each frame of the left camera with its completion
-// time. It can stop after every N edges for a while and
-// start again (the trigger-loss fault).
+// no trigger input and run free, so the trigger follows them: the driver reads the left camera's
+// frame completions from the kernel's vb2_buf_done trace events (tracefs, on the CLOCK_MONOTONIC
+// trace clock, enabled before the camera streams: the Nth completion is frame N-1, as long as
+// vivid never finds its queue empty, which the firmware's spare buffers see to) and makes each
+// next frame's edge half a period before it is due, pulling the gpio-sim line up and down
+// through its sysfs `pull` attribute. A slave trigger numbers the edges it sees from 0, so edge
+// N comes before frame N, as on a triggered board; edges the driver is behind on (after a pause)
+// come at once, 1 ms apart. It prints each edge with the CLOCK_MONOTONIC times just before and
+// after it was made, and each completion it read, for the host to check the edge times the
+// firmware reports. It can stop after every N edges for a while and start again (the
+// trigger-loss fault).
 //
 //   vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ [--pause-every N --pause-ms MS]
 #include <fcntl.h>
