@@ -15,6 +15,8 @@ packages=(
   clang libclang-rt-14-dev
   # cross compilers and the user-mode emulator that runs cross-built tests
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user
+  # the virtual board (docs/vboard.md): whole-system emulators, module tools, initramfs packing
+  qemu-system-x86 qemu-system-arm kmod cpio xz-utils
   # data fetching (apt-get download + dpkg-deb)
   dpkg ca-certificates
 )

@@ -1,0 +1,180 @@
+// vboard-trigger: the virtual board's trigger source, run inside the guest. vivid's cameras have
+// no trigger input and run free, so the trigger follows them: the driver reads the left camera's
+// frame completions from the kernel's vb2_buf_done trace events (tracefs, on the CLOCK_MONOTONIC
+// trace clock, enabled before the camera streams: the Nth completion is frame N-1, as long as
+// vivid never finds its queue empty, which the firmware's spare buffers see to) and makes each
+// next frame's edge half a period before it is due, pulling the gpio-sim line up and down
+// through its sysfs `pull` attribute. A slave trigger numbers the edges it sees from 0, so edge
+// N comes before frame N, as on a triggered board; edges the driver is behind on (after a pause)
+// come at once, 1 ms apart. It prints each edge with the CLOCK_MONOTONIC times just before and
+// after it was made, and each completion it read, for the host to check the edge times the
+// firmware reports. It can stop after every N edges for a while and start again (the
+// trigger-loss fault).
+//
+//   vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ [--pause-every N --pause-ms MS]
+#include <fcntl.h>
+#include <linux/gpio.h>
+#include <sys/ioctl.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+#include <string>
+
+namespace {
+
+constexpr std::int64_t kPerSecond = 1'000'000'000;
+
+std::int64_t now_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * kPerSecond + ts.tv_nsec;
+}
+
+void sleep_until(std::int64_t t) {
+  const timespec ts{static_cast<time_t>(t / kPerSecond), static_cast<long>(t % kPerSecond)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+[[noreturn]] void fail(const std::string& what) {
+  std::fprintf(stderr, "vboard-trigger: %s\n", what.c_str());
+  std::exit(1);
+}
+
+long number(const char* text, const char* what) {
+  char* end = nullptr;
+  errno = 0;
+  const long v = std::strtol(text, &end, 10);
+  if (errno != 0 || end == text || *end != '\0' || v < 0) {
+    fail(std::string(what) + ": '" + text + "' is not a number >= 0");
+  }
+  return v;
+}
+
+bool line_used(int chip, unsigned offset) {
+  gpio_v2_line_info info{};
+  info.offset = offset;
+  if (ioctl(chip, GPIO_V2_GET_LINEINFO_IOCTL, &info) != 0) {
+    fail("line " + std::to_string(offset) +
+         ": GPIO_V2_GET_LINEINFO_IOCTL: " + std::strerror(errno));
+  }
+  return (info.flags & GPIO_V2_LINE_FLAG_USED) != 0;
+}
+
+void pull(int fd, const char* direction, const char* path) {
+  const std::size_t n = std::strlen(direction);
+  if (pwrite(fd, direction, n, 0) != static_cast<ssize_t>(n)) {
+    fail(std::string(path) + ": cannot write '" + direction + "': " + std::strerror(errno));
+  }
+}
+
+// One "vivid-000-vid-c-PID [CPU] FLAGS TIME: vb2_buf_done: ..." line of the trace: a buffer of
+// the first vivid instance (the left camera, /dev/video0) completed at TIME.
+bool parse_frame(const char* line, std::int64_t& time_ns) {
+  const char* event = std::strstr(line, ": vb2_buf_done: ");
+  const char* task = std::strstr(line, "vivid-000-vid-c-");
+  if (event == nullptr || task == nullptr || task > event) return false;
+  const char* start = event;
+  while (start > line && start[-1] != ' ') --start;
+  time_ns = static_cast<std::int64_t>(std::strtod(start, nullptr) * 1e9);
+  return true;
+}
+
+class Line {
+ public:
+  explicit Line(const char* pull_path) : path_(pull_path) {
+    fd_ = open(pull_path, O_WRONLY | O_CLOEXEC);
+    if (fd_ < 0) fail(std::string(pull_path) + ": " + std::strerror(errno));
+    pull(fd_, "pull-down", path_);
+  }
+  // A 1 ms pulse: the rising edge is the trigger.
+  void pulse() {
+    const std::int64_t before = now_ns();
+    pull(fd_, "pull-up", path_);
+    const std::int64_t after = now_ns();
+    std::printf("vboard-trigger: edge %ld %lld %lld\n", edges_++, static_cast<long long>(before),
+                static_cast<long long>(after));
+    std::fflush(stdout);
+    sleep_until(after + 1'000'000);
+    pull(fd_, "pull-down", path_);
+    sleep_until(now_ns() + 1'000'000);
+  }
+  long edges() const { return edges_; }
+
+ private:
+  const char* path_;
+  int fd_ = -1;
+  long edges_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 6) {
+    fail(
+        "usage: vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ [--pause-every N --pause-ms "
+        "MS]");
+  }
+  const char* chip_path = argv[1];
+  const auto offset = static_cast<unsigned>(number(argv[2], "OFFSET"));
+  const char* trace_path = argv[4];
+  const long rate = number(argv[5], "RATE_HZ");
+  if (rate < 1 || rate > 1000) fail("RATE_HZ: " + std::to_string(rate) + " is not within 1..1000");
+  long pause_every = 0, pause_ms = 0;
+  for (int i = 6; i + 1 < argc; i += 2) {
+    const std::string option = argv[i];
+    if (option == "--pause-every") {
+      pause_every = number(argv[i + 1], "--pause-every");
+    } else if (option == "--pause-ms") {
+      pause_ms = number(argv[i + 1], "--pause-ms");
+    } else {
+      fail("unknown option '" + option + "'");
+    }
+  }
+
+  const int chip = open(chip_path, O_RDONLY | O_CLOEXEC);
+  if (chip < 0) fail(std::string(chip_path) + ": " + std::strerror(errno));
+  FILE* trace = std::fopen(trace_path, "r");
+  if (trace == nullptr) fail(std::string(trace_path) + ": " + std::strerror(errno));
+  Line line(argv[3]);
+  while (!line_used(chip, offset)) sleep_until(now_ns() + 2'000'000);
+  std::printf("vboard-trigger: line %u requested, following the left camera at %ld Hz\n", offset,
+              rate);
+  std::fflush(stdout);
+  // Frame 0's edge: the cameras started streaming just before the line was requested, and
+  // their first frame comes about a period later. The line shows as used before its interrupt is
+  // set up in the same call: an edge at once could go unseen.
+  sleep_until(now_ns() + 20'000'000);
+  line.pulse();
+
+  const std::int64_t period = kPerSecond / rate;
+  std::int64_t resume = 0;
+  long paused_at = 0;
+  std::array<char, 1024> text{};
+  long sequence = -1;
+  while (std::fgets(text.data(), text.size(), trace) != nullptr) {
+    std::int64_t done = 0;
+    if (!parse_frame(text.data(), done)) continue;
+    ++sequence;
+    std::printf("vboard-trigger: frame %ld %lld\n", sequence, static_cast<long long>(done));
+    if (now_ns() < resume) continue;
+    if (pause_every > 0 && line.edges() > 0 && line.edges() % pause_every == 0 &&
+        paused_at != line.edges()) {
+      paused_at = line.edges();
+      resume = now_ns() + pause_ms * 1'000'000;
+      std::printf("vboard-trigger: pause %ld ms\n", pause_ms);
+      std::fflush(stdout);
+      continue;
+    }
+    while (line.edges() <= sequence) line.pulse();  // behind: the edges of frames already done
+    sleep_until(done + period / 2);                 // the next frame's edge, half a period early
+    line.pulse();
+  }
+  fail(std::string(trace_path) + ": the trace ended");
+}

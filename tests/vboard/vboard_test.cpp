@@ -1,0 +1,188 @@
+// The virtual board: the real firmware on Debian's kernel under qemu-system (TCG), two vivid
+// cameras through the V4L2 backend, the trigger on a gpio-sim line through the gpiod backend
+// (slave), and the link on the guest's UART, read and decoded on the host. The initramfs of each
+// architecture is made by the fixture (scripts/vboard/prepare.sh); docs/vboard.md.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+
+#include "virtual_board.hpp"
+
+namespace epipole::test {
+namespace {
+
+using protocol::FrameSummary;
+using protocol::Health;
+
+constexpr int kFrames = 20;
+constexpr int kTimeoutSeconds = 120;
+// The edge's kernel timestamp is taken in gpio-sim's interrupt, which the write to `pull`
+// raises; on an emulated CPU that interrupt may run a little after the write has returned.
+constexpr std::int64_t kEdgeSlackNs = 20'000'000;
+
+// This program's guest architecture and the initramfs its fixture made.
+const std::string kArch = EPIPOLE_VBOARD_ARCH;
+const std::string kInitramfs = EPIPOLE_VBOARD_INITRAMFS;
+
+std::string context(const BoardRun& run) {
+  return "QEMU exit " + std::to_string(run.exit_code) + " after " + std::to_string(run.seconds) +
+         " s, " + std::to_string(run.link.size()) + " link bytes; console:\n" + run.console;
+}
+
+// The link as the robot sees it: every byte a valid frame, no frame lost, sequence numbers one
+// after the other.
+void expect_clean_link(const BoardRun& run) {
+  EXPECT_GT(run.decoder.frames, 0u);
+  EXPECT_EQ(run.decoder.bad_cobs + run.decoder.bad_crc + run.decoder.too_long +
+                run.decoder.bad_body + run.decoder.bad_version + run.decoder.unknown_type,
+            0u);
+  EXPECT_EQ(run.decoder.lost, 0u);
+  EXPECT_EQ(run.decoder.resyncs, 0u);
+  for (std::size_t i = 1; i < run.messages.size(); ++i) {
+    ASSERT_EQ(run.messages[i].sequence,
+              static_cast<std::uint16_t>(run.messages[i - 1].sequence + 1))
+        << "message " << i;
+  }
+}
+
+// Each frame summary: numbers increasing (stale pairs are skipped, so not one by one), and the
+// driver made its edge before the left camera completed it (all but the first: that edge comes
+// once the firmware has requested the line, just after the cameras started). A frame whose edge
+// came first carries that edge's time: the gpio-sim edge of its number, between the driver's
+// times before and after making it.
+void expect_triggered_frames(const BoardRun& run, std::size_t from, std::size_t to) {
+  const std::vector<FrameSummary> frames = run.all<FrameSummary>();
+  for (std::size_t i = from; i < to && i < frames.size(); ++i) {
+    if (i > 0) {
+      EXPECT_GT(frames[i].frame, frames[i - 1].frame) << "frame summary " << i;
+    }
+    const auto edge = run.edges.find(frames[i].frame);
+    const auto done = run.frames_done.find(frames[i].frame);
+    ASSERT_NE(edge, run.edges.end())
+        << "frame " << frames[i].frame << ": the driver made no such edge";
+    ASSERT_NE(done, run.frames_done.end()) << "frame " << frames[i].frame << ": not completed";
+    const bool edge_first = edge->second.after_ns < done->second;
+    if (frames[i].frame > 0) {
+      EXPECT_TRUE(edge_first) << "frame " << frames[i].frame << ": the edge came after the frame";
+    }
+    if (!edge_first) continue;
+    const auto t = static_cast<std::int64_t>(frames[i].trigger_ns);
+    EXPECT_GE(t, edge->second.before_ns) << "frame " << frames[i].frame;
+    EXPECT_LE(t, edge->second.after_ns + kEdgeSlackNs) << "frame " << frames[i].frame;
+  }
+}
+
+TEST(EPIPOLE_VBOARD_SUITE, FirmwareRunsOnVividCamerasAndGpioSimTrigger) {
+  const BoardRun run = boot_virtual_board(
+      kArch, kInitramfs, "epipole.frames=" + std::to_string(kFrames), kTimeoutSeconds);
+  std::printf("vboard %s: %.1f s from QEMU's start to power off, %zu link bytes\n", kArch.c_str(),
+              run.seconds, run.link.size());
+  ASSERT_EQ(run.exit_code, 0) << context(run);
+  ASSERT_EQ(run.firmware_exit, 0) << context(run);
+  expect_clean_link(run);
+
+  const std::vector<FrameSummary> frames = run.all<FrameSummary>();
+  ASSERT_EQ(frames.size(), static_cast<std::size_t>(kFrames)) << context(run);
+  ASSERT_GE(run.edges.size(), frames.size()) << context(run);
+  expect_triggered_frames(run, 0, frames.size());
+
+  const std::vector<Health> health = run.all<Health>();
+  ASSERT_FALSE(health.empty()) << context(run);
+  const Health& last = health.back();
+  EXPECT_GT(last.frames, 0u);
+  EXPECT_LE(last.frames, static_cast<std::uint32_t>(kFrames));
+  EXPECT_GT(last.uptime_ms, 0u);
+  EXPECT_EQ(last.camera_reopens, 0);
+  EXPECT_EQ(last.trigger_losses, 0);
+  EXPECT_EQ(last.link_reopens, 0);
+  EXPECT_EQ(last.bad_commands, 0);
+  EXPECT_EQ(last.messages_dropped, 0);
+  for (std::size_t i = 1; i < health.size(); ++i) {
+    EXPECT_GT(health[i].uptime_ms, health[i - 1].uptime_ms);
+    EXPECT_GE(health[i].frames, health[i - 1].frames);
+  }
+}
+
+// One architecture is enough for the faults (the amd64 board's program): the firmware's code for
+// them is the same on both.
+#if EPIPOLE_VBOARD_FAULTS
+// The trigger stops for 1.5 s after every 6 edges and starts again. Each quiet spell is one
+// trigger loss in health, and only an edge after it ends the spell, so two losses mean the line
+// came back in between. vivid's cameras run free meanwhile, so pairs go on, without edges of their
+// own; when the line comes back the driver makes the missed edges at once (a slave counts the
+// edges it sees), and the frames after that carry their own edges again.
+TEST(EPIPOLE_VBOARD_SUITE, TriggerStopsAndRestarts) {
+  const BoardRun run = boot_virtual_board(kArch, kInitramfs,
+                                          "epipole.frames=0 epipole.pause=6:1500 epipole.seconds=8",
+                                          kTimeoutSeconds);
+  ASSERT_EQ(run.exit_code, 0) << context(run);
+  ASSERT_EQ(run.firmware_exit, 0) << context(run);
+  expect_clean_link(run);
+  ASSERT_GE(run.pauses.size(), 2u) << context(run);
+
+  const std::vector<Health> health = run.all<Health>();
+  ASSERT_GE(health.size(), 4u) << context(run);
+  EXPECT_EQ(health.front().trigger_losses, 0);
+  EXPECT_GE(health.back().trigger_losses, 2) << context(run);
+  EXPECT_LE(health.back().trigger_losses, static_cast<int>(run.pauses.size()));
+  for (std::size_t i = 1; i < health.size(); ++i) {
+    EXPECT_GE(health[i].trigger_losses, health[i - 1].trigger_losses);
+    EXPECT_GT(health[i].frames, health[i - 1].frames) << "health " << i << ": the pairs stopped";
+  }
+
+  // Before the first pause every frame carries its edge; after it, frames carry theirs again.
+  const std::vector<FrameSummary> frames = run.all<FrameSummary>();
+  const auto first_after = std::find_if(frames.begin(), frames.end(), [&](const FrameSummary& f) {
+    return static_cast<std::int64_t>(f.frame) >= run.pauses.front();
+  });
+  expect_triggered_frames(run, 0, static_cast<std::size_t>(first_after - frames.begin()));
+  const auto carries_its_edge = [&](const FrameSummary& f) {
+    const auto edge = run.edges.find(f.frame);
+    const auto t = static_cast<std::int64_t>(f.trigger_ns);
+    return edge != run.edges.end() && t >= edge->second.before_ns &&
+           t <= edge->second.after_ns + kEdgeSlackNs;
+  };
+  EXPECT_GT(std::count_if(first_after, frames.end(), carries_its_edge), 0) << context(run);
+}
+// The robot's end of the UART goes away for a second and comes back. A UART without modem lines
+// tells the firmware nothing, so it sends on (health counts no link reopen and no dropped
+// message: the UART took every byte); what it sent meanwhile is lost, and the robot's decoder
+// resynchronises at the next frame boundary and counts the gap. Pairs and health go on after it.
+TEST(EPIPOLE_VBOARD_SUITE, LinkClosedAndReopened) {
+  const BoardRun run = boot_virtual_board(kArch, kInitramfs, "epipole.frames=0 epipole.seconds=7",
+                                          kTimeoutSeconds, 2.5);
+  ASSERT_EQ(run.exit_code, 0) << context(run);
+  ASSERT_EQ(run.firmware_exit, 0) << context(run);
+  ASSERT_GT(run.reconnected_at, 0u) << context(run);
+  ASSERT_GT(run.link.size(), run.reconnected_at) << "nothing after the reconnection";
+  EXPECT_GT(run.decoder.lost, 0u) << "the messages sent while the host was away";
+  // At most the frame cut by each end of the gap.
+  EXPECT_LE(run.decoder.bad_cobs + run.decoder.bad_crc + run.decoder.bad_body, 2u);
+
+  protocol::FrameDecoder before;
+  std::size_t decoded_before = 0;
+  for (std::size_t i = 0; i < run.reconnected_at; ++i)
+    decoded_before += before.push(run.link[i]) ? 1 : 0;
+  ASSERT_GT(decoded_before, 0u);
+  ASSERT_GT(run.messages.size(), decoded_before + 2) << "no messages after the reconnection";
+  std::uint32_t last_frame = 0;
+  bool frame_after = false, health_after = false;
+  for (std::size_t i = decoded_before; i < run.messages.size(); ++i) {
+    if (const auto* f = std::get_if<FrameSummary>(&run.messages[i].message)) {
+      EXPECT_GT(f->frame, last_frame);
+      last_frame = f->frame;
+      frame_after = true;
+    } else if (const auto* h = std::get_if<Health>(&run.messages[i].message)) {
+      health_after = true;
+      EXPECT_EQ(h->camera_reopens, 0);
+      EXPECT_EQ(h->trigger_losses, 0);
+    }
+  }
+  EXPECT_TRUE(frame_after);
+  EXPECT_TRUE(health_after);
+}
+#endif
+
+}  // namespace
+}  // namespace epipole::test
