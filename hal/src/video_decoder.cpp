@@ -55,6 +55,11 @@ class Decoder {
       fail(cat("is not a video FFmpeg can read (", av_error(rc), ")"));
     }
     format_.reset(raw);
+    // FFmpeg reads a picture as a one-frame video (its image2 and *_pipe demuxers): refused.
+    const std::string demuxer = format_->iformat->name;
+    if (demuxer == "image2" || (demuxer.size() > 5 && demuxer.ends_with("_pipe"))) {
+      fail(cat("is not a video but a picture (FFmpeg reads it as ", demuxer, ")"));
+    }
     if (const int rc = avformat_find_stream_info(format_.get(), nullptr); rc < 0) {
       fail(cat("is not a readable video (", av_error(rc), ")"));
     }
