@@ -9,6 +9,7 @@ packages=(
   # host libraries
   libsimde-dev libeigen3-dev libyaml-cpp-dev libgpiod-dev libcamera-dev libpng-dev libjpeg-dev
   libcli11-dev nlohmann-json3-dev libpugixml-dev
+  libavformat-dev libavcodec-dev libswscale-dev libavutil-dev
   # tests, benchmarks and host-only references (never linked into the firmware)
   googletest libgtest-dev libgmock-dev libbenchmark-dev libopencv-dev
   # clang with its sanitizer and libFuzzer runtimes (the fuzz preset)

@@ -422,9 +422,19 @@ class BoardReader {
       s.name = entry.first.Scalar();
       const std::string p = "sim.scenes." + s.name;
       const YAML::Node m = entry.second;
-      f_.only_keys(m, p, {"left", "right", "synthesize", "disparity", "calibration"});
-      if (const YAML::Node v = f_.optional_child(m, p, "synthesize"); v.IsDefined()) {
-        s.synthesize = path(v, p + ".synthesize");
+      f_.only_keys(m, p,
+                   {"left", "right", "side_by_side", "synthesize", "disparity", "max_frames",
+                    "calibration"});
+      integer(m, p, "max_frames", s.max_frames, 1, 100'000);
+      if (const YAML::Node v = f_.optional_child(m, p, "side_by_side"); v.IsDefined()) {
+        for (const char* other : {"left", "right", "synthesize"}) {
+          if (f_.optional_child(m, p, other).IsDefined()) {
+            f_.fail(p, cat("side_by_side and ", other, " are two sources: give one"));
+          }
+        }
+        s.side_by_side = path(v, p + ".side_by_side");
+      } else if (const YAML::Node y = f_.optional_child(m, p, "synthesize"); y.IsDefined()) {
+        s.synthesize = path(y, p + ".synthesize");
         s.synthesize_disparity = f_.integer(f_.child(m, p, "disparity"), p + ".disparity");
         if (s.synthesize_disparity < 0 || s.synthesize_disparity > 255) {
           f_.fail(p + ".disparity", "must be in 0..255");

@@ -108,10 +108,12 @@ struct BoardConfig {
   // The simulated board (backend "sim"): what its cameras replay.
   struct SimScene {
     std::string name;
-    std::vector<std::filesystem::path> left;  // image files, paired in order with right
-    std::vector<std::filesystem::path> right;
-    std::filesystem::path synthesize;   // or: one image, the right view made from it ...
+    std::vector<std::filesystem::path> left;   // image files, paired in order with right,
+    std::vector<std::filesystem::path> right;  // or one video file each (is_video_file())
+    std::filesystem::path side_by_side;        // or: one video, the left view in its left half
+    std::filesystem::path synthesize;   // or: one image or video, the right view made from it
     int synthesize_disparity = 0;       // ... at this disparity (pixels)
+    int max_frames = 300;               // a video of more frames is refused
     std::filesystem::path calibration;  // overrides the board's
   };
   struct Sim {

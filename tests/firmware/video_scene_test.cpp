@@ -1,0 +1,115 @@
+// The simulated board replaying a video (host builds: FFmpeg and the sample videos): the scene
+// keys, their errors, and the frame loop running on the decoded frames.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/firmware.hpp"
+#include "sim_rig.hpp"
+#include "test_data.hpp"
+
+namespace epipole::firmware {
+namespace {
+
+// The rig's board file with its scene replaced by `scene` (the keys of sim.scenes.test).
+std::string with_scene(const test::SimRig& rig, const std::string& scene) {
+  std::string text = rig.yaml();
+  const std::string from = "synthesize: unused.png, disparity: 8";
+  text.replace(text.find(from), from.size(), scene);
+  return text;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+struct Observer final : FrameObserver {
+  std::vector<int> centre_disparity;
+  Observer() { centre_disparity.reserve(64); }
+  void on_frame(const FrameResult& r) override {
+    centre_disparity.push_back(r.disparity(r.disparity.width() / 2, r.disparity.height() / 2));
+  }
+};
+
+TEST(VideoScene, TheFrameLoopRunsOnAVideoDecodedAtStartUp) {
+  test::SimRig rig;
+  const std::string video = test::data_file("samples/Megamind.avi").string();
+  const BoardConfig config = parse_board_config(
+      with_scene(rig, "synthesize: " + video + ", disparity: 8"), rig.dir.path() / "board.yaml");
+  EXPECT_EQ(config.sim_scene()->max_frames, 300);
+  SceneImages images = load_scene_images(config);
+  ASSERT_EQ(images.left.size(), 270u);  // every frame of the sample, fitted to 160x96
+  ASSERT_EQ(images.right.size(), 270u);
+  EXPECT_EQ(images.left[0].width(), 160);
+  EXPECT_EQ(images.left[0].height(), 96);
+  int moved = 0;  // the video moves: frames differ
+  for (int y = 0; y < 96; ++y) {
+    for (int x = 0; x < 160; ++x) moved += images.left[0](x, y) != images.left[200](x, y);
+  }
+  EXPECT_GT(moved, 500);
+
+  Firmware fw(config, std::move(images));
+  Observer observer;
+  fw.frame_loop().set_observer(&observer);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = fw.run(40, stop);
+  EXPECT_EQ(s.frames, 40u);
+  EXPECT_EQ(s.timeouts, 0u);
+  ASSERT_EQ(observer.centre_disparity.size(), 40u);
+  std::vector<int> d = observer.centre_disparity;
+  std::nth_element(d.begin(), d.begin() + 20, d.end());
+  EXPECT_NEAR(d[20], 8 * 16, 16) << "the median centre disparity is the synthesised one";
+}
+
+TEST(VideoScene, SideBySideAndStereoVideosAndTheirErrors) {
+  test::SimRig rig;
+  const std::string megamind = test::data_file("samples/Megamind.avi").string();
+  const std::string vtest = test::data_file("samples/vtest.avi").string();
+  const auto load = [&](const std::string& scene) {
+    return load_scene_images(
+        parse_board_config(with_scene(rig, scene), rig.dir.path() / "board.yaml"));
+  };
+  const SceneImages sbs = load("side_by_side: " + megamind + ", max_frames: 270");
+  ASSERT_EQ(sbs.left.size(), 270u);
+  EXPECT_EQ(sbs.right[5].width(), 160);
+  const SceneImages pair = load("left: " + megamind + ", right: " + megamind);
+  ASSERT_EQ(pair.left.size(), 270u);
+
+  struct Case {
+    std::string scene;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {"side_by_side: " + megamind + ", left: " + megamind,
+       "sim.scenes.test: side_by_side and left are two sources"},
+      {"synthesize: " + megamind + ", disparity: 8, max_frames: 0",
+       "sim.scenes.test.max_frames: 0 is outside 1..100000"},
+      {"synthesize: " + megamind + ", disparity: 8, max_frames: 10",
+       "sim.scenes.test.synthesize: " + megamind + ": more than 10 frames (max_frames)"},
+      {"side_by_side: " + vtest + ", max_frames: 10",
+       "sim.scenes.test.side_by_side: " + vtest + ": more than 10 frames"},
+      {"left: " + megamind + ", right: " + vtest, "is 768x576 but"},
+      {"left: " + megamind + ", right: [a.png]",
+       "sim.scenes.test: left and right must each be one video file"},
+      {"side_by_side: missing.mp4", "sim.scenes.test.side_by_side: "},
+  };
+  for (const Case& c : cases) {
+    const std::string error = error_of([&] { load(c.scene); });
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.scene << ": got '" << error << "'";
+  }
+  EXPECT_NE(error_of([&] { load("side_by_side: missing.mp4"); }).find("missing.mp4: no such file"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace epipole::firmware
