@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   # build tools
-  build-essential cmake ninja-build pkg-config git clang-format
+  build-essential cmake ninja-build pkg-config git clang-format ccache
   # host libraries
   libsimde-dev libeigen3-dev libyaml-cpp-dev libgpiod-dev libcamera-dev libpng-dev libjpeg-dev
   libcli11-dev nlohmann-json3-dev libpugixml-dev

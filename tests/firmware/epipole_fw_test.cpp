@@ -19,6 +19,7 @@
 #include "epipole/firmware/protocol/codec.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "sim_rig.hpp"
+#include "test_paths.hpp"
 
 namespace epipole::firmware {
 namespace {
@@ -40,10 +41,10 @@ Process start(const std::vector<std::string>& args, const std::vector<std::strin
     ::close(pipe_fds[0]);
     for (const std::string& e : env) ::putenv(const_cast<char*>(e.c_str()));
     std::vector<char*> argv;
-    argv.push_back(const_cast<char*>(EPIPOLE_FW));
+    argv.push_back(const_cast<char*>(test::firmware_path()));
     for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
-    ::execv(EPIPOLE_FW, argv.data());
+    ::execv(test::firmware_path(), argv.data());
     ::_exit(127);
   }
   ::close(pipe_fds[1]);

@@ -15,6 +15,7 @@
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "sim_rig.hpp"
+#include "test_paths.hpp"
 
 namespace epipole::firmware {
 namespace {
@@ -558,12 +559,12 @@ TEST(FrameLoop, FreeRunningCamerasWithoutATriggerPairByTime) {
 
 TEST(FrameLoop, PairingFollowsTheBoardsTrigger) {
   const BoardConfig usb =
-      load_board_config(std::filesystem::path(EPIPOLE_SOURCE_DIR) / "board" / "usb-stereo");
+      load_board_config(std::filesystem::path(test::source_dir()) / "board" / "usb-stereo");
   const hal::PairingConfig p = pairing_config(usb);
   EXPECT_FALSE(p.match_sequences) << "two free-running UVC cameras: by time";
   EXPECT_EQ(p.tolerance, 16'000'000);
   EXPECT_EQ(p.trigger_period, hal::period_of(30)) << "the cameras' frame period";
-  const BoardConfig pi = load_board_config(std::filesystem::path(EPIPOLE_SOURCE_DIR) / "board" /
+  const BoardConfig pi = load_board_config(std::filesystem::path(test::source_dir()) / "board" /
                                            "raspberrypi5-ov9281");
   EXPECT_TRUE(pairing_config(pi).match_sequences) << "one trigger for both: by sequence";
   EXPECT_EQ(pairing_config(pi).trigger_period, hal::period_of(30));

@@ -16,6 +16,7 @@
 #include "epipole/core/image_io.hpp"
 #include "run_tool.hpp"
 #include "test_data.hpp"
+#include "test_paths.hpp"
 
 namespace {
 
@@ -24,6 +25,7 @@ namespace fs = std::filesystem;
 using Result = epipole::test::ToolResult;
 using epipole::test::line_count;
 using epipole::test::run_tool;
+using epipole::test::source_dir;
 
 std::string quoted(const fs::path& p) {
   return "'" + p.string() + "'";
@@ -270,8 +272,8 @@ TEST(CalibrateCli, TheSimulatedBoardsRigIsThisCalibration) {
   const Calibration& c = calibration();
   ASSERT_EQ(c.result.exit_code, 0) << c.result.out;
   const auto fresh = epipole::calib::load_calibration(c.rig);
-  const auto committed = epipole::calib::load_calibration(fs::path(EPIPOLE_SOURCE_DIR) / "board" /
-                                                          "sim" / "chessboard-rig.yaml");
+  const auto committed = epipole::calib::load_calibration(fs::path(source_dir()) / "board" / "sim" /
+                                                          "chessboard-rig.yaml");
   EXPECT_TRUE(fresh.Q.isApprox(committed.Q, 1e-6)) << fresh.Q << "\n" << committed.Q;
   EXPECT_TRUE(fresh.left.camera_matrix().isApprox(committed.left.camera_matrix(), 1e-6));
   EXPECT_TRUE(fresh.right.camera_matrix().isApprox(committed.right.camera_matrix(), 1e-6));

@@ -14,22 +14,26 @@
 #include "epipole/core/image_io.hpp"
 #include "run_tool.hpp"
 #include "test_data.hpp"
+#include "test_paths.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
+using epipole::test::firmware_path;
 using epipole::test::run_tool;
+using epipole::test::sim_output_dir;
+using epipole::test::source_dir;
 
 constexpr int kFrames = 20;
 
 // The run is made once, before these tests, by the ctest fixture sim_cli_run (its output folder
-// is EPIPOLE_SIM_OUT); a test program started by hand makes it itself when it is missing.
+// is sim_output_dir()); a test program started by hand makes it itself when it is missing.
 fs::path out_dir() {
-  return EPIPOLE_SIM_OUT;
+  return sim_output_dir();
 }
 
 std::string sim_command() {
-  return "sim --board '" + std::string(EPIPOLE_SOURCE_DIR) + "/board/sim' --frames " +
+  return "sim --board '" + std::string(source_dir()) + "/board/sim' --frames " +
          std::to_string(kFrames) + " --out '" + out_dir().string() + "'";
 }
 
@@ -189,11 +193,11 @@ TEST(SimCli, BadArgumentsAreOneLineErrors) {
   ASSERT_FALSE(fs::exists(out_dir().string() + "-bad/summary.json"));
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(epipole::test::line_count(r.out), 1) << r.out;
-  const auto r2 = run_tool("sim --board '" + std::string(EPIPOLE_SOURCE_DIR) +
+  const auto r2 = run_tool("sim --board '" + std::string(source_dir()) +
                            "/board/raspberrypi5-ov9281' --out '" + out_dir().string() + "-bad'");
   EXPECT_EQ(r2.exit_code, 1);
   EXPECT_NE(r2.out.find("not a simulated board"), std::string::npos) << r2.out;
-  const auto r3 = run_tool("sim --board '" + std::string(EPIPOLE_SOURCE_DIR) +
+  const auto r3 = run_tool("sim --board '" + std::string(source_dir()) +
                            "/board/sim' --scene moon --out '" + out_dir().string() + "-bad'");
   EXPECT_EQ(r3.exit_code, 1);
   EXPECT_NE(r3.out.find("'moon' is not a scene"), std::string::npos) << r3.out;
@@ -203,7 +207,7 @@ TEST(SimCli, BadArgumentsAreOneLineErrors) {
 // compiled into the data cache by the build).
 TEST(SimCli, TheFirmwareRunsTheShippedSimulatedBoard) {
   epipole::test::data_file("compiled/haarcascade_frontalface_default.bin");
-  const std::string command = std::string(EPIPOLE_FW) + " --board '" + EPIPOLE_SOURCE_DIR +
+  const std::string command = std::string(firmware_path()) + " --board '" + source_dir() +
                               "/board/sim' --scene faces --frames 10 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   ASSERT_NE(pipe, nullptr);

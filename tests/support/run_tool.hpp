@@ -1,7 +1,7 @@
 #pragma once
 
 // Running the epipole host tool from a test, as a user would from a shell. The program's path
-// is EPIPOLE_TOOL, defined by tests/CMakeLists.txt for every CLI test program.
+// is test_paths.hpp's tool_path().
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+
+#include "test_paths.hpp"
 
 namespace epipole::test {
 
@@ -19,7 +21,7 @@ struct ToolResult {
 
 // Starts `epipole ARGUMENTS` with stdout and stderr into the returned pipe.
 inline FILE* start_tool(const std::string& arguments) {
-  const std::string command = std::string(EPIPOLE_TOOL) + " " + arguments + " 2>&1";
+  const std::string command = std::string(tool_path()) + " " + arguments + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) throw std::runtime_error("popen failed");
   return pipe;
@@ -38,7 +40,7 @@ inline ToolResult finish_tool(FILE* pipe) {
 // Runs `epipole ARGUMENTS` to the end; stderr is merged into the output or discarded.
 inline ToolResult run_tool(const std::string& arguments, bool merge_stderr = true) {
   if (merge_stderr) return finish_tool(start_tool(arguments));
-  const std::string command = std::string(EPIPOLE_TOOL) + " " + arguments + " 2>/dev/null";
+  const std::string command = std::string(tool_path()) + " " + arguments + " 2>/dev/null";
   FILE* pipe = popen(command.c_str(), "r");
   if (pipe == nullptr) throw std::runtime_error("popen failed");
   return finish_tool(pipe);

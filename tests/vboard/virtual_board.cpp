@@ -18,6 +18,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "test_paths.hpp"
+
 namespace epipole::test {
 
 namespace {
@@ -27,7 +29,8 @@ using Clock = std::chrono::steady_clock;
 pid_t start_board(const std::string& arch, const std::string& initramfs,
                   const std::string& kernel_arguments, const std::string& socket_path,
                   const std::string& console_path) {
-  std::vector<std::string> words = {EPIPOLE_SOURCE_DIR "/scripts/vboard/boot.sh", arch, initramfs};
+  std::vector<std::string> words = {std::string(source_dir()) + "/scripts/vboard/boot.sh", arch,
+                                    initramfs};
   std::istringstream in(kernel_arguments);
   for (std::string w; in >> w;) words.push_back(w);
   std::vector<char*> argv;

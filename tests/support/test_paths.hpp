@@ -1,0 +1,13 @@
+#pragma once
+
+// Where this build put what the tests run. Defined in a file the build generates
+// (tests/CMakeLists.txt), not by compile flags, so the tests' objects hold no path of one
+// checkout and a fresh clone compiles them from ccache.
+namespace epipole::test {
+
+const char* source_dir();      // the source tree: board/, scripts/
+const char* tool_path();       // the epipole host tool; empty where it is not built
+const char* firmware_path();   // epipole-fw
+const char* sim_output_dir();  // what the sim_cli_run fixture writes
+
+}  // namespace epipole::test
