@@ -57,8 +57,10 @@ void StereoPairer::drop_front(Side side, std::uint64_t& counter) {
   ++counter;
 }
 
-bool StereoPairer::push(Side side, const Frame& frame) {
+bool StereoPairer::push(Side side, const Frame& camera_frame) {
   Queue& q = queue(side);
+  Frame frame = camera_frame;
+  if (config_.match_sequences && q.numbered) frame.sequence += q.offset;
   const bool left = side == Side::left;
   ++(left ? counters_.pushed_left : counters_.pushed_right);
   // A sequence that does not increase is a duplicate or garbled: refuse it. Pairing by time,
@@ -82,6 +84,8 @@ bool StereoPairer::push(Side side, const Frame& frame) {
 
 void StereoPairer::take_fronts() {
   pair_ = {left_q_.front(), right_q_.front()};
+  has_pair_number_ = true;
+  last_pair_number_ = pair_.left.sequence;
   left_q_.head = (left_q_.head + 1) % kCapacity;
   --left_q_.size;
   right_q_.head = (right_q_.head + 1) % kCapacity;
@@ -90,19 +94,23 @@ void StereoPairer::take_fronts() {
   ++counters_.pairs;
 }
 
+// Frames on different clocks never pair: both oldest frames go when they are.
+bool StereoPairer::fronts_on_one_clock() {
+  if (left_q_.front().clock == right_q_.front().clock) return true;
+  drop_front(Side::left, counters_.mismatched_left);
+  drop_front(Side::right, counters_.mismatched_right);
+  return false;
+}
+
 // Each side's frames come in time order. Of the two oldest frames, the earlier one (`early`)
 // can pair only with the later one (`late`): every other frame of late's side is later still.
 // Late may have a nearer partner in the frame after early, if that is already here; one that
 // has not come yet is no nearer when the tolerance is below half the frame period.
 void StereoPairer::match_by_time() {
   while (!ready_ && left_q_.size > 0 && right_q_.size > 0) {
+    if (!fronts_on_one_clock()) continue;
     const Frame& l = left_q_.front();
     const Frame& r = right_q_.front();
-    if (l.clock != r.clock) {
-      drop_front(Side::left, counters_.mismatched_left);
-      drop_front(Side::right, counters_.mismatched_right);
-      continue;
-    }
     const Side early = l.timestamp <= r.timestamp ? Side::left : Side::right;
     std::uint64_t& unpaired =
         early == Side::left ? counters_.unpaired_left : counters_.unpaired_right;
@@ -120,11 +128,69 @@ void StereoPairer::match_by_time() {
   }
 }
 
+void StereoPairer::number(Side side, std::uint32_t offset) {
+  Queue& q = queue(side);
+  q.numbered = true;
+  q.offset = offset;
+  for (std::size_t i = 0; i < q.size; ++i) q.frames[(q.head + i) % kCapacity].sequence += offset;
+  q.last += offset;
+  ++(side == Side::left ? counters_.renumbered_left : counters_.renumbered_right);
+}
+
+// Numbers the frames of a reopened side (or both) again; false while they must wait for a
+// match. Like match_by_time: of the two oldest frames, the earlier one can only match the later.
+bool StereoPairer::renumber() {
+  if (left_q_.numbered && right_q_.numbered) return true;
+  // Both reopened, with the trigger's record: each side on its own, by the edge of its time.
+  if (trigger_ != nullptr && !left_q_.numbered && !right_q_.numbered) {
+    for (const Side side : {Side::left, Side::right}) {
+      Queue& q = queue(side);
+      while (!q.numbered && q.size > 0) {
+        const Frame& f = q.front();
+        const auto edge =
+            trigger_->find_near(f.timestamp - config_.edge_delay, config_.edge_tolerance);
+        if (edge) {
+          number(side, edge->sequence - f.sequence);
+        } else {
+          drop_front(side,
+                     side == Side::left ? counters_.off_trigger_left : counters_.off_trigger_right);
+        }
+      }
+    }
+    return left_q_.numbered && right_q_.numbered;
+  }
+  while (left_q_.size > 0 && right_q_.size > 0) {
+    if (!fronts_on_one_clock()) continue;
+    const Frame& l = left_q_.front();
+    const Frame& r = right_q_.front();
+    const Side early = l.timestamp <= r.timestamp ? Side::left : Side::right;
+    const Nanoseconds dt =
+        early == Side::left ? r.timestamp - l.timestamp : l.timestamp - r.timestamp;
+    if (dt > config_.tolerance) {
+      drop_front(early, early == Side::left ? counters_.unpaired_left : counters_.unpaired_right);
+      continue;
+    }
+    if (!left_q_.numbered && !right_q_.numbered) {
+      // Both reopened, no record: the pairs' numbers go on after the last one.
+      const std::uint32_t next = has_pair_number_ ? last_pair_number_ + 1 : 0;
+      number(Side::left, next - l.sequence);
+      number(Side::right, next - r.sequence);
+    } else if (!left_q_.numbered) {
+      number(Side::left, r.sequence - l.sequence);
+    } else {
+      number(Side::right, l.sequence - r.sequence);
+    }
+    return true;
+  }
+  return false;
+}
+
 void StereoPairer::match() {
   if (!config_.match_sequences) {
     match_by_time();
     return;
   }
+  if (!renumber()) return;
   while (!ready_ && left_q_.size > 0 && right_q_.size > 0) {
     const Frame& l = left_q_.front();
     const Frame& r = right_q_.front();
@@ -170,6 +236,7 @@ void StereoPairer::reset(Side side) {
     drop_front(side, side == Side::left ? counters_.unpaired_left : counters_.unpaired_right);
   }
   q.has_last = false;
+  if (config_.match_sequences) q.numbered = false;
 }
 
 void StereoPairer::count_corrupt(Side side) {
@@ -181,6 +248,20 @@ void StereoPairer::count_corrupt(Side side) {
 StereoGrabber::StereoGrabber(CameraSource& left, CameraSource& right, Clock& clock,
                              PairingConfig config, const TriggerRecord* trigger)
     : left_(left), right_(right), clock_(clock), pairer_(left, right, config, trigger) {}
+
+// While one camera is gone the other is still read, without waiting: it keeps its buffers
+// moving, and its own loss is found (and its reopening begun) then, not once the first is back.
+void StereoGrabber::poll(Side side) {
+  CameraSource& camera = side == Side::left ? left_ : right_;
+  const AcquireResult r = camera.acquire(0);
+  if (r.status == AcquireStatus::ok) {
+    pairer_.push(side, r.frame);
+  } else if (r.status == AcquireStatus::device_lost) {
+    pairer_.reset(side);
+  } else if (r.status == AcquireStatus::corrupt) {
+    pairer_.count_corrupt(side);
+  }
+}
 
 PairResult StereoGrabber::next(Nanoseconds timeout) {
   const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
@@ -197,6 +278,7 @@ PairResult StereoGrabber::next(Nanoseconds timeout) {
       pairer_.push(side, r.frame);
     } else if (r.status == AcquireStatus::device_lost) {
       pairer_.reset(side);
+      poll(side == Side::left ? Side::right : Side::left);
       return {PairStatus::device_lost, {}, side};
     } else if (r.status == AcquireStatus::corrupt) {
       pairer_.count_corrupt(side);  // the camera took its buffer back; wait for the next frame

@@ -15,6 +15,22 @@ std::optional<TriggerEdge> TriggerRecord::find(std::uint32_t sequence) const {
   return slot.edge;
 }
 
+std::optional<TriggerEdge> TriggerRecord::find_near(Nanoseconds time, Nanoseconds tolerance) const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  std::optional<TriggerEdge> nearest;
+  Nanoseconds best = tolerance;
+  for (const Slot& slot : slots_) {
+    if (!slot.valid) continue;
+    const Nanoseconds d =
+        slot.edge.timestamp > time ? slot.edge.timestamp - time : time - slot.edge.timestamp;
+    if (d <= best) {
+      best = d;
+      nearest = slot.edge;
+    }
+  }
+  return nearest;
+}
+
 std::uint64_t TriggerRecord::added() const {
   const std::lock_guard<std::mutex> lock(mutex_);
   return added_;

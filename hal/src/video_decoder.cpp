@@ -1,11 +1,15 @@
 // Video files through FFmpeg's libraries: demuxed by libavformat, decoded by libavcodec, each
-// frame converted to GRAY8 by libswscale (the luma plane, in full range).
+// frame converted to GRAY8 by libswscale (the luma plane, in full range). Built as the plugin
+// libepipole_video.so (video_plugin.hpp), which video_loader.cpp opens when a video is replayed.
 #include "video_decoder.hpp"
 
+#include <algorithm>
+#include <cstring>
 #include <memory>
 #include <string>
 
 #include "epipole/core/error.hpp"
+#include "video_plugin.hpp"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -159,3 +163,20 @@ int decode_video_gray(const std::filesystem::path& file, int limit,
 }
 
 }  // namespace epipole::hal
+
+// The plugin's entry point (video_plugin.hpp).
+extern "C" __attribute__((visibility("default"))) int epipole_video_decode_gray(
+    const char* file, int limit, EpipoleVideoFrame frame, void* context, char* error,
+    std::size_t error_size) {
+  try {
+    return epipole::hal::decode_video_gray(file, limit,
+                                           [&](epipole::GrayView view) { frame(context, &view); });
+  } catch (const std::exception& e) {
+    if (error_size > 0) {
+      const std::size_t n = std::min(std::strlen(e.what()), error_size - 1);
+      std::memcpy(error, e.what(), n);
+      error[n] = '\0';
+    }
+    return -1;
+  }
+}

@@ -412,6 +412,39 @@ TEST(StereoPairing, DisconnectAndReconnectWithRecovery) {
   expect_counters_add_up(grabber.pairer());
 }
 
+// Both cameras go, one after the other (a driver unloaded under them): while the left one is
+// gone the right one is still read, so its own loss is found and it is reopened without waiting
+// for the left one; once both are back, frames of one trigger pair again.
+TEST(StereoPairing, TheOtherCameraIsStillReadWhileOneIsGone) {
+  Rig rig;
+  rig.left.inject({.kind = SimFaultKind::disconnect, .sequence = 50, .value = 8});
+  rig.right.inject({.kind = SimFaultKind::disconnect, .sequence = 55, .value = 1});
+  RecoveryConfig config;
+  config.backoff = {.initial = 10 * kMs, .max = 200 * kMs};
+  RecoveringCamera left(rig.left, rig.board.clock, config);
+  RecoveringCamera right(rig.right, rig.board.clock, config);
+  StereoGrabber grabber(left, right, rig.board.clock, pairing());
+  bool right_back_while_left_gone = false;
+  std::uint64_t pairs_after = 0;
+  while (rig.board.clock.now() < 300 * kPeriod) {
+    const PairResult r = grabber.next(5 * kPeriod);
+    if (left.recovering() && right.counters().reopens == 1 && !right.recovering()) {
+      right_back_while_left_gone = true;
+    }
+    if (r.status != PairStatus::ok) continue;
+    EXPECT_EQ(rig.left.true_sequence(r.pair.left), rig.right.true_sequence(r.pair.right));
+    if (right.counters().reopens == 1 && left.counters().reopens == 1) ++pairs_after;
+    grabber.release(r.pair);
+  }
+  EXPECT_EQ(left.counters().losses, 1u);
+  EXPECT_EQ(right.counters().losses, 1u);
+  EXPECT_EQ(right.counters().reopen_failures, 1u);
+  EXPECT_EQ(left.counters().reopen_failures, 8u);
+  EXPECT_TRUE(right_back_while_left_gone);
+  EXPECT_GT(pairs_after, 150u);
+  expect_counters_add_up(grabber.pairer());
+}
+
 TEST(Recovery, TimeoutsInARowReopenTheCamera) {
   Rig rig;
   rig.left.inject({.kind = SimFaultKind::stall, .sequence = 5, .duration = 40 * kPeriod});
@@ -747,6 +780,92 @@ TEST(PairingByTime, NearestWithinTheToleranceEachFrameOnce) {
   expect_counters_add_up(pairer);
   EXPECT_EQ(l.released, 8) << "every frame went back to its camera once";
   EXPECT_EQ(r.released, 5);
+}
+
+// A V4L2 camera counts from 0 again at every stream start: after a reopen of one side, that
+// side's numbers are given again by the other side's frame of the same time.
+TEST(StereoPairing, AReopenedSideIsNumberedAgainByTheOtherSide) {
+  HandCamera l("left"), r("right");
+  StereoPairer pairer(l, r, {.tolerance = 2 * kMs, .trigger_period = kPeriod});
+  for (std::uint32_t s = 100; s < 103; ++s) {
+    const Nanoseconds t = s * kPeriod;
+    EXPECT_FALSE(pairer.push(Side::left, hand_frame(s, t)));
+    ASSERT_TRUE(pairer.push(Side::right, hand_frame(s, t + kMs)));
+    pairer.release(pairer.take());
+  }
+  pairer.reset(Side::right);
+  // Left goes on (103, 104, ...); the reopened right counts 0, 1, ... and misses trigger 103. Its
+  // first frame lies between two left frames, beyond the tolerance of both: it is dropped, never
+  // numbered by either of them.
+  EXPECT_FALSE(pairer.push(Side::left, hand_frame(103, 103 * kPeriod)));
+  EXPECT_FALSE(pairer.push(Side::right, hand_frame(0, 103 * kPeriod + kPeriod / 2)));
+  EXPECT_EQ(pairer.counters().renumbered_right, 0u);
+  EXPECT_FALSE(pairer.push(Side::left, hand_frame(104, 104 * kPeriod)));
+  ASSERT_TRUE(pairer.push(Side::right, hand_frame(1, 104 * kPeriod - kMs)));
+  StereoPair p = pairer.take();
+  EXPECT_EQ(p.left.sequence, 104u);
+  EXPECT_EQ(p.right.sequence, 104u) << "the right camera's 1, numbered by the trigger";
+  pairer.release(p);
+  EXPECT_EQ(pairer.counters().renumbered_right, 1u);
+  EXPECT_EQ(pairer.counters().renumbered_left, 0u);
+  // From now on by sequence, as before the reopen: a frame the left side missed is not paired.
+  EXPECT_FALSE(pairer.push(Side::right, hand_frame(2, 105 * kPeriod)));
+  EXPECT_FALSE(pairer.push(Side::left, hand_frame(106, 106 * kPeriod)));
+  ASSERT_TRUE(pairer.push(Side::right, hand_frame(3, 106 * kPeriod)));
+  p = pairer.take();
+  EXPECT_EQ(p.left.sequence, 106u);
+  EXPECT_EQ(p.right.sequence, 106u);
+  pairer.release(p);
+  expect_counters_add_up(pairer);
+  EXPECT_EQ(l.released, 6);
+  EXPECT_EQ(r.released, 7);
+}
+
+// Both cameras reopened (a module reload): with the trigger's record, each side is numbered by
+// the edge of its frames' time; without one, the pairs' numbers go on after the last pair.
+TEST(StereoPairing, BothSidesReopenedAreNumberedByTheTriggerOrContinue) {
+  HandCamera l("left"), r("right");
+  TriggerRecord record;
+  const Nanoseconds delay = 4 * kMs;
+  StereoPairer with_record(l, r,
+                           {.tolerance = 2 * kMs,
+                            .trigger_period = kPeriod,
+                            .edge_delay = delay,
+                            .edge_tolerance = 2 * kMs},
+                           &record);
+  for (std::uint32_t s = 0; s < 60; ++s) record.add({s, s * kPeriod});
+  with_record.reset(Side::left);
+  with_record.reset(Side::right);
+  // Left restarts at 0 on edge 40, right at 0 on edge 41 (it missed 40). A left frame off every
+  // edge is dropped.
+  EXPECT_FALSE(with_record.push(Side::left, hand_frame(0, 39 * kPeriod + kPeriod / 2)));
+  EXPECT_EQ(with_record.counters().off_trigger_left, 1u);
+  EXPECT_FALSE(with_record.push(Side::left, hand_frame(1, 40 * kPeriod + delay)));
+  EXPECT_FALSE(with_record.push(Side::right, hand_frame(0, 41 * kPeriod + delay + kMs)));
+  EXPECT_EQ(with_record.counters().unpaired_left, 1u) << "left's 40 has no right partner";
+  ASSERT_TRUE(with_record.push(Side::left, hand_frame(2, 41 * kPeriod + delay)));
+  StereoPair p = with_record.take();
+  EXPECT_EQ(p.left.sequence, 41u);
+  EXPECT_EQ(p.right.sequence, 41u);
+  with_record.release(p);
+  expect_counters_add_up(with_record);
+
+  HandCamera l2("left"), r2("right");
+  StereoPairer without(l2, r2, {.tolerance = 2 * kMs, .trigger_period = kPeriod});
+  EXPECT_FALSE(without.push(Side::left, hand_frame(500, 0)));
+  ASSERT_TRUE(without.push(Side::right, hand_frame(500, kMs)));
+  without.release(without.take());
+  without.reset(Side::left);
+  without.reset(Side::right);
+  EXPECT_FALSE(without.push(Side::right, hand_frame(0, 10 * kPeriod)));
+  ASSERT_TRUE(without.push(Side::left, hand_frame(7, 10 * kPeriod + kMs)));
+  p = without.take();
+  EXPECT_EQ(p.left.sequence, 501u);
+  EXPECT_EQ(p.right.sequence, 501u);
+  without.release(p);
+  EXPECT_FALSE(without.push(Side::left, hand_frame(8, 11 * kPeriod)));
+  ASSERT_TRUE(without.push(Side::right, hand_frame(1, 11 * kPeriod)));
+  EXPECT_EQ(without.take().left.sequence, 502u);
 }
 
 TEST(PairingByTime, TheTriggerRecordAndTheToleranceAreChecked) {

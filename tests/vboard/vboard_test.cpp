@@ -145,6 +145,50 @@ TEST(EPIPOLE_VBOARD_SUITE, TriggerStopsAndRestarts) {
   };
   EXPECT_GT(std::count_if(first_after, frames.end(), carries_its_edge), 0) << context(run);
 }
+// Both cameras disappear under the firmware (unbound from vivid, as if unplugged) 4 s after it
+// started; vivid is unloaded as soon as the firmware has let go of them and loaded again. The
+// firmware reopens each camera with back-off until it is back, counts both reopens in health, and
+// pairs again: vivid counts its frames from 0 again, and the pairs' numbers go on from the last.
+TEST(EPIPOLE_VBOARD_SUITE, CameraModuleUnloadedAndReloaded) {
+  const BoardRun run = boot_virtual_board(
+      kArch, kInitramfs, "epipole.frames=0 epipole.seconds=14 epipole.reload=4", kTimeoutSeconds);
+  ASSERT_EQ(run.exit_code, 0) << context(run);
+  ASSERT_EQ(run.firmware_exit, 0) << context(run);
+  ASSERT_NE(run.console.find("fault: vivid unloaded"), std::string::npos) << context(run);
+  ASSERT_NE(run.console.find("fault: vivid loaded again"), std::string::npos) << context(run);
+  expect_clean_link(run);
+
+  std::size_t back = 0;  // the first message after the health that counts both reopens
+  std::uint16_t reopens = 0;
+  for (std::size_t i = 0; i < run.messages.size(); ++i) {
+    const auto* h = std::get_if<Health>(&run.messages[i].message);
+    if (h == nullptr) continue;
+    EXPECT_GE(h->camera_reopens, reopens) << "health " << i;
+    reopens = h->camera_reopens;
+    if (back == 0 && reopens >= 2) back = i + 1;
+  }
+  ASSERT_GT(back, 0u) << "no health counted the two reopens; " << context(run);
+  EXPECT_EQ(run.all<Health>().front().camera_reopens, 0);
+
+  std::size_t frames_after = 0;
+  std::uint32_t last_frame = 0;
+  std::uint64_t last_trigger = 0;
+  for (std::size_t i = 0; i < run.messages.size(); ++i) {
+    const auto* f = std::get_if<FrameSummary>(&run.messages[i].message);
+    if (f == nullptr) continue;
+    if (last_trigger != 0) {
+      EXPECT_GT(f->frame, last_frame) << "message " << i;
+      EXPECT_GT(f->trigger_ns, last_trigger) << "message " << i;
+    }
+    last_frame = f->frame;
+    last_trigger = f->trigger_ns;
+    if (i >= back) ++frames_after;
+  }
+  std::printf("vboard %s: %u camera reopens, %zu pairs after both were back\n", kArch.c_str(),
+              reopens, frames_after);
+  EXPECT_GE(frames_after, 5u) << "the pairs did not come back; " << context(run);
+}
+
 // The robot's end of the UART goes away for a second and comes back. A UART without modem lines
 // tells the firmware nothing, so it sends on (health counts no link reopen and no dropped
 // message: the UART took every byte); what it sent meanwhile is lost, and the robot's decoder

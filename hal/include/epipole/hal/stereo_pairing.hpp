@@ -34,6 +34,8 @@ struct PairingCounters {
   std::uint64_t off_trigger_left = 0, off_trigger_right = 0;
   // Damaged frames the cameras reported (AcquireStatus::corrupt); never pushed (StereoGrabber).
   std::uint64_t corrupt_left = 0, corrupt_right = 0;
+  // Pairing by sequence: the times a reopened side's frames were given trigger numbers again.
+  std::uint64_t renumbered_left = 0, renumbered_right = 0;
 };
 
 struct PairingConfig {
@@ -63,6 +65,13 @@ struct PairingConfig {
 // their timestamps say; a frame whose sequence does not increase on its side is refused; a frame
 // for which the other side has moved past its sequence is dropped. Dropped frames go back to their
 // camera at once and are counted. Fixed memory; never allocates.
+//
+// A reopened camera (reset()) counts its frames again from wherever its driver starts (V4L2: 0 at
+// every stream start), so its numbers say nothing about the trigger any more. Its frames wait
+// until one matches, by time within the tolerance, a frame of the other side (or, both sides
+// reopened and a trigger record given, an edge of the record): the difference of the two
+// numbers is then added to each of its frames, and they pair by sequence again. With both sides
+// reopened and no record, the first match continues the pairs' numbering.
 class StereoPairer {
  public:
   // `trigger`: the edges of the trigger line (optional; it must outlive the pairer). Without it,
@@ -78,7 +87,8 @@ class StereoPairer {
   // Takes the ready pair; the caller releases both frames (release()).
   StereoPair take();
   void release(const StereoPair& pair);
-  // Drops what waits on one side (e.g. its camera was reopened); counted as unpaired.
+  // Drops what waits on one side (its camera was reopened); counted as unpaired. Pairing by
+  // sequence, that side's frames are numbered anew from their next match.
   void reset(Side side);
   // Counts a damaged frame a camera reported (it never reaches the pairer).
   void count_corrupt(Side side);
@@ -97,6 +107,8 @@ class StereoPairer {
     bool has_last = false;
     std::uint32_t last = 0;
     Nanoseconds last_time = 0;
+    bool numbered = true;      // false after reset(), until the side's next match
+    std::uint32_t offset = 0;  // added to the camera's sequence: the trigger's number
     const Frame& front() const { return frames[head]; }
     const Frame& second() const { return frames[(head + 1) % kCapacity]; }
   };
@@ -106,7 +118,10 @@ class StereoPairer {
   void drop_front(Side side, std::uint64_t& counter);
   bool on_trigger(const Frame& left, const Frame& right) const;
   void match();
+  bool fronts_on_one_clock();
   void match_by_time();
+  bool renumber();
+  void number(Side side, std::uint32_t offset);
   void take_fronts();
   void check_period(Nanoseconds period) const;
 
@@ -117,6 +132,8 @@ class StereoPairer {
   Queue left_q_, right_q_;
   StereoPair pair_{};
   bool ready_ = false;
+  bool has_pair_number_ = false;
+  std::uint32_t last_pair_number_ = 0;
   PairingCounters counters_{};
 };
 
@@ -140,6 +157,7 @@ class StereoGrabber {
   StereoPairer& pairer() { return pairer_; }
 
  private:
+  void poll(Side side);
   CameraSource& left_;
   CameraSource& right_;
   Clock& clock_;

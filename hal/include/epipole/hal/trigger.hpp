@@ -102,6 +102,8 @@ class TriggerRecord {
   void add(const TriggerEdge& edge);
   // The edge of that sequence, while it is among the last kCapacity.
   std::optional<TriggerEdge> find(std::uint32_t sequence) const;
+  // The edge nearest `time`, when one of the last kCapacity lies within `tolerance` of it.
+  std::optional<TriggerEdge> find_near(Nanoseconds time, Nanoseconds tolerance) const;
   std::uint64_t added() const;
   void clear();
 
