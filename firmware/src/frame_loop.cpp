@@ -343,16 +343,11 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
     const hal::StereoPair& pair = got.pair;
     hal::Nanoseconds trigger_ns = pair.left.timestamp;
     if (trigger_) {
-      // The edge of the pair's number, if it can be the pair's: not after the frame, and less
-      // than a trigger period before it. After both cameras were reopened without a trigger
-      // record to number them by, the pairs' numbers go on from the last pair and need not be
-      // the edges' any more (hal/stereo_pairing.hpp).
+      // The edge of the pair's number, while the numbers are the trigger's: after both cameras
+      // were reopened without a trigger record to number them by, they go on from the last pair
+      // instead (hal/stereo_pairing.hpp).
       const auto edge = trigger_->record().find(pair.left.sequence);
-      const hal::Nanoseconds period = grabber_.pairer().config().trigger_period;
-      if (edge && edge->timestamp <= pair.left.timestamp &&
-          (period == 0 || pair.left.timestamp - edge->timestamp < period)) {
-        trigger_ns = edge->timestamp;
-      }
+      if (edge && grabber_.pairer().numbers_are_the_triggers()) trigger_ns = edge->timestamp;
     }
     const hal::Nanoseconds captured = clock.now() - trigger_ns;
     const hal::Nanoseconds t0 = steady_now();

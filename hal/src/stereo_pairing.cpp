@@ -151,6 +151,7 @@ bool StereoPairer::renumber() {
             trigger_->find_near(f.timestamp - config_.edge_delay, config_.edge_tolerance);
         if (edge) {
           number(side, edge->sequence - f.sequence);
+          numbers_are_the_triggers_ = true;
         } else {
           drop_front(side,
                      side == Side::left ? counters_.off_trigger_left : counters_.off_trigger_right);
@@ -173,6 +174,7 @@ bool StereoPairer::renumber() {
     if (!left_q_.numbered && !right_q_.numbered) {
       // Both reopened, no record: the pairs' numbers go on after the last one.
       const std::uint32_t next = has_pair_number_ ? last_pair_number_ + 1 : 0;
+      numbers_are_the_triggers_ = false;
       number(Side::left, next - l.sequence);
       number(Side::right, next - r.sequence);
     } else if (!left_q_.numbered) {

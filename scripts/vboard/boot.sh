@@ -8,9 +8,15 @@
 #   EPIPOLE_VBOARD_UART=pty           the link on a pseudo-terminal (QEMU prints its path)
 #   EPIPOLE_VBOARD_UART=socket:PATH   the link on a unix socket; QEMU waits for the host to
 #                                     connect before the guest starts, so no byte is lost
+#   EPIPOLE_VBOARD_LINK=uart          the link on a 16550 UART (default): the guest cannot tell
+#                                     whether the host is there
+#   EPIPOLE_VBOARD_LINK=usb           the link on a USB serial adapter (an FTDI on an xHCI
+#                                     controller, guest /dev/ttyUSB0) that QEMU unplugs while the
+#                                     host end is closed, as a robot's cable pulled out
 #
-# amd64: the PC machine booting the uncompressed kernel (PVH), the link on a 16550 at 0x2f8 (guest /dev/ttyS1).
-# arm64: the virt machine with a Cortex-A72 (its one PL011 is the console), the link on a PCI
+# amd64: the PC machine booting the uncompressed kernel (PVH), the UART a 16550 at 0x2f8 (guest
+#        /dev/ttyS1).
+# arm64: the virt machine with a Cortex-A72 (its one PL011 is the console), the UART a PCI
 #        16550 (guest /dev/ttyS0).
 # KVM is not used: where /dev/kvm is a nested or paravirtual flavour it cannot run a stock
 # kernel, and TCG boots in seconds.
@@ -39,14 +45,32 @@ case $uart in
     ;;
 esac
 
+case ${EPIPOLE_VBOARD_LINK:-uart} in
+  uart) usb= ;;
+  usb) usb=(-device qemu-xhci -device usb-serial,chardev=link) ;;
+  *)
+    echo "boot: EPIPOLE_VBOARD_LINK must be uart or usb, not '$EPIPOLE_VBOARD_LINK'" >&2
+    exit 2
+    ;;
+esac
+
 common=(-accel tcg -m 512 -smp ${EPIPOLE_VBOARD_CPUS:-1} -nodefaults -no-user-config -display none -no-reboot
   -serial stdio -chardev "$chardev" -initrd "$initramfs")
 if [[ $arch == amd64 ]]; then
-  exec qemu-system-x86_64 -M pc -cpu max "${common[@]}" -kernel "$root/vmlinux" \
-    -device isa-serial,chardev=link \
-    -append "console=ttyS0 quiet panic=-1 epipole.uart=/dev/ttyS1 $*"
+  if [[ -n $usb ]]; then
+    link=("${usb[@]}") guest=/dev/ttyUSB0
+  else
+    link=(-device isa-serial,chardev=link) guest=/dev/ttyS1
+  fi
+  exec qemu-system-x86_64 -M pc -cpu max "${common[@]}" -kernel "$root/vmlinux" "${link[@]}" \
+    -append "console=ttyS0 quiet panic=-1 epipole.uart=$guest $*"
 else
+  if [[ -n $usb ]]; then
+    link=("${usb[@]}") guest=/dev/ttyUSB0
+  else
+    link=(-device pci-serial,chardev=link) guest=/dev/ttyS0
+  fi
   exec qemu-system-aarch64 -M virt -cpu cortex-a72 "${common[@]}" \
-    -kernel "$root/image/boot/vmlinuz-$kver" -device pci-serial,chardev=link \
-    -append "console=ttyAMA0 quiet panic=-1 epipole.uart=/dev/ttyS0 $*"
+    -kernel "$root/image/boot/vmlinuz-$kver" "${link[@]}" \
+    -append "console=ttyAMA0 quiet panic=-1 epipole.uart=$guest $*"
 fi

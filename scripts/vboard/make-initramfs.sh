@@ -79,11 +79,11 @@ add_program() {
 }
 add_program "$build/firmware/epipole-fw"
 
-# Kernel modules: what vivid and configfs need (kmod resolves the closure on the unpacked
-# kernel), the two built out of tree, and a modules.dep for busybox's modprobe.
+# Kernel modules: what vivid, configfs and the USB serial link need (kmod resolves the closure
+# on the unpacked kernel), the two built out of tree, and a modules.dep for busybox's modprobe.
 modules="$stage/lib/modules/$kver"
 mkdir -p "$modules/extra"
-for module in vivid configfs; do
+for module in vivid configfs xhci-pci ftdi_sio; do
   modprobe -d "$root/image" -S "$kver" --show-depends "$module" | awk '$1 == "insmod" {print $2}'
 done | sort -u | while read -r ko; do
   relative=${ko#"$root/image/lib/modules/$kver/"}

@@ -862,10 +862,14 @@ TEST(StereoPairing, BothSidesReopenedAreNumberedByTheTriggerOrContinue) {
   p = without.take();
   EXPECT_EQ(p.left.sequence, 501u);
   EXPECT_EQ(p.right.sequence, 501u);
+  EXPECT_FALSE(without.numbers_are_the_triggers());
+  EXPECT_TRUE(with_record.numbers_are_the_triggers());
   without.release(p);
   EXPECT_FALSE(without.push(Side::left, hand_frame(8, 11 * kPeriod)));
   ASSERT_TRUE(without.push(Side::right, hand_frame(1, 11 * kPeriod)));
-  EXPECT_EQ(without.take().left.sequence, 502u);
+  p = without.take();
+  EXPECT_EQ(p.left.sequence, 502u);
+  without.release(p);
 }
 
 TEST(PairingByTime, TheTriggerRecordAndTheToleranceAreChecked) {

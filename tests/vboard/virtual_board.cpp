@@ -28,7 +28,7 @@ using Clock = std::chrono::steady_clock;
 
 pid_t start_board(const std::string& arch, const std::string& initramfs,
                   const std::string& kernel_arguments, const std::string& socket_path,
-                  const std::string& console_path) {
+                  const std::string& console_path, LinkKind link) {
   std::vector<std::string> words = {std::string(source_dir()) + "/scripts/vboard/boot.sh", arch,
                                     initramfs};
   std::istringstream in(kernel_arguments);
@@ -48,6 +48,7 @@ pid_t start_board(const std::string& arch, const std::string& initramfs,
     dup2(console, 1);
     dup2(console, 2);
     setenv("EPIPOLE_VBOARD_UART", uart.c_str(), 1);
+    setenv("EPIPOLE_VBOARD_LINK", link == LinkKind::usb_serial ? "usb" : "uart", 1);
     execv(argv[0], argv.data());
     _exit(127);
   }
@@ -120,7 +121,7 @@ void parse_console(BoardRun& run) {
 
 BoardRun boot_virtual_board(const std::string& arch, const std::string& initramfs,
                             const std::string& kernel_arguments, int timeout_s,
-                            double disconnect_after_s) {
+                            double disconnect_after_s, LinkKind link) {
   BoardRun run;
   const std::string base = ::testing::TempDir() + "vboard-" + std::to_string(getpid()) + "-" + arch;
   const std::string socket_path = base + ".sock", console_path = base + ".console";
@@ -128,7 +129,8 @@ BoardRun boot_virtual_board(const std::string& arch, const std::string& initramf
   const auto start = Clock::now();
   const auto deadline = start + std::chrono::seconds(timeout_s);
 
-  const pid_t qemu = start_board(arch, initramfs, kernel_arguments, socket_path, console_path);
+  const pid_t qemu =
+      start_board(arch, initramfs, kernel_arguments, socket_path, console_path, link);
   if (int fd = connect_link(socket_path, qemu, deadline); fd >= 0) {
     if (disconnect_after_s > 0) {
       while (run.link.empty() && Clock::now() < deadline)

@@ -41,12 +41,18 @@ struct BoardRun {
   }
 };
 
+// How the firmware's link reaches the host (scripts/vboard/boot.sh, EPIPOLE_VBOARD_LINK).
+enum class LinkKind {
+  uart,        // a 16550: the guest cannot tell whether the host is there
+  usb_serial,  // a USB serial adapter, unplugged while the host end is closed
+};
+
 // Boots ARCH ("amd64", "arm64") with INITRAMFS (scripts/vboard/prepare.sh made it) and the
 // extra kernel arguments, waits at most timeout_s for the guest to power off. With
 // disconnect_after_s, the host closes its end of the link that long after the first byte and
 // connects again a second later (what the guest sends meanwhile is lost, as on a UART).
 BoardRun boot_virtual_board(const std::string& arch, const std::string& initramfs,
                             const std::string& kernel_arguments, int timeout_s,
-                            double disconnect_after_s = 0);
+                            double disconnect_after_s = 0, LinkKind link = LinkKind::uart);
 
 }  // namespace epipole::test

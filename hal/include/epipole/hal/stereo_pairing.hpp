@@ -96,6 +96,10 @@ class StereoPairer {
   // constructor checks them. Throws Error (and keeps the old period) when they do not fit.
   void set_trigger_period(Nanoseconds period);
   std::size_t waiting(Side side) const { return queue(side).size; }
+  // Whether a pair's number is still its trigger's: false from the time both sides were numbered
+  // anew without a trigger record (their numbers go on from the last pair), until both are
+  // numbered by the record again. Pairing by time: the left camera's numbers, as they come.
+  bool numbers_are_the_triggers() const { return numbers_are_the_triggers_; }
   const PairingCounters& counters() const { return counters_; }
   const PairingConfig& config() const { return config_; }
 
@@ -132,6 +136,7 @@ class StereoPairer {
   Queue left_q_, right_q_;
   StereoPair pair_{};
   bool ready_ = false;
+  bool numbers_are_the_triggers_ = true;
   bool has_pair_number_ = false;
   std::uint32_t last_pair_number_ = 0;
   PairingCounters counters_{};
