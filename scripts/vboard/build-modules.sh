@@ -2,7 +2,8 @@
 # Builds the two drivers the virtual board needs and Debian's kernel leaves out, out of tree
 # against that kernel's headers (fetch-kernel.sh first), into its cache folder's modules/:
 #   gpio-sim.ko   the simulated GPIO chip that carries the trigger line
-#   vimc.ko       the virtual media controller camera (libcamera can drive it; vivid it cannot)
+#   vimc.ko       the virtual media controller camera (libcamera can drive it; vivid it cannot),
+#                 with n_devs= for several instances (vimc-instances.c): one libcamera camera each
 # Idempotent: modules already built for the kernel version are kept.
 #
 #   scripts/vboard/build-modules.sh amd64|arm64
@@ -18,7 +19,9 @@ root=$(vboard_cache "$kver")
   exit 1
 }
 out="$root/modules"
-if [[ -f $out/gpio-sim.ko && -f $out/vimc.ko ]]; then
+# The stamp names what the modules are: a newer recipe builds them again.
+stamp=.modules-v2-vimc-instances
+if [[ -f $out/$stamp ]]; then
   echo "build-modules: $out is complete"
   exit 0
 fi
@@ -47,6 +50,16 @@ printf 'obj-m := gpio-sim.o\ngpio-sim-y := gpio-sim-main.o irq_sim.o\n' >"$work/
 
 mkdir "$work/vimc"
 cp "$source_dir"/drivers/media/test-drivers/vimc/*.[ch] "$work/vimc/"
+# vimc registers one platform device: its own device and init/exit make way for n_devs of them.
+core="$work/vimc/vimc-core.c"
+grep -q '^static struct platform_device vimc_pdev = {$' "$core" &&
+  grep -q '^static int __init vimc_init(void)$' "$core" || {
+  echo "build-modules: vimc-core.c has changed: its platform device or init was not found" >&2
+  exit 1
+}
+sed -i -e '/^static struct platform_device vimc_pdev = {$/,/^};$/d' \
+  -e '/^static int __init vimc_init(void)$/,$d' "$core"
+cat "$(dirname "$0")/vimc-instances.c" >>"$core"
 printf 'obj-m := vimc.o\nvimc-y := %s\n' \
   "$(cd "$work/vimc" && ls ./*.c | sed 's|^\./||; s|\.c$|.o|' | paste -sd' ')" >"$work/vimc/Kbuild"
 
@@ -58,6 +71,7 @@ for module in gpio-sim vimc; do
 done
 mkdir -p "$out.partial"
 cp "$work/gpio-sim/gpio-sim.ko" "$work/vimc/vimc.ko" "$out.partial/"
+touch "$out.partial/$stamp"
 rm -rf "$out"
 mv "$out.partial" "$out"
 echo "build-modules: $out ready ($(modinfo -F vermagic "$out/gpio-sim.ko"))"

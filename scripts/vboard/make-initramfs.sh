@@ -43,7 +43,7 @@ mkdir -p "$stage"/{bin,usr/bin,etc/epipole,proc,sys,dev,tmp,run,lib/"$triple"}
 cp "$root/busybox" "$stage/bin/busybox"
 ln -s busybox "$stage/bin/sh"
 cp "$board/init" "$stage/init"
-cp "$board/board.yaml" "$stage/etc/epipole/board.yaml"
+cp "$board/board.yaml" "$board/board-libcamera.yaml" "$stage/etc/epipole/"
 cp "$build/tests/vboard/vboard-trigger" "$build/tests/vboard/vboard-control" "$stage/usr/bin/"
 
 # A dynamically linked program and, recursively, the libraries it names (DT_NEEDED), from the
@@ -78,6 +78,28 @@ add_program() {
   done
 }
 add_program "$build/firmware/epipole-fw"
+
+# A firmware built with libcamera gets the vimc pipeline's IPA module (Debian's libcamera-ipa of
+# the same version as the libcamera it links, fetched once into the cache): the libcamera test
+# runs on two vimc cameras (board-libcamera.yaml).
+if "${cross}readelf" -d "$build/firmware/epipole-fw" | grep -q 'NEEDED.*\[libcamera\.so'; then
+  [[ -n $cross ]] && qualifier=":arm64" || qualifier=""
+  version=$(dpkg-query -W -f='${Version}' "libcamera0.0.3$qualifier" 2>/dev/null ||
+    vboard_package_version "libcamera0.0.3$qualifier")
+  ipa=$(vboard_cache "libcamera-ipa-$version-$arch")
+  if [[ ! -d $ipa ]]; then
+    download=$(mktemp -d)
+    (cd "$download" && vboard_download "libcamera-ipa$qualifier=$version")
+    dpkg-deb -x "$download"/libcamera-ipa_*.deb "$ipa.partial"
+    rm -rf "$download"
+    mv "$ipa.partial" "$ipa"
+  fi
+  for file in usr/lib/$triple/libcamera/{ipa_vimc.so,ipa_vimc.so.sign,vimc_ipa_proxy} \
+    usr/share/libcamera/ipa/vimc/vimc.conf; do
+    mkdir -p "$stage/$(dirname "$file")"
+    cp "$ipa/$file" "$stage/$file"
+  done
+fi
 
 # Kernel modules: what vivid, configfs and the USB serial link need (kmod resolves the closure
 # on the unpacked kernel), the two built out of tree, and a modules.dep for busybox's modprobe.

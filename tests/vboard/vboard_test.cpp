@@ -104,6 +104,41 @@ TEST(EPIPOLE_VBOARD_SUITE, FirmwareRunsOnVividCamerasAndGpioSimTrigger) {
   }
 }
 
+#if EPIPOLE_VBOARD_LIBCAMERA
+// The cameras through the libcamera backend: two vimc instances, libcamera's vimc pipeline with
+// its IPA module, free-running (no trigger), paired by time (board-libcamera.yaml).
+TEST(EPIPOLE_VBOARD_SUITE, FirmwareRunsOnTwoVimcCamerasThroughLibcamera) {
+  constexpr int kLibcameraFrames = 10;
+  const BoardRun run = boot_virtual_board(
+      kArch, kInitramfs,
+      "epipole.cameras=libcamera epipole.frames=" + std::to_string(kLibcameraFrames),
+      kTimeoutSeconds);
+  std::printf("vboard %s libcamera: %.1f s from QEMU's start to power off, %zu link bytes\n",
+              kArch.c_str(), run.seconds, run.link.size());
+  ASSERT_EQ(run.exit_code, 0) << context(run);
+  ASSERT_EQ(run.firmware_exit, 0) << context(run);
+  // libcamera's own log: both cameras configured, by the vimc pipeline (RGB888 to gray).
+  std::size_t configured = 0;
+  for (std::size_t at = 0;
+       (at = run.console.find("configuring streams: (0) 360x180-RGB888", at)) != std::string::npos;
+       ++at) {
+    ++configured;
+  }
+  EXPECT_EQ(configured, 2u) << context(run);
+  expect_clean_link(run);
+  const std::vector<FrameSummary> frames = run.all<FrameSummary>();
+  ASSERT_EQ(frames.size(), static_cast<std::size_t>(kLibcameraFrames)) << context(run);
+  for (std::size_t i = 1; i < frames.size(); ++i) {
+    EXPECT_GT(frames[i].frame, frames[i - 1].frame);
+    EXPECT_GT(frames[i].trigger_ns, frames[i - 1].trigger_ns);
+  }
+  const std::vector<Health> health = run.all<Health>();
+  ASSERT_FALSE(health.empty()) << context(run);
+  EXPECT_EQ(health.back().camera_reopens, 0);
+  EXPECT_EQ(health.back().messages_dropped, 0);
+}
+#endif
+
 // The faults, on both architectures.
 // The trigger stops for 1.5 s after every 6 edges and starts again. Each quiet spell is one
 // trigger loss in health, and only an edge after it ends the spell, so two losses mean the line
