@@ -94,23 +94,21 @@ void StereoPairer::take_fronts() {
   ++counters_.pairs;
 }
 
-// Frames on different clocks never pair: both oldest frames go when they are.
-bool StereoPairer::fronts_on_one_clock() {
-  if (left_q_.front().clock == right_q_.front().clock) return true;
-  drop_front(Side::left, counters_.mismatched_left);
-  drop_front(Side::right, counters_.mismatched_right);
-  return false;
-}
-
 // Each side's frames come in time order. Of the two oldest frames, the earlier one (`early`)
 // can pair only with the later one (`late`): every other frame of late's side is later still.
 // Late may have a nearer partner in the frame after early, if that is already here; one that
-// has not come yet is no nearer when the tolerance is below half the frame period.
-void StereoPairer::match_by_time() {
-  while (!ready_ && left_q_.size > 0 && right_q_.size > 0) {
-    if (!fronts_on_one_clock()) continue;
+// has not come yet is no nearer when the tolerance is below half the frame period. Drops the
+// oldest frames until the two fronts match (true) or a side runs out (false). Frames on
+// different clocks never match: both go.
+bool StereoPairer::fronts_match_by_time() {
+  while (left_q_.size > 0 && right_q_.size > 0) {
     const Frame& l = left_q_.front();
     const Frame& r = right_q_.front();
+    if (l.clock != r.clock) {
+      drop_front(Side::left, counters_.mismatched_left);
+      drop_front(Side::right, counters_.mismatched_right);
+      continue;
+    }
     const Side early = l.timestamp <= r.timestamp ? Side::left : Side::right;
     std::uint64_t& unpaired =
         early == Side::left ? counters_.unpaired_left : counters_.unpaired_right;
@@ -124,8 +122,13 @@ void StereoPairer::match_by_time() {
       drop_front(early, unpaired);
       continue;
     }
-    take_fronts();
+    return true;
   }
+  return false;
+}
+
+void StereoPairer::match_by_time() {
+  while (!ready_ && fronts_match_by_time()) take_fronts();
 }
 
 void StereoPairer::number(Side side, std::uint32_t offset) {
@@ -138,7 +141,7 @@ void StereoPairer::number(Side side, std::uint32_t offset) {
 }
 
 // Numbers the frames of a reopened side (or both) again; false while they must wait for a
-// match. Like match_by_time: of the two oldest frames, the earlier one can only match the later.
+// match, by time as free-running cameras pair.
 bool StereoPairer::renumber() {
   if (left_q_.numbered && right_q_.numbered) return true;
   // Both reopened, with the trigger's record: each side on its own, by the edge of its time.
@@ -160,31 +163,21 @@ bool StereoPairer::renumber() {
     }
     return left_q_.numbered && right_q_.numbered;
   }
-  while (left_q_.size > 0 && right_q_.size > 0) {
-    if (!fronts_on_one_clock()) continue;
-    const Frame& l = left_q_.front();
-    const Frame& r = right_q_.front();
-    const Side early = l.timestamp <= r.timestamp ? Side::left : Side::right;
-    const Nanoseconds dt =
-        early == Side::left ? r.timestamp - l.timestamp : l.timestamp - r.timestamp;
-    if (dt > config_.tolerance) {
-      drop_front(early, early == Side::left ? counters_.unpaired_left : counters_.unpaired_right);
-      continue;
-    }
-    if (!left_q_.numbered && !right_q_.numbered) {
-      // Both reopened, no record: the pairs' numbers go on after the last one.
-      const std::uint32_t next = has_pair_number_ ? last_pair_number_ + 1 : 0;
-      numbers_are_the_triggers_ = false;
-      number(Side::left, next - l.sequence);
-      number(Side::right, next - r.sequence);
-    } else if (!left_q_.numbered) {
-      number(Side::left, r.sequence - l.sequence);
-    } else {
-      number(Side::right, l.sequence - r.sequence);
-    }
-    return true;
+  if (!fronts_match_by_time()) return false;
+  const std::uint32_t l = left_q_.front().sequence;
+  const std::uint32_t r = right_q_.front().sequence;
+  if (!left_q_.numbered && !right_q_.numbered) {
+    // Both reopened, no record: the pairs' numbers go on after the last one.
+    const std::uint32_t next = has_pair_number_ ? last_pair_number_ + 1 : 0;
+    numbers_are_the_triggers_ = false;
+    number(Side::left, next - l);
+    number(Side::right, next - r);
+  } else if (!left_q_.numbered) {
+    number(Side::left, r - l);
+  } else {
+    number(Side::right, l - r);
   }
-  return false;
+  return true;
 }
 
 void StereoPairer::match() {
@@ -251,11 +244,11 @@ StereoGrabber::StereoGrabber(CameraSource& left, CameraSource& right, Clock& clo
                              PairingConfig config, const TriggerRecord* trigger)
     : left_(left), right_(right), clock_(clock), pairer_(left, right, config, trigger) {}
 
-// While one camera is gone the other is still read, without waiting: it keeps its buffers
-// moving, and its own loss is found (and its reopening begun) then, not once the first is back.
-void StereoGrabber::poll(Side side) {
+// Acquires from one side and hands the pairer what came: a frame, a loss (that side's frames
+// are dropped) or a damaged frame (counted; the camera took its buffer back).
+AcquireStatus StereoGrabber::acquire(Side side, Nanoseconds timeout) {
   CameraSource& camera = side == Side::left ? left_ : right_;
-  const AcquireResult r = camera.acquire(0);
+  const AcquireResult r = camera.acquire(timeout);
   if (r.status == AcquireStatus::ok) {
     pairer_.push(side, r.frame);
   } else if (r.status == AcquireStatus::device_lost) {
@@ -263,6 +256,7 @@ void StereoGrabber::poll(Side side) {
   } else if (r.status == AcquireStatus::corrupt) {
     pairer_.count_corrupt(side);
   }
+  return r.status;
 }
 
 PairResult StereoGrabber::next(Nanoseconds timeout) {
@@ -274,19 +268,15 @@ PairResult StereoGrabber::next(Nanoseconds timeout) {
     const Nanoseconds left_time = std::max<Nanoseconds>(deadline - clock_.now(), 0);
     // Acquire on the side that has nothing waiting (the left one first).
     const Side side = pairer_.waiting(Side::left) == 0 ? Side::left : Side::right;
-    CameraSource& camera = side == Side::left ? left_ : right_;
-    const AcquireResult r = camera.acquire(left_time);
-    if (r.status == AcquireStatus::ok) {
-      pairer_.push(side, r.frame);
-    } else if (r.status == AcquireStatus::device_lost) {
-      pairer_.reset(side);
-      poll(side == Side::left ? Side::right : Side::left);
+    const AcquireStatus status = acquire(side, left_time);
+    if (status == AcquireStatus::device_lost) {
+      // The other camera is still read, without waiting: its buffers keep moving, and its own
+      // loss is found (and its reopening begun) now, not once this one is back.
+      acquire(side == Side::left ? Side::right : Side::left, 0);
       return {PairStatus::device_lost, {}, side};
-    } else if (r.status == AcquireStatus::corrupt) {
-      pairer_.count_corrupt(side);  // the camera took its buffer back; wait for the next frame
-    } else {
-      return {PairStatus::timeout, {}, side};
     }
+    if (status == AcquireStatus::timeout) return {PairStatus::timeout, {}, side};
+    // ok, or corrupt: wait for the next frame
   }
 }
 

@@ -9,7 +9,6 @@
 #include <cstdlib>
 #include <mutex>
 #include <string>
-#include <vector>
 
 #include "epipole/core/error.hpp"
 #include "video_decoder.hpp"
@@ -31,31 +30,24 @@ struct Plugin {
   std::string error;  // why it could not be opened
 };
 
-Plugin open_plugin() {
-  std::vector<std::filesystem::path> candidates;
+// The plugin named by EPIPOLE_VIDEO_PLUGIN, else the one beside the program.
+std::filesystem::path plugin_path() {
   if (const char* path = std::getenv("EPIPOLE_VIDEO_PLUGIN"); path != nullptr && *path != '\0') {
-    candidates.emplace_back(path);
-  } else {
-    candidates.push_back(program_folder() / ".." / "lib" / "epipole" / kPluginName);
+    return path;
   }
-  Plugin plugin;
-  for (const std::filesystem::path& candidate : candidates) {
-    void* handle = ::dlopen(candidate.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (handle == nullptr) {
-      plugin.error += cat(plugin.error.empty() ? "" : "; ", ::dlerror());
-      continue;
-    }
-    void* entry = ::dlsym(handle, EPIPOLE_VIDEO_PLUGIN_ENTRY);
-    if (entry == nullptr) {
-      plugin.error += cat(plugin.error.empty() ? "" : "; ", candidate.string(), ": no ",
-                          EPIPOLE_VIDEO_PLUGIN_ENTRY);
-      ::dlclose(handle);
-      continue;
-    }
-    plugin.decode = reinterpret_cast<EpipoleVideoDecode>(entry);
-    return plugin;
+  return program_folder() / ".." / "lib" / "epipole" / kPluginName;
+}
+
+Plugin open_plugin() {
+  const std::filesystem::path path = plugin_path();
+  void* handle = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (handle == nullptr) return {nullptr, ::dlerror()};
+  void* entry = ::dlsym(handle, EPIPOLE_VIDEO_PLUGIN_ENTRY);
+  if (entry == nullptr) {
+    ::dlclose(handle);
+    return {nullptr, cat(path.string(), ": no ", EPIPOLE_VIDEO_PLUGIN_ENTRY)};
   }
-  return plugin;
+  return {reinterpret_cast<EpipoleVideoDecode>(entry), {}};
 }
 
 const Plugin& plugin() {

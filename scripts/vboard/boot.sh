@@ -45,9 +45,15 @@ case $uart in
     ;;
 esac
 
+# The link: each machine's UART, or the same USB serial adapter on both.
+if [[ $arch == amd64 ]]; then
+  link=(-device isa-serial,chardev=link) guest=/dev/ttyS1
+else
+  link=(-device pci-serial,chardev=link) guest=/dev/ttyS0
+fi
 case ${EPIPOLE_VBOARD_LINK:-uart} in
-  uart) usb= ;;
-  usb) usb=(-device qemu-xhci -device usb-serial,chardev=link) ;;
+  uart) ;;
+  usb) link=(-device qemu-xhci -device usb-serial,chardev=link) guest=/dev/ttyUSB0 ;;
   *)
     echo "boot: EPIPOLE_VBOARD_LINK must be uart or usb, not '$EPIPOLE_VBOARD_LINK'" >&2
     exit 2
@@ -55,22 +61,12 @@ case ${EPIPOLE_VBOARD_LINK:-uart} in
 esac
 
 common=(-accel tcg -m 512 -smp ${EPIPOLE_VBOARD_CPUS:-1} -nodefaults -no-user-config -display none -no-reboot
-  -serial stdio -chardev "$chardev" -initrd "$initramfs")
+  -serial stdio -chardev "$chardev" -initrd "$initramfs" "${link[@]}")
 if [[ $arch == amd64 ]]; then
-  if [[ -n $usb ]]; then
-    link=("${usb[@]}") guest=/dev/ttyUSB0
-  else
-    link=(-device isa-serial,chardev=link) guest=/dev/ttyS1
-  fi
-  exec qemu-system-x86_64 -M pc -cpu max "${common[@]}" -kernel "$root/vmlinux" "${link[@]}" \
+  exec qemu-system-x86_64 -M pc -cpu max "${common[@]}" -kernel "$root/vmlinux" \
     -append "console=ttyS0 quiet panic=-1 epipole.uart=$guest $*"
 else
-  if [[ -n $usb ]]; then
-    link=("${usb[@]}") guest=/dev/ttyUSB0
-  else
-    link=(-device pci-serial,chardev=link) guest=/dev/ttyS0
-  fi
   exec qemu-system-aarch64 -M virt -cpu cortex-a72 "${common[@]}" \
-    -kernel "$root/image/boot/vmlinuz-$kver" "${link[@]}" \
+    -kernel "$root/image/boot/vmlinuz-$kver" \
     -append "console=ttyAMA0 quiet panic=-1 epipole.uart=$guest $*"
 fi

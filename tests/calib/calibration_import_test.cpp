@@ -11,6 +11,7 @@
 
 #include "epipole/calib/calibration.hpp"
 #include "epipole/core/error.hpp"
+#include "error_of.hpp"
 #include "sample_calibration.hpp"
 
 namespace epipole::calib {
@@ -110,14 +111,7 @@ void expect_geometry(const StereoCalibration& got, const StereoCalibration& want
   EXPECT_LE((got.Q - want.Q).cwiseAbs().maxCoeff(), tol * 1000);
 }
 
-std::string import_error(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::error_of;
 
 TEST(OpenCvImport, YamlAsTheSampleWritesIt) {
   const StereoCalibration want = test::sample_calibration();
@@ -160,12 +154,12 @@ TEST(OpenCvImport, BadInputNamesTheKeyAndFile) {
   const auto in = write_temp("cv-in.yml", f.intrinsics);
   const auto ex = write_temp("cv-ex.yml", f.extrinsics);
   // No image size recorded or given.
-  EXPECT_NE(import_error([&] { import_opencv_calibration(in, ex); }).find("image size"),
+  EXPECT_NE(error_of([&] { import_opencv_calibration(in, ex); }).find("image size"),
             std::string::npos);
   // Swapped files still find every key; a missing one is named with both files.
   const auto only_in = [&](const std::string& text) {
     const auto file = write_temp("cv-broken.yml", text);
-    return import_error([&] { import_opencv_calibration(in, file, 640, 480); });
+    return error_of([&] { import_opencv_calibration(in, file, 640, 480); });
   };
   std::string e = only_in("%YAML:1.0\n" + yaml_matrix("R", c.R));
   EXPECT_NE(e.find("missing key 'T'"), std::string::npos) << e;
@@ -213,7 +207,7 @@ TEST(OpenCvImport, OtherDistortionModels) {
   std::string real = f.intrinsics;
   real.replace(real.find(d1), d1.size(), yaml_matrix("D1", rational));
   const auto in_real = write_temp("cv-in-d8r.yml", real);
-  const std::string e = import_error([&] { import_opencv_calibration(in_real, ex, 640, 480); });
+  const std::string e = error_of([&] { import_opencv_calibration(in_real, ex, 640, 480); });
   EXPECT_NE(e.find("D1"), std::string::npos) << e;
   EXPECT_NE(e.find("not supported"), std::string::npos) << e;
   // Four coefficients: k3 = 0.
@@ -237,7 +231,7 @@ TEST(OpenCvImport, MalformedXml) {
                                  std::string("<something_else/>")}) {
     SCOPED_TRACE(bad);
     const auto ex = write_temp("cv-bad.xml", bad);
-    const std::string e = import_error([&] { import_opencv_calibration(in, ex, 640, 480); });
+    const std::string e = error_of([&] { import_opencv_calibration(in, ex, 640, 480); });
     EXPECT_NE(e.find("cv-bad.xml"), std::string::npos) << e;
   }
   // Entities and comments are fine.
@@ -277,31 +271,31 @@ TEST(RosImport, BadInput) {
   const StereoCalibration c = test::sample_calibration();
   const auto left = write_temp("ros-left.yaml", ros_file(c.left, "l"));
   const auto fisheye = write_temp("ros-fisheye.yaml", ros_file(c.right, "r", "equidistant"));
-  std::string e = import_error([&] { import_ros_calibration(left, fisheye); });
+  std::string e = error_of([&] { import_ros_calibration(left, fisheye); });
   EXPECT_NE(e.find("ros-fisheye.yaml: distortion_model: 'equidistant' is not supported"),
             std::string::npos)
       << e;
   std::string text = ros_file(c.right, "r");
   text.replace(text.find("rows: 3\n  cols: 4"), 17, "rows: 3\n  cols: 3");
   const auto wrong = write_temp("ros-wrong.yaml", text);
-  e = import_error([&] { import_ros_calibration(left, wrong); });
+  e = error_of([&] { import_ros_calibration(left, wrong); });
   EXPECT_NE(e.find("ros-wrong.yaml: projection_matrix: expected 3x4"), std::string::npos) << e;
   text = ros_file(c.right, "r");
   text.replace(text.find("image_width: 640"), 16, "image_width: 320");
   const auto smaller = write_temp("ros-small.yaml", text);
-  e = import_error([&] { import_ros_calibration(left, smaller); });
+  e = error_of([&] { import_ros_calibration(left, smaller); });
   EXPECT_NE(e.find("image sizes differ"), std::string::npos) << e;
   text = ros_file(c.right, "r");
   text.erase(text.find("rectification_matrix"));
   const auto missing = write_temp("ros-missing.yaml", text);
-  e = import_error([&] { import_ros_calibration(left, missing); });
+  e = error_of([&] { import_ros_calibration(left, missing); });
   EXPECT_NE(e.find("ros-missing.yaml: missing key 'rectification_matrix'"), std::string::npos) << e;
   // A monocular camera_info (identity rectification, no baseline) is not a stereo pair.
   CameraCalibration mono = c.right;
   mono.rectification.setIdentity();
   mono.projection(0, 3) = 0;
   const auto mono_file = write_temp("ros-mono.yaml", ros_file(mono, "r"));
-  e = import_error([&] { import_ros_calibration(left, mono_file); });
+  e = error_of([&] { import_ros_calibration(left, mono_file); });
   EXPECT_FALSE(e.empty());
 }
 

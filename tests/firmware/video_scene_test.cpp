@@ -10,6 +10,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/firmware.hpp"
+#include "error_of.hpp"
 #include "sim_rig.hpp"
 #include "test_data.hpp"
 
@@ -24,14 +25,7 @@ std::string with_scene(const test::SimRig& rig, const std::string& scene) {
   return text;
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::error_of;
 
 struct Observer final : FrameObserver {
   std::vector<int> centre_disparity;

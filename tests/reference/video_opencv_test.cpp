@@ -16,6 +16,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/hal/sim_files.hpp"
+#include "error_of.hpp"
 #include "test_data.hpp"
 
 namespace epipole::hal {
@@ -35,14 +36,7 @@ std::vector<cv::Mat> opencv_gray_frames(const fs::path& file) {
   return frames;
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "";
-}
+using test::error_of;
 
 // The two conversions differ: ours takes the luma plane (expanded to full range by swscale),
 // OpenCV converts to BGR and back to gray. Measured on the sample videos (mean, max of

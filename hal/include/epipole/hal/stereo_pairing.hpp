@@ -122,7 +122,7 @@ class StereoPairer {
   void drop_front(Side side, std::uint64_t& counter);
   bool on_trigger(const Frame& left, const Frame& right) const;
   void match();
-  bool fronts_on_one_clock();
+  bool fronts_match_by_time();
   void match_by_time();
   bool renumber();
   void number(Side side, std::uint32_t offset);
@@ -162,7 +162,7 @@ class StereoGrabber {
   StereoPairer& pairer() { return pairer_; }
 
  private:
-  void poll(Side side);
+  AcquireStatus acquire(Side side, Nanoseconds timeout);
   CameraSource& left_;
   CameraSource& right_;
   Clock& clock_;
