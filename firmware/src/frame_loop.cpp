@@ -332,22 +332,31 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
       grabber_.pairer().reset(got.lost_side);
       continue;
     }
-    // The freshest pair: older ones that waited behind it are skipped.
+    // The freshest pair: older ones that waited behind it are skipped. A camera lost meanwhile
+    // has been reopened, and its buffers unmapped with the pair's frames in them: the pair goes.
+    bool camera_lost = false;
     for (;;) {
       hal::PairResult newer = grabber_.next(0);
+      camera_lost = newer.status == hal::PairStatus::device_lost;
       if (newer.status != hal::PairStatus::ok) break;
       grabber_.release(got.pair);
       got = newer;
       ++summary_.stale;
     }
+    if (camera_lost) {
+      grabber_.release(got.pair);
+      ++summary_.stale;
+      continue;
+    }
     const hal::StereoPair& pair = got.pair;
     hal::Nanoseconds trigger_ns = pair.left.timestamp;
-    if (trigger_) {
-      // The edge of the pair's number, while the numbers are the trigger's: after both cameras
-      // were reopened without a trigger record to number them by, they go on from the last pair
-      // instead (hal/stereo_pairing.hpp).
-      const auto edge = trigger_->record().find(pair.left.sequence);
-      if (edge && grabber_.pairer().numbers_are_the_triggers()) trigger_ns = edge->timestamp;
+    // The edge of the pair's number, while the numbers are the trigger's: after both cameras
+    // were reopened without a trigger record to number them by, they go on from the last pair
+    // instead (hal/stereo_pairing.hpp).
+    if (trigger_ && grabber_.pairer().numbers_are_the_triggers()) {
+      if (const auto edge = trigger_->record().find(pair.left.sequence)) {
+        trigger_ns = edge->timestamp;
+      }
     }
     const hal::Nanoseconds captured = clock.now() - trigger_ns;
     const hal::Nanoseconds t0 = steady_now();
