@@ -17,6 +17,41 @@ std::optional<std::uint8_t> crc_extra_of(std::uint32_t message_id) {
   return std::nullopt;
 }
 
+enum class Check { ok, incomplete, no_start_byte, bad_flags, unknown_message, bad_crc };
+
+// Checks the frame at the start of `bytes`; `size` gets the frame's length (signature
+// included) once the header is complete.
+Check check_frame(std::span<const std::uint8_t> bytes, std::size_t& size) {
+  if (bytes.empty() || bytes[0] != kStx) return Check::no_start_byte;
+  if (bytes.size() < kHeaderSize) return Check::incomplete;
+  const std::uint8_t flags = bytes[2];
+  if ((flags & ~kIncompatSigned) != 0) return Check::bad_flags;
+  const std::uint8_t length = bytes[1];
+  size = kHeaderSize + length + kChecksumSize + ((flags & kIncompatSigned) ? kSignatureSize : 0);
+  if (bytes.size() < size) return Check::incomplete;
+  const std::uint32_t message_id =
+      bytes[7] | bytes[8] << 8 | static_cast<std::uint32_t>(bytes[9]) << 16;
+  const auto extra = crc_extra_of(message_id);
+  if (!extra) return Check::unknown_message;
+  std::uint16_t crc = crc16_x25(bytes.subspan(1, kHeaderSize - 1 + length));
+  crc = crc16_x25(std::span(&*extra, 1), crc);
+  const auto received = static_cast<std::uint16_t>(bytes[kHeaderSize + length] |
+                                                   bytes[kHeaderSize + length + 1] << 8);
+  return crc == received ? Check::ok : Check::bad_crc;
+}
+
+// The frame at the start of `bytes`, which check_frame() found valid.
+Frame frame_of(std::span<const std::uint8_t> bytes) {
+  Frame frame;
+  frame.length = bytes[1];
+  frame.sequence = bytes[4];
+  frame.system_id = bytes[5];
+  frame.component_id = bytes[6];
+  frame.message_id = bytes[7] | bytes[8] << 8 | static_cast<std::uint32_t>(bytes[9]) << 16;
+  std::memcpy(frame.payload.data(), bytes.data() + kHeaderSize, frame.length);
+  return frame;
+}
+
 std::uint32_t float_bits(float v) {
   std::uint32_t bits = 0;
   std::memcpy(&bits, &v, sizeof bits);
@@ -118,26 +153,91 @@ ObstacleDistance to_obstacle_distance(const protocol::Obstacles& sectors, std::u
 }
 
 std::optional<Frame> parse_frame(std::span<const std::uint8_t> bytes) {
-  if (bytes.size() < kHeaderSize + kChecksumSize || bytes[0] != kStx || bytes[2] != 0) {
-    return std::nullopt;  // incompatibility flags other than 0 (signing) are not supported
+  std::size_t size = 0;
+  if (check_frame(bytes, size) != Check::ok) return std::nullopt;
+  return frame_of(bytes);
+}
+
+std::optional<Heartbeat> decode_heartbeat(const Frame& frame) {
+  if (frame.message_id != kHeartbeatId) return std::nullopt;
+  ByteReader r(frame.payload);
+  Heartbeat h;
+  h.custom_mode = r.u32();
+  h.type = r.u8();
+  h.autopilot = r.u8();
+  h.base_mode = r.u8();
+  h.system_status = r.u8();
+  h.mavlink_version = r.u8();
+  return h;
+}
+
+std::optional<ObstacleDistance> decode_obstacle_distance(const Frame& frame) {
+  if (frame.message_id != kObstacleDistanceId) return std::nullopt;
+  ByteReader r(frame.payload);
+  ObstacleDistance m;
+  m.time_usec = r.u64();
+  for (std::uint16_t& d : m.distances_cm) d = r.u16();
+  m.min_distance_cm = r.u16();
+  m.max_distance_cm = r.u16();
+  m.sensor_type = r.u8();
+  const std::uint8_t increment = r.u8();
+  const float increment_f = r.f32();
+  // MAVLink: the float increment (an extension) is used when it is set, else the integer one.
+  m.increment_deg = increment_f != 0.0f ? increment_f : static_cast<float>(increment);
+  m.angle_offset_deg = r.f32();
+  m.frame = r.u8();
+  return m;
+}
+
+std::optional<Frame> StreamDecoder::push(std::uint8_t byte) {
+  if (size_ == 0 && byte != kStx) {
+    ++stats_.skipped_bytes;
+    return std::nullopt;
   }
-  const std::uint8_t length = bytes[1];
-  if (bytes.size() < kHeaderSize + length + kChecksumSize) return std::nullopt;
-  Frame frame;
-  frame.length = length;
-  frame.sequence = bytes[4];
-  frame.system_id = bytes[5];
-  frame.component_id = bytes[6];
-  frame.message_id = bytes[7] | bytes[8] << 8 | static_cast<std::uint32_t>(bytes[9]) << 16;
-  const auto extra = crc_extra_of(frame.message_id);
-  if (!extra) return std::nullopt;
-  std::uint16_t crc = crc16_x25(bytes.subspan(1, kHeaderSize - 1 + length));
-  crc = crc16_x25(std::span(&*extra, 1), crc);
-  const auto received = static_cast<std::uint16_t>(bytes[kHeaderSize + length] |
-                                                   bytes[kHeaderSize + length + 1] << 8);
-  if (crc != received) return std::nullopt;
-  std::memcpy(frame.payload.data(), bytes.data() + kHeaderSize, length);
-  return frame;
+  buffer_[size_++] = byte;
+  for (;;) {
+    std::size_t frame_size = 0;
+    const Check check = check_frame(std::span(buffer_.data(), size_), frame_size);
+    if (check == Check::incomplete) return std::nullopt;
+    if (check == Check::ok) {
+      const Frame frame = frame_of(std::span(buffer_.data(), frame_size));
+      drop_front(frame_size);
+      if (have_sequence_) {
+        const auto step = static_cast<std::uint8_t>(frame.sequence - last_sequence_);
+        if (step != 0) stats_.lost += step - 1u;
+      }
+      have_sequence_ = true;
+      last_sequence_ = frame.sequence;
+      ++stats_.frames;
+      return frame;
+    }
+    switch (check) {
+      case Check::bad_flags:
+        ++stats_.bad_flags;
+        break;
+      case Check::unknown_message:
+        ++stats_.unknown_message;
+        break;
+      case Check::bad_crc:
+        ++stats_.bad_crc;
+        break;
+      case Check::ok:
+      case Check::incomplete:
+      case Check::no_start_byte:  // the buffer always begins with the start byte
+        break;
+    }
+    // The start byte began no frame: resume at the next one inside what was buffered.
+    std::size_t next = 1;
+    while (next < size_ && buffer_[next] != kStx) ++next;
+    stats_.skipped_bytes += next;
+    drop_front(next);
+    if (size_ == 0) return std::nullopt;
+  }
+}
+
+void StreamDecoder::drop_front(std::size_t bytes) {
+  std::memmove(buffer_.data(), buffer_.data() + bytes, size_ - bytes);
+  size_ -= bytes;
 }
 
 }  // namespace epipole::mavlink

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <random>
 #include <vector>
 
 #include "epipole/core/error.hpp"
@@ -130,6 +131,161 @@ TEST(Mavlink, ParserRejectsDamagedAndUnknownFrames) {
   auto other = frame;
   other[7] = 1;  // SYS_STATUS: its CRC extra is not known here
   EXPECT_FALSE(parse_frame(other));
+}
+
+std::vector<std::uint8_t> heartbeat_frame(std::uint8_t sequence) {
+  std::vector<std::uint8_t> frame(kMaxFrameSize);
+  frame.resize(encode_heartbeat({1, 196}, sequence, frame));
+  return frame;
+}
+
+std::vector<std::uint8_t> obstacle_frame(std::uint8_t sequence) {
+  ObstacleDistance m;
+  m.time_usec = 1000u * sequence;
+  m.distances_cm.fill(kUnknownDistance);
+  for (int i = 0; i < 8; ++i) m.distances_cm[i] = static_cast<std::uint16_t>(100 * i + sequence);
+  m.min_distance_cm = 20;
+  m.max_distance_cm = 2000;
+  m.increment_deg = 11.25f;
+  m.angle_offset_deg = -39.375f;
+  std::vector<std::uint8_t> frame(kMaxFrameSize);
+  frame.resize(encode_obstacle_distance(m, {1, 196}, sequence, frame));
+  return frame;
+}
+
+// The sequence numbers of the frames the stream decoder delivers from `bytes`, fed one by one.
+std::vector<int> decode_stream(StreamDecoder& decoder, const std::vector<std::uint8_t>& bytes) {
+  std::vector<int> sequences;
+  for (const std::uint8_t b : bytes) {
+    if (const auto frame = decoder.push(b)) sequences.push_back(frame->sequence);
+  }
+  return sequences;
+}
+
+void append(std::vector<std::uint8_t>& to, const std::vector<std::uint8_t>& bytes) {
+  to.insert(to.end(), bytes.begin(), bytes.end());
+}
+
+TEST(MavlinkStream, DecodesFramesBackToBack) {
+  std::vector<std::uint8_t> stream;
+  for (int i = 0; i < 6; ++i) {
+    append(stream, i % 3 == 0 ? heartbeat_frame(static_cast<std::uint8_t>(i))
+                              : obstacle_frame(static_cast<std::uint8_t>(i)));
+  }
+  StreamDecoder decoder;
+  EXPECT_EQ(decode_stream(decoder, stream), (std::vector<int>{0, 1, 2, 3, 4, 5}));
+  const StreamStats& s = decoder.stats();
+  EXPECT_EQ(s.frames, 6u);
+  EXPECT_EQ(s.bad_crc + s.unknown_message + s.bad_flags + s.skipped_bytes + s.lost, 0u);
+}
+
+TEST(MavlinkStream, DecodesTheMessagesFields) {
+  StreamDecoder decoder;
+  std::optional<Frame> heartbeat;
+  for (const std::uint8_t b : heartbeat_frame(9)) heartbeat = decoder.push(b);
+  ASSERT_TRUE(heartbeat);
+  const auto h = decode_heartbeat(*heartbeat);
+  ASSERT_TRUE(h);
+  EXPECT_EQ(h->type, kMavTypeOnboardController);
+  EXPECT_EQ(h->autopilot, kMavAutopilotInvalid);
+  EXPECT_EQ(h->system_status, kMavStateActive);
+  EXPECT_EQ(h->mavlink_version, 3);
+  EXPECT_FALSE(decode_obstacle_distance(*heartbeat));
+
+  std::optional<Frame> obstacles;
+  for (const std::uint8_t b : obstacle_frame(7)) obstacles = decoder.push(b);
+  ASSERT_TRUE(obstacles);
+  const auto m = decode_obstacle_distance(*obstacles);
+  ASSERT_TRUE(m);
+  EXPECT_FALSE(decode_heartbeat(*obstacles));
+  EXPECT_EQ(m->time_usec, 7000u);
+  EXPECT_EQ(m->distances_cm[0], 7);
+  EXPECT_EQ(m->distances_cm[7], 707);
+  EXPECT_EQ(m->distances_cm[8], kUnknownDistance);
+  EXPECT_EQ(m->min_distance_cm, 20);
+  EXPECT_EQ(m->max_distance_cm, 2000);
+  EXPECT_EQ(m->increment_deg, 11.25f);
+  EXPECT_EQ(m->angle_offset_deg, -39.375f);
+  EXPECT_EQ(m->frame, kMavFrameBodyFrd);
+}
+
+// Garbage (with start bytes in it), a frame with a flipped bit, a truncated frame and a lost
+// one: every undamaged frame is found, and each fault is counted where it belongs.
+TEST(MavlinkStream, ResynchronisesAfterDamage) {
+  std::vector<std::uint8_t> stream{0x00, 0xFD, 0x13, 0xFD, 0x55};
+  append(stream, heartbeat_frame(0));
+  auto damaged = obstacle_frame(1);
+  damaged[40] ^= 0x10;
+  append(stream, damaged);
+  append(stream, heartbeat_frame(2));
+  const auto whole = obstacle_frame(3);
+  stream.insert(stream.end(), whole.begin(), whole.begin() + 60);  // cut short
+  append(stream, heartbeat_frame(4));
+  append(stream, obstacle_frame(5));
+  // 6 is lost on the way
+  append(stream, obstacle_frame(7));
+  append(stream, heartbeat_frame(8));  // still delivered although the stream ends with it
+  StreamDecoder decoder;
+  EXPECT_EQ(decode_stream(decoder, stream), (std::vector<int>{0, 2, 4, 5, 7, 8}));
+  const StreamStats& s = decoder.stats();
+  EXPECT_EQ(s.frames, 6u);
+  EXPECT_GE(s.bad_crc, 2u);  // the damaged frame and the truncated one, at least
+  EXPECT_EQ(s.lost, 3u);     // 1, 3 and 6
+  EXPECT_GE(s.skipped_bytes, 5u + damaged.size() + 60u);
+}
+
+TEST(MavlinkStream, CountsUnknownMessagesAndFlags) {
+  auto unknown = heartbeat_frame(0);
+  unknown[7] = 1;  // SYS_STATUS: no CRC extra known here
+  auto flagged = heartbeat_frame(1);
+  flagged[2] = 0x02;  // an incompatibility flag this decoder does not know
+  std::vector<std::uint8_t> stream;
+  append(stream, unknown);
+  append(stream, flagged);
+  append(stream, heartbeat_frame(2));
+  StreamDecoder decoder;
+  EXPECT_EQ(decode_stream(decoder, stream), std::vector<int>{2});
+  EXPECT_EQ(decoder.stats().unknown_message, 1u);
+  EXPECT_EQ(decoder.stats().bad_flags, 1u);
+  EXPECT_EQ(decoder.stats().skipped_bytes, unknown.size() + flagged.size());
+}
+
+// A signed frame (incompatibility flag 0x01) carries 13 signature bytes after its checksum;
+// the signature is skipped, not checked.
+TEST(MavlinkStream, SkipsASignature) {
+  auto frame = heartbeat_frame(3);
+  frame[2] = kIncompatSigned;
+  std::vector<std::uint8_t> covered(frame.begin() + 1, frame.end() - 2);
+  covered.push_back(kHeartbeatCrcExtra);
+  const std::uint16_t crc = crc16_x25(covered);
+  frame[frame.size() - 2] = static_cast<std::uint8_t>(crc);
+  frame[frame.size() - 1] = static_cast<std::uint8_t>(crc >> 8);
+  frame.insert(frame.end(), kSignatureSize, 0xAB);
+  append(frame, heartbeat_frame(4));
+  StreamDecoder decoder;
+  EXPECT_EQ(decode_stream(decoder, frame), (std::vector<int>{3, 4}));
+  EXPECT_EQ(decoder.stats().skipped_bytes, 0u);
+}
+
+// Random bytes never crash the decoder, and a frame after them is found.
+TEST(MavlinkStream, SurvivesRandomBytes) {
+  std::mt19937 random(7);
+  std::uniform_int_distribution<int> byte(0, 255);
+  std::vector<std::uint8_t> stream;
+  for (int i = 0; i < 20000; ++i) {
+    const int b = byte(random);
+    stream.push_back(static_cast<std::uint8_t>(b < 16 ? kStx : b));  // many start bytes
+  }
+  StreamDecoder decoder;
+  const std::size_t garbage_frames = decode_stream(decoder, stream).size();
+  // A frame is found once the garbage's last candidate has failed: a heartbeat's worth of
+  // bytes after it cannot all belong to a false start, so feed a few.
+  std::vector<std::uint8_t> tail;
+  for (int i = 0; i < 20; ++i) append(tail, heartbeat_frame(static_cast<std::uint8_t>(i)));
+  const std::vector<int> found = decode_stream(decoder, tail);
+  EXPECT_EQ(garbage_frames, 0u);
+  ASSERT_FALSE(found.empty());
+  EXPECT_EQ(found.back(), 19);
 }
 
 }  // namespace

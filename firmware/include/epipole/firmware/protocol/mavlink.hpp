@@ -75,4 +75,49 @@ struct Frame {
 // the message's CRC extra); nullopt when it is not a valid, complete frame of those.
 std::optional<Frame> parse_frame(std::span<const std::uint8_t> bytes);
 
+inline constexpr std::uint8_t kIncompatSigned = 0x01;  // a 13-byte signature follows the CRC
+inline constexpr std::size_t kSignatureSize = 13;
+
+struct Heartbeat {
+  std::uint32_t custom_mode = 0;
+  std::uint8_t type = 0;
+  std::uint8_t autopilot = 0;
+  std::uint8_t base_mode = 0;
+  std::uint8_t system_status = 0;
+  std::uint8_t mavlink_version = 0;
+};
+
+// The fields of a parsed frame of that message; nullopt for a frame of another message.
+std::optional<Heartbeat> decode_heartbeat(const Frame& frame);
+std::optional<ObstacleDistance> decode_obstacle_distance(const Frame& frame);
+
+// What the stream decoder has seen.
+struct StreamStats {
+  std::uint64_t frames = 0;           // valid frames delivered
+  std::uint64_t bad_crc = 0;          // a start byte whose frame's checksum did not match
+  std::uint64_t unknown_message = 0;  // a frame of a message this decoder has no CRC extra for
+  std::uint64_t bad_flags = 0;        // incompatibility flags other than signing
+  std::uint64_t skipped_bytes = 0;    // bytes outside any valid frame
+  std::uint64_t lost = 0;             // sequence numbers skipped (frames lost on the way)
+};
+
+// Turns an untrusted byte stream into MAVLink 2 frames of the messages above, as a flight
+// controller reads Epipole's output. Fixed memory, never throws: after a frame that does not
+// check, decoding resumes at the next start byte inside it, so a damaged frame costs only itself.
+class StreamDecoder {
+ public:
+  // Feeds one byte; returns a frame when the byte completes a valid one.
+  std::optional<Frame> push(std::uint8_t byte);
+  const StreamStats& stats() const { return stats_; }
+
+ private:
+  void drop_front(std::size_t bytes);
+
+  std::array<std::uint8_t, kMaxFrameSize + kSignatureSize> buffer_{};
+  std::size_t size_ = 0;
+  bool have_sequence_ = false;
+  std::uint8_t last_sequence_ = 0;
+  StreamStats stats_;
+};
+
 }  // namespace epipole::mavlink
