@@ -25,6 +25,7 @@ using namespace epipole::protocol;
 
 struct LinkOptions {
   std::string port;
+  std::string protocol = "epipole";  // or mavlink: the board's serial.protocol
   int baud = 115200;
   bool json = false;
   int count = 0;         // stop after this many messages (0: no limit)
@@ -32,9 +33,8 @@ struct LinkOptions {
   std::vector<std::string> send;
 };
 
-std::string to_text(const DecodedMessage& decoded) {
-  const nlohmann::json json = to_json(decoded);
-  std::string line = cat("#", decoded.sequence, " ", name_of(type_of(decoded.message)));
+std::string to_text(const nlohmann::json& json) {
+  std::string line = cat("#", json["seq"].dump(), " ", json["type"].get<std::string>());
   for (const auto& [key, value] : json.items()) {
     if (key == "seq" || key == "type") continue;
     line += cat(" ", key, "=", value.dump());
@@ -92,12 +92,15 @@ Message parse_command(const std::string& text) {
 
 class Printer {
  public:
-  Printer(const LinkOptions& options) : options_(options) {}
+  explicit Printer(const LinkOptions& options)
+      : options_(options),
+        decoder_(options.protocol == "mavlink" ? JsonStreamDecoder::Protocol::mavlink
+                                               : JsonStreamDecoder::Protocol::epipole) {}
   // Feeds bytes; false once enough messages were printed.
   bool feed(std::span<const std::uint8_t> bytes) {
     for (const std::uint8_t b : bytes) {
-      if (auto decoded = decoder_.push(b)) {
-        std::cout << (options_.json ? to_json(*decoded).dump() : to_text(*decoded)) << "\n";
+      if (const auto json = decoder_.push(b)) {
+        std::cout << (options_.json ? json->dump() : to_text(*json)) << "\n";
         if (options_.count > 0 && ++printed_ >= options_.count) return false;
       }
     }
@@ -105,7 +108,7 @@ class Printer {
     return true;
   }
   void finish() const {
-    const nlohmann::json stats = stats_json(decoder_.stats());
+    const nlohmann::json stats = decoder_.stats();
     if (options_.json) {
       std::cout << stats.dump() << "\n";
     } else {
@@ -115,7 +118,7 @@ class Printer {
 
  private:
   const LinkOptions& options_;
-  FrameDecoder decoder_;
+  JsonStreamDecoder decoder_;
   int printed_ = 0;
 };
 
@@ -127,6 +130,8 @@ bool is_terminal(const std::string& path) {
 void run_link(const LinkOptions& options) {
   std::vector<Message> commands;
   for (const std::string& text : options.send) commands.push_back(parse_command(text));
+  require(commands.empty() || options.protocol == "epipole",
+          "--send: a board speaking MAVLink reads no commands");
   Printer printer(options);
 
   if (!is_terminal(options.port)) {
@@ -181,6 +186,10 @@ void add_link_command(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("port", options->port,
                   "Serial device (e.g. /dev/ttyUSB0) or a recorded stream file")
       ->required();
+  cmd->add_option("--protocol", options->protocol,
+                  "The board's serial.protocol: epipole, or mavlink (HEARTBEAT, OBSTACLE_DISTANCE)")
+      ->check(CLI::IsMember({"epipole", "mavlink"}))
+      ->capture_default_str();
   cmd->add_option("--baud,-b", options->baud, "Baud rate of a serial device")
       ->check([](const std::string& v) {
         try {

@@ -35,6 +35,35 @@ struct JsonFields {
   }
 };
 
+nlohmann::json native_stats(const DecoderStats& s) {
+  return {{"type", "decoder"},
+          {"protocol", "epipole"},
+          {"frames", s.frames},
+          {"bad_cobs", s.bad_cobs},
+          {"too_long", s.too_long},
+          {"bad_crc", s.bad_crc},
+          {"bad_version", s.bad_version},
+          {"unknown_type", s.unknown_type},
+          {"bad_body", s.bad_body},
+          {"replays", s.replays},
+          {"lost", s.lost},
+          {"resyncs", s.resyncs},
+          {"errors", s.bad_cobs + s.too_long + s.bad_crc + s.bad_version + s.unknown_type +
+                         s.bad_body + s.replays + s.lost}};
+}
+
+nlohmann::json mavlink_stats(const mavlink::StreamStats& s) {
+  return {{"type", "decoder"},
+          {"protocol", "mavlink"},
+          {"frames", s.frames},
+          {"bad_crc", s.bad_crc},
+          {"unknown_message", s.unknown_message},
+          {"bad_flags", s.bad_flags},
+          {"skipped_bytes", s.skipped_bytes},
+          {"lost", s.lost},
+          {"errors", s.bad_crc + s.unknown_message + s.bad_flags + s.skipped_bytes + s.lost}};
+}
+
 }  // namespace
 
 nlohmann::json to_json(const DecodedMessage& decoded) {
@@ -48,18 +77,54 @@ nlohmann::json to_json(const DecodedMessage& decoded) {
   return out;
 }
 
-nlohmann::json stats_json(const DecoderStats& s) {
-  return {{"type", "decoder"},
-          {"frames", s.frames},
-          {"bad_cobs", s.bad_cobs},
-          {"too_long", s.too_long},
-          {"bad_crc", s.bad_crc},
-          {"bad_version", s.bad_version},
-          {"unknown_type", s.unknown_type},
-          {"bad_body", s.bad_body},
-          {"replays", s.replays},
-          {"lost", s.lost},
-          {"resyncs", s.resyncs}};
+nlohmann::json to_json(const mavlink::Frame& frame) {
+  nlohmann::json out = {{"seq", frame.sequence},
+                        {"type", "unknown"},
+                        {"system_id", frame.system_id},
+                        {"component_id", frame.component_id}};
+  if (const auto h = mavlink::decode_heartbeat(frame)) {
+    out["type"] = "heartbeat";
+    out["mav_type"] = h->type;
+    out["autopilot"] = h->autopilot;
+    out["base_mode"] = h->base_mode;
+    out["system_status"] = h->system_status;
+    out["mavlink_version"] = h->mavlink_version;
+  } else if (const auto m = mavlink::decode_obstacle_distance(frame)) {
+    out["type"] = "obstacle_distance";
+    out["time_usec"] = m->time_usec;
+    out["sensor_type"] = m->sensor_type;
+    out["frame"] = m->frame;
+    out["increment_deg"] = m->increment_deg;
+    out["angle_offset_deg"] = m->angle_offset_deg;
+    out["min_distance_cm"] = m->min_distance_cm;
+    out["max_distance_cm"] = m->max_distance_cm;
+    // Sectors past the field of view are unused (UINT16_MAX), as are sectors of unknown depth;
+    // max_distance_cm + 1 means nothing is there.
+    out["distances_cm"] = m->distances_cm;
+    nlohmann::json nearest = nullptr;
+    for (const std::uint16_t d : m->distances_cm) {
+      if (d >= m->min_distance_cm && d <= m->max_distance_cm &&
+          (nearest.is_null() || d < nearest.get<int>())) {
+        nearest = d;
+      }
+    }
+    out["nearest_cm"] = nearest;
+  }
+  return out;
+}
+
+std::optional<nlohmann::json> JsonStreamDecoder::push(std::uint8_t byte) {
+  if (protocol_ == Protocol::mavlink) {
+    if (const auto frame = mavlink_.push(byte)) return to_json(*frame);
+  } else if (const auto decoded = native_.push(byte)) {
+    return to_json(*decoded);
+  }
+  return std::nullopt;
+}
+
+nlohmann::json JsonStreamDecoder::stats() const {
+  return protocol_ == Protocol::mavlink ? mavlink_stats(mavlink_.stats())
+                                        : native_stats(native_.stats());
 }
 
 }  // namespace epipole::tools

@@ -42,13 +42,15 @@ struct SimOptions {
 };
 
 // Reads the simulated link's far end, as the robot would, keeping the raw bytes and decoding
-// them into JSON lines.
+// them, in the board's protocol, into JSON lines.
 class LinkRecorder {
  public:
-  LinkRecorder(const std::string& peer, const fs::path& directory)
+  LinkRecorder(const std::string& peer, JsonStreamDecoder::Protocol protocol,
+               const fs::path& directory)
       : port_({peer, 115200}),
         raw_(directory / "serial.bin", std::ios::binary),
-        lines_(directory / "serial.jsonl") {
+        lines_(directory / "serial.jsonl"),
+        decoder_(protocol) {
     require(raw_.good() && lines_.good(), directory.string(), ": cannot write the serial stream");
     thread_ = std::thread([this] { run(); });
   }
@@ -56,10 +58,10 @@ class LinkRecorder {
   void finish() {
     stopping_ = true;
     thread_.join();
-    lines_ << stats_json(decoder_.stats()).dump() << "\n";
+    lines_ << decoder_.stats().dump() << "\n";
   }
   const std::map<std::string, int>& counts() const { return counts_; }
-  const protocol::DecoderStats& stats() const { return decoder_.stats(); }
+  nlohmann::json stats() const { return decoder_.stats(); }
   const nlohmann::json& last_health() const { return last_health_; }
 
  private:
@@ -74,11 +76,10 @@ class LinkRecorder {
       raw_.write(reinterpret_cast<const char*>(buffer.data()),
                  static_cast<std::streamsize>(r.bytes));
       for (std::size_t i = 0; i < r.bytes; ++i) {
-        if (const auto decoded = decoder_.push(static_cast<std::uint8_t>(buffer[i]))) {
-          const nlohmann::json json = to_json(*decoded);
-          lines_ << json.dump() << "\n";
-          ++counts_[json["type"].get<std::string>()];
-          if (json["type"] == "health") last_health_ = json;
+        if (const auto json = decoder_.push(static_cast<std::uint8_t>(buffer[i]))) {
+          lines_ << json->dump() << "\n";
+          ++counts_[(*json)["type"].get<std::string>()];
+          if ((*json)["type"] == "health") last_health_ = *json;
         }
       }
     }
@@ -87,7 +88,7 @@ class LinkRecorder {
   hal::TermiosSerialPort port_;
   std::ofstream raw_;
   std::ofstream lines_;
-  protocol::FrameDecoder decoder_;
+  JsonStreamDecoder decoder_;
   std::map<std::string, int> counts_;
   nlohmann::json last_health_;
   std::atomic<bool> stopping_{false};
@@ -203,7 +204,8 @@ nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& 
   fw.frame_loop().set_observer(&pictures);
   std::unique_ptr<LinkRecorder> recorder;
   if (!fw.board().serial_peer().empty()) {
-    recorder = std::make_unique<LinkRecorder>(fw.board().serial_peer(), directory);
+    recorder =
+        std::make_unique<LinkRecorder>(fw.board().serial_peer(), config.serial.protocol, directory);
   }
   const std::atomic<bool> stop{false};
   const firmware::RunSummary s = fw.run(options.frames, stop);
@@ -222,7 +224,7 @@ nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& 
                         {"pictures", pictures.written()}};
   if (recorder) {
     out["received"] = recorder->counts();
-    out["decoder"] = stats_json(recorder->stats());
+    out["decoder"] = recorder->stats();
     out["last_health"] = recorder->last_health();
   }
   return out;
@@ -232,6 +234,11 @@ void print_scene(const nlohmann::json& s) {
   std::cout << "sim: scene " << s["scene"].get<std::string>() << ": " << s["frames"] << " pairs of "
             << s["images"] << " images, " << s["messages_sent"] << " messages sent ("
             << s["messages_dropped"] << " dropped)";
+  if (s.contains("decoder")) {
+    const nlohmann::json& d = s["decoder"];
+    std::cout << ", " << d["frames"] << " decoded as " << d["protocol"].get<std::string>() << " ("
+              << d["errors"] << " errors)";
+  }
   if (s.contains("last_health") && !s["last_health"].is_null()) {
     const nlohmann::json& h = s["last_health"];
     std::cout << "; last health: " << h["fps_centi"].get<int>() / 100.0 << " fps, latency p50 "

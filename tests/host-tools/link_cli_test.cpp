@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "epipole/firmware/protocol/codec.hpp"
+#include "epipole/firmware/protocol/mavlink.hpp"
 #include "run_tool.hpp"
 
 namespace epipole::protocol {
@@ -41,6 +42,15 @@ void append_frame(Bytes& stream, const Message& message, std::uint16_t sequence)
   stream.insert(stream.end(), frame.begin(), frame.end());
 }
 
+// Writes a recorded stream into the test's temporary folder; returns its path.
+std::string write_stream(const std::string& name, const Bytes& stream) {
+  const std::string path = ::testing::TempDir() + name;
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(stream.data()),
+             static_cast<std::streamsize>(stream.size()));
+  return path;
+}
+
 TEST(LinkCli, DecodesARecordedStreamAndCountsTheGarbage) {
   Health health;
   health.frames = 1234;
@@ -57,10 +67,7 @@ TEST(LinkCli, DecodesARecordedStreamAndCountsTheGarbage) {
   damaged[3] ^= 0x10;
   stream.insert(stream.end(), damaged.begin(), damaged.end());
   append_frame(stream, detections, 3);
-  const std::string path = ::testing::TempDir() + "epipole-link-stream.bin";
-  std::ofstream(path, std::ios::binary)
-      .write(reinterpret_cast<const char*>(stream.data()),
-             static_cast<std::streamsize>(stream.size()));
+  const std::string path = write_stream("epipole-link-stream.bin", stream);
 
   const Result r = finish(start_tool("link " + path + " --json"));
   ASSERT_EQ(r.exit_code, 0) << r.out;
@@ -126,13 +133,66 @@ TEST(LinkCli, SendsCommandsAndReadsTheAnswerOnASerialDevice) {
   EXPECT_EQ(lines[0]["seq"], 40);
 }
 
+// A MAVLink board's recorded stream: HEARTBEAT and OBSTACLE_DISTANCE, with a damaged frame.
+TEST(LinkCli, DecodesAMavlinkStream) {
+  Bytes stream = {0x13, 0x37};
+  const auto append = [&stream](std::size_t size, const Bytes& frame) {
+    stream.insert(stream.end(), frame.begin(), frame.begin() + static_cast<std::ptrdiff_t>(size));
+  };
+  Bytes frame(mavlink::kMaxFrameSize);
+  append(mavlink::encode_heartbeat({1, 196}, 0, frame), frame);
+  Obstacles sectors;
+  sectors.field_of_view_centideg = 9000;
+  sectors.count = 4;
+  sectors.nearest_mm = {1500, kUnknownDepth, 800, 30000};
+  const mavlink::ObstacleDistance m = mavlink::to_obstacle_distance(sectors, 42, 20, 2000);
+  const std::size_t damaged = mavlink::encode_obstacle_distance(m, {1, 196}, 1, frame);
+  frame[30] ^= 0x01;
+  append(damaged, frame);
+  append(mavlink::encode_obstacle_distance(m, {1, 196}, 2, frame), frame);
+  const std::string path = write_stream("epipole-link-mavlink.bin", stream);
+
+  const Result r = finish(start_tool("link " + path + " --protocol mavlink --json"));
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto lines = json_lines(r.out);
+  ASSERT_EQ(lines.size(), 3u) << r.out;
+  EXPECT_EQ(lines[0]["type"], "heartbeat");
+  EXPECT_EQ(lines[0]["component_id"], 196);
+  EXPECT_EQ(lines[1]["type"], "obstacle_distance");
+  EXPECT_EQ(lines[1]["seq"], 2);
+  EXPECT_EQ(lines[1]["time_usec"], 42);
+  EXPECT_EQ(lines[1]["distances_cm"][0], 150);
+  EXPECT_EQ(lines[1]["distances_cm"][1], 65535);
+  EXPECT_EQ(lines[1]["distances_cm"][3], 2001);
+  EXPECT_EQ(lines[1]["nearest_cm"], 80);
+  EXPECT_EQ(lines[2]["type"], "decoder");
+  EXPECT_EQ(lines[2]["protocol"], "mavlink");
+  EXPECT_EQ(lines[2]["frames"], 2);
+  EXPECT_EQ(lines[2]["bad_crc"], 1);
+  EXPECT_EQ(lines[2]["lost"], 1);
+  EXPECT_GT(lines[2]["errors"].get<int>(), 0);
+
+  // Read as the native protocol, the same bytes are garbage: nothing is made up from them.
+  const auto native = json_lines(finish(start_tool("link " + path + " --json")).out);
+  ASSERT_EQ(native.size(), 1u);
+  EXPECT_EQ(native[0]["frames"], 0);
+  EXPECT_GT(native[0]["errors"].get<int>(), 0);
+
+  const Result commands =
+      finish(start_tool("link " + path + " --protocol mavlink --send snapshot"));
+  EXPECT_NE(commands.exit_code, 0);
+  EXPECT_NE(commands.out.find("MAVLink reads no commands"), std::string::npos) << commands.out;
+  std::remove(path.c_str());
+}
+
 TEST(LinkCli, BadArgumentsAreOneLineErrors) {
   const std::string file = ::testing::TempDir() + "epipole-link-empty.bin";
   std::ofstream(file).put('x');
   for (const std::string& arguments : std::vector<std::string>{
            "link", "link /no/such/file", "link " + file + " --send bogus",
            "link " + file + " --send trigger-rate=fast", "link " + file + " --send snapshot",
-           "link " + file + " --baud 12345", "link " + file + " --send stages=0x1ffff"}) {
+           "link " + file + " --baud 12345", "link " + file + " --send stages=0x1ffff",
+           "link " + file + " --protocol px4"}) {
     const Result r = finish(start_tool(arguments));
     EXPECT_NE(r.exit_code, 0) << arguments;
     EXPECT_FALSE(r.out.empty()) << arguments;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -214,6 +215,58 @@ TEST(SimCli, TheFirmwareRunsTheShippedSimulatedBoard) {
   const auto r = epipole::test::finish_tool(pipe);
   EXPECT_EQ(r.exit_code, 0) << r.out;
   EXPECT_NE(r.out.find("stopped after 10 pairs"), std::string::npos) << r.out;
+}
+
+// A board that speaks MAVLink to its flight controller: the robot's end of the link decodes
+// MAVLink 2 (HEARTBEAT at the health interval, an OBSTACLE_DISTANCE for every pair), not the
+// native protocol.
+TEST(SimCli, AMavlinkBoardsStreamIsDecodedAsMavlink) {
+  const fs::path board = fs::path(::testing::TempDir()) / "sim-mavlink";
+  fs::create_directories(board);
+  for (const auto& entry : fs::directory_iterator(fs::path(source_dir()) / "board" / "sim")) {
+    fs::copy_file(entry.path(), board / entry.path().filename(),
+                  fs::copy_options::overwrite_existing);
+  }
+  std::ifstream in(board / "board.yaml");
+  std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string native = "protocol: epipole";
+  ASSERT_NE(yaml.find(native), std::string::npos);
+  yaml.replace(yaml.find(native), native.size(), "protocol: mavlink");
+  std::ofstream(board / "board.yaml") << yaml;
+
+  const fs::path out = fs::path(::testing::TempDir()) / "sim-mavlink-out";
+  const auto r = run_tool("sim --board '" + board.string() + "' --scene aloe --frames " +
+                          std::to_string(kFrames) + " --pictures 0 --out '" + out.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  std::ifstream summary_file(out / "summary.json");
+  const nlohmann::json scene = nlohmann::json::parse(summary_file)["scenes"][0];
+  EXPECT_EQ(scene["decoder"]["protocol"], "mavlink") << scene.dump(2);
+  EXPECT_EQ(scene["decoder"]["errors"], 0) << scene.dump(2);
+  EXPECT_EQ(scene["decoder"]["bad_crc"], 0) << scene.dump(2);
+  EXPECT_EQ(scene["received"]["obstacle_distance"], kFrames) << scene.dump(2);
+  EXPECT_GE(scene["received"]["heartbeat"].get<int>(), 1) << scene.dump(2);
+  EXPECT_EQ(scene["received"].size(), 2u) << scene.dump(2);
+
+  std::ifstream lines(out / "aloe" / "serial.jsonl");
+  std::string line;
+  int obstacles = 0, near = 0;
+  while (std::getline(lines, line)) {
+    const nlohmann::json m = nlohmann::json::parse(line);
+    if (m["type"] != "obstacle_distance") continue;
+    ++obstacles;
+    EXPECT_EQ(m["system_id"], 1);
+    EXPECT_EQ(m["component_id"], 196);
+    EXPECT_EQ(m["min_distance_cm"], 20);
+    EXPECT_EQ(m["max_distance_cm"], 2000);
+    // board/sim: 72 sectors over the rectified camera's field of view, centred on forward.
+    ASSERT_EQ(m["distances_cm"].size(), 72u);
+    const double increment = m["increment_deg"];
+    EXPECT_GT(increment, 0.1);
+    EXPECT_NEAR(m["angle_offset_deg"].get<double>(), -36 * increment + increment / 2, 1e-3);
+    if (!m["nearest_cm"].is_null()) ++near;
+  }
+  EXPECT_EQ(obstacles, kFrames);
+  EXPECT_EQ(near, kFrames) << "Aloe is within 20 m in every frame";
 }
 
 }  // namespace
