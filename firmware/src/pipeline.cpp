@@ -102,6 +102,19 @@ struct Pipeline::Stages {
 
 namespace {
 
+// The command that compiles a missing cascade: from OpenCV's XML of the same name in the data
+// cache of scripts/fetch-data.sh when it is there.
+std::string compile_command_for(const std::filesystem::path& compiled) {
+  std::string xml = "CASCADE.xml";
+  for (const char* family : {"haarcascades", "lbpcascades"}) {
+    std::filesystem::path candidate = default_data_directory() / "cascades" / family;
+    candidate /= compiled.stem().string() + ".xml";
+    std::error_code ec;
+    if (std::filesystem::exists(candidate, ec)) xml = candidate.string();
+  }
+  return cat("epipole cascade-compile ", xml, " ", compiled.string());
+}
+
 vision::CascadeModel board_cascade(const BoardConfig& board) {
   const std::filesystem::path& file = board.detector.cascade;
   if (file.extension() == ".xml") {
@@ -111,6 +124,11 @@ vision::CascadeModel board_cascade(const BoardConfig& board) {
                     file.string(), " ",
                     std::filesystem::path(file).replace_extension(".bin").string(),
                     "` and name the .bin"));
+  }
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) {
+    throw Error(cat("detector.cascade: ", file.string(), " does not exist: make it with `",
+                    compile_command_for(file), "`"));
   }
   return load_compiled_cascade(file);
 }

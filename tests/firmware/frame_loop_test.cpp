@@ -14,6 +14,7 @@
 
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/hal/serial_port.hpp"
+#include "error_of.hpp"
 #include "sim_rig.hpp"
 #include "test_paths.hpp"
 
@@ -181,6 +182,28 @@ TEST(FrameLoop, AnXmlCascadeIsRefusedWithTheCommandToCompileIt) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("epipole cascade-compile"), std::string::npos) << e.what();
   }
+}
+
+// A board naming a compiled cascade that was never made (board/sim before the host build has
+// compiled OpenCV's face cascade) is told the one command that makes it.
+TEST(FrameLoop, AMissingCompiledCascadeIsReportedWithTheCommandThatMakesIt) {
+  test::SimRig rig;
+  const test::TempDir data;
+  std::filesystem::create_directories(data.path() / "cascades" / "haarcascades");
+  const std::filesystem::path xml =
+      data.path() / "cascades" / "haarcascades" / "haarcascade_frontalface_default.xml";
+  std::ofstream(xml) << "<opencv_storage/>\n";
+  ::setenv("EPIPOLE_DATA_DIR", data.path().c_str(), 1);
+  BoardConfig config = rig.config;
+  config.stages.detect = true;
+  config.detector.cascade = data.path() / "compiled" / "haarcascade_frontalface_default.bin";
+  const std::string error = test::error_of([&] { Firmware fw(config, rig.images()); });
+  ::unsetenv("EPIPOLE_DATA_DIR");
+  EXPECT_NE(error.find("`epipole cascade-compile " + xml.string() + " " +
+                       config.detector.cascade.string() + "`"),
+            std::string::npos)
+      << error;
+  EXPECT_EQ(error.find('\n'), std::string::npos) << "one line: " << error;
 }
 
 TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
