@@ -1,12 +1,19 @@
 // The board file: every key read, every bad value an error naming the file and the key.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
+#include <string>
+#include <vector>
 
+#include "epipole/calib/calibration.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/board_config.hpp"
+#include "error_of.hpp"
 #include "sim_rig.hpp"
+#include "test_data.hpp"
+#include "test_paths.hpp"
 
 namespace epipole::firmware {
 namespace {
@@ -152,6 +159,49 @@ TEST(BoardConfig, AFolderMeansItsBoardFile) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("missing"), std::string::npos) << e.what();
   }
+}
+
+// Every board file the repository ships (board/*/board.yaml and board/*/board-*.yaml: what a
+// user copies to start a board of their own) loads through the firmware's own reading and
+// validation, and so does every calibration file it names that ships beside it.
+TEST(BoardConfig, EveryShippedBoardLoads) {
+  namespace fs = std::filesystem;
+  // The simulated boards name the fetched data sets: the same folder for the test and the board.
+  const fs::path data = test::data_file("samples/left01.jpg").parent_path().parent_path();
+  ::setenv("EPIPOLE_DATA_DIR", data.c_str(), 1);
+  std::vector<std::string> loaded;
+  for (const auto& folder : fs::directory_iterator(fs::path(test::source_dir()) / "board")) {
+    if (!folder.is_directory()) continue;
+    EXPECT_TRUE(fs::exists(folder.path() / "board.yaml")) << folder.path() << ": no board.yaml";
+    for (const auto& entry : fs::directory_iterator(folder.path())) {
+      const std::string name = entry.path().filename().string();
+      if (name != "board.yaml" && !(name.starts_with("board-") && name.ends_with(".yaml"))) {
+        continue;
+      }
+      BoardConfig c;
+      const std::string error = test::error_of([&] { c = load_board_config(entry.path()); });
+      EXPECT_EQ(error, "") << entry.path();
+      if (!error.empty()) continue;
+      loaded.push_back(folder.path().filename().string() + "/" + name);
+      // A board's own rig.yaml is made by epipole calibrate on the user's rig; a file that
+      // ships in the repository must load.
+      std::vector<fs::path> calibrations{c.calibration};
+      for (const auto& scene : c.sim.scenes) calibrations.push_back(scene.calibration);
+      for (const fs::path& calibration : calibrations) {
+        if (calibration.empty() || !fs::exists(calibration)) continue;
+        EXPECT_EQ(test::error_of([&] { calib::load_calibration(calibration); }), "") << calibration;
+      }
+      if (c.cameras.backend == "sim") {
+        for (const auto& scene : c.sim.scenes) {
+          EXPECT_TRUE(fs::exists(scene.calibration)) << name << ": scene " << scene.name;
+        }
+      }
+    }
+  }
+  ::unsetenv("EPIPOLE_DATA_DIR");
+  // sim, raspberrypi5-ov9281, usb-stereo and the virtual board's two, at least.
+  EXPECT_GE(loaded.size(), 5u);
+  EXPECT_NE(std::find(loaded.begin(), loaded.end(), "sim/board.yaml"), loaded.end());
 }
 
 }  // namespace
