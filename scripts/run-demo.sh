@@ -19,8 +19,9 @@ samples="$data/samples"
 
 ./scripts/setup.sh
 ./scripts/fetch-data.sh
-cmake --preset host >/dev/null
-cmake --build --preset host --target epipole epipole-fw
+# The same data folder for the build (it compiles board/sim's face cascade into it) and the runs.
+cmake --preset host -DEPIPOLE_DATA_DIR="$data" >/dev/null
+cmake --build --preset host --target epipole epipole-fw sim_board_cascade
 tool=build/host/host-tools/epipole
 
 mkdir -p "$out/calibration"

@@ -2,7 +2,9 @@
 # Every test: installs what is missing, fetches the data sets, builds the host, host-asan,
 # aarch64 and armhf presets and runs all their tests (the cross-built ones under qemu-user),
 # then builds the libFuzzer targets (fuzz preset) and runs each from its seed corpus. The cross
-# presets also build the board's .deb and check its contents (scripts/check-package.sh).
+# presets also build the board's .deb and check its contents (scripts/check-package.sh). Last, it
+# runs the main job (scripts/run-demo.sh) in a fresh copy of the tree with a fresh copy of the
+# data sets and checks what it wrote (scripts/check-demo.sh): a broken main job fails the tests.
 # This is the README's test command and what CI runs.
 #
 #   EPIPOLE_PRESETS="host aarch64"   run a subset of the presets
@@ -46,6 +48,25 @@ if [[ " $presets " == *" host "* && " $presets " == *" aarch64 "* ]]; then
   # A virtual machine on a shared CI machine: a failed test gets one more run, reported by ctest.
   ctest --preset host -L vboard --output-junit junit-vboard.xml --repeat until-pass:2
   timings+="  vboard: tested in $((SECONDS - phase)) s"$'\n'
+fi
+
+if [[ " $presets " == *" host "* ]]; then
+  # As a new user runs it: a copy of this tree without its build folders, the data sets without
+  # what builds put there (the compiled cascade), so the main job must make all it needs itself.
+  echo "=== demo: the main job (scripts/run-demo.sh) in a fresh copy of the tree, then a check of what it wrote"
+  phase=$SECONDS
+  demo=$(mktemp -d)
+  mkdir "$demo/src" "$demo/data"
+  git ls-files -z --cached --others --exclude-standard |
+    while IFS= read -r -d '' f; do [[ -e $f ]] && printf '%s\0' "$f"; done |
+    cpio -pdm0 --quiet "$demo/src"
+  data=${EPIPOLE_DATA_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/epipole/data}
+  cp -r "$data/." "$demo/data/"
+  rm -rf "$demo/data/compiled"
+  EPIPOLE_DATA_DIR="$demo/data" "$demo/src/scripts/run-demo.sh" "$demo/out"
+  ./scripts/check-demo.sh "$demo/out"
+  rm -rf "$demo"
+  timings+="  demo: ran and checked in $((SECONDS - phase)) s"$'\n'
 fi
 
 printf "%s" "$timings"

@@ -20,6 +20,8 @@ packages=(
   qemu-system-x86 qemu-system-arm kmod cpio xz-utils
   # data fetching (apt-get download + dpkg-deb)
   dpkg ca-certificates
+  # checking what the main job wrote (scripts/check-demo.sh)
+  jq
 )
 
 missing=()

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Checks what the main job (scripts/run-demo.sh) wrote: the calibration's files, and for every
+# scene of the simulated board its frame pairs, its pictures and a serial stream that the robot's
+# end decoded without a single error. Exits non-zero naming each thing that is missing or wrong.
+#
+#   scripts/check-demo.sh OUT_DIR
+set -euo pipefail
+
+out=${1:?usage: scripts/check-demo.sh OUT_DIR}
+problems=0
+problem() {
+  echo "check-demo: $*" >&2
+  problems=$((problems + 1))
+}
+nonempty() {
+  [[ -s $1 ]] || problem "$1 is missing or empty"
+}
+
+for f in rig.yaml report.json preview.png; do nonempty "$out/calibration/$f"; done
+
+summary="$out/sim/summary.json"
+if ! jq -e '.scenes | length > 0' "$summary" >/dev/null 2>&1; then
+  problem "$summary is missing, not JSON or lists no scene"
+  exit 1
+fi
+
+# check FILTER WHAT: the scene's summary ($s) must satisfy the jq FILTER.
+check() { jq -e --arg type "$per_frame" "$1" <<<"$s" >/dev/null || problem "$scene: $2"; }
+
+while read -r scene; do
+  dir="$out/sim/$scene"
+  s=$(jq -c --arg scene "$scene" '.scenes[] | select(.scene == $scene)' "$summary")
+  # The message a frame pair publishes: the frame summary, or OBSTACLE_DISTANCE in MAVLink.
+  per_frame=$(jq -r 'if .decoder.protocol == "mavlink" then "obstacle_distance" else "frame" end' <<<"$s")
+  check '.frames > 0' "no frame pairs"
+  check '(.received[$type] // 0) == .frames' \
+    "$(jq -c '.frames' <<<"$s") pairs but not as many '$per_frame' messages decoded"
+  check '.decoder.errors == 0' "the serial stream was not decoded without errors: $(jq -c .decoder <<<"$s")"
+  check '.pictures | length > 0' "no pictures"
+  nonempty "$dir/serial.bin"
+  tail -n 1 "$dir/serial.jsonl" 2>/dev/null | jq -e '.type == "decoder" and .errors == 0' >/dev/null 2>&1 ||
+    problem "$dir/serial.jsonl does not end with an error-free decoder line"
+  while read -r picture; do
+    nonempty "$dir/$picture"
+  done < <(jq -r '.pictures[]' <<<"$s")
+  echo "check-demo: $scene: $(jq -r --arg type "$per_frame" \
+    '"\(.frames) pairs, \(.received[$type] // 0) \($type) messages decoded (\(.decoder.protocol), \(.decoder.errors) errors), \(.pictures | length) pictures"' <<<"$s")"
+done < <(jq -r '.scenes[].scene' "$summary")
+
+if ((problems > 0)); then
+  echo "check-demo: $problems problems in $out" >&2
+  exit 1
+fi
+echo "check-demo: $out is complete"
