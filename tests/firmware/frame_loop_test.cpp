@@ -208,8 +208,9 @@ TEST(FrameLoop, AMissingCompiledCascadeIsReportedWithTheCommandThatMakesIt) {
 
 TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
   // A trigger far faster than the host can process: the loop takes the freshest pair and
-  // counts the ones it skipped; latency stays bounded instead of growing.
-  test::SimRig rig(160, 96, 8, "");
+  // counts the ones it skipped; latency stays bounded instead of growing. At 320x240 a pair
+  // takes several of the 1 kHz trigger's periods (at 160x96 some runs took less than one).
+  test::SimRig rig(320, 240, 8, "");
   BoardConfig config = rig.parse("");
   config.trigger.line.rate_hz = 1000;
   config.trigger.line.pulse_width = 100'000;
