@@ -9,13 +9,18 @@
 
 namespace epipole::firmware {
 
-std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config) {
-  std::filesystem::path file = config.calibration;
+std::filesystem::path board_calibration_file(const BoardConfig& config) {
   if (const BoardConfig::SimScene* scene = config.sim_scene();
       scene != nullptr && config.cameras.backend == "sim" && !scene->calibration.empty()) {
-    file = scene->calibration;
+    return scene->calibration;
   }
-  if (file.empty()) return std::nullopt;
+  return config.calibration;
+}
+
+std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config) {
+  const std::filesystem::path file = board_calibration_file(config);
+  std::error_code ec;
+  if (file.empty() || !std::filesystem::exists(file, ec)) return std::nullopt;
   return calib::load_calibration(file);
 }
 
@@ -53,6 +58,7 @@ Firmware::~Firmware() = default;
 
 void Firmware::build(std::unique_ptr<Board> board) {
   calibration_ = load_board_calibration(config_);
+  if (!calibration_) missing_calibration_ = board_calibration_file(config_);
   board_ = std::move(board);
   pipeline_ = std::make_unique<Pipeline>(config_, calibration_);
   LinkConfig link;

@@ -218,7 +218,7 @@ protocol::AckStatus FrameLoop::set_exposure(const protocol::SetExposure& command
   return protocol::AckStatus::ok;
 }
 
-void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency) {
+void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool trigger_from_capture) {
   if (link_.protocol() == LinkProtocol::mavlink) {
     if (r.obstacles != nullptr) {
       const auto cm = [](double m) { return static_cast<std::uint16_t>(m * 100 + 0.5); };
@@ -238,6 +238,7 @@ void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency) {
   s.valid_disparity_permille = static_cast<std::uint16_t>(r.valid_disparity_permille);
   s.points = static_cast<std::uint16_t>(r.best_points.size());
   s.detections = static_cast<std::uint8_t>(r.detections.size());
+  if (trigger_from_capture) s.flags |= protocol::kFrameTriggerFromCapture;
   send(s);
   if ((r.stages & stage_bit(Stage::detect)) != 0) {
     protocol::Detections d;
@@ -291,6 +292,7 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
       if (link_.protocol() == LinkProtocol::mavlink) {
         link_.publish_heartbeat();
       } else {
+        if (!pipeline_.has_calibration()) h->flags |= protocol::kHealthNotCalibrated;
         send(*h);
         if (last_calibration_health_ && last_calibration_health_->matches > 0) {
           const auto centipx = [](double px) {
@@ -350,12 +352,14 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
     }
     const hal::StereoPair& pair = got.pair;
     hal::Nanoseconds trigger_ns = pair.left.timestamp;
+    bool trigger_from_capture = true;
     // The edge of the pair's number, while the numbers are the trigger's: after both cameras
     // were reopened without a trigger record to number them by, they go on from the last pair
     // instead (hal/stereo_pairing.hpp).
     if (trigger_ && grabber_.pairer().numbers_are_the_triggers()) {
       if (const auto edge = trigger_->record().find(pair.left.sequence)) {
         trigger_ns = edge->timestamp;
+        trigger_from_capture = false;
       }
     }
     const hal::Nanoseconds captured = clock.now() - trigger_ns;
@@ -364,7 +368,7 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
         pipeline_.process(pair.left.gray, pair.right.gray, pair.left.sequence, trigger_ns, stages_);
     if (charge != nullptr) charge->advance(steady_now() - t0);
     const hal::Nanoseconds t1 = steady_now();
-    publish(r, clock.now() - trigger_ns);
+    publish(r, clock.now() - trigger_ns, trigger_from_capture);
     const hal::Nanoseconds t2 = steady_now();
     if (charge != nullptr) charge->advance(t2 - t1);
     const hal::Nanoseconds latency = clock.now() - trigger_ns;

@@ -67,7 +67,13 @@ int main(int argc, char** argv) {
                  fw.working_set_bytes() / 1024,
                  fw.board().serial_peer().empty() ? "" : ", link at ",
                  fw.board().serial_peer().c_str());
-    if (!fw.calibration()) {
+    if (!fw.missing_calibration().empty()) {
+      std::fprintf(stderr,
+                   "epipole-fw: not calibrated: %s does not exist yet; running uncalibrated "
+                   "(images taken as rectified, no depth, health flags say so). Calibrate on the "
+                   "board: snapshots, `epipole calibrate ... -o %s`, restart (docs/deploy.md)\n",
+                   fw.missing_calibration().c_str(), fw.missing_calibration().c_str());
+    } else if (!fw.calibration()) {
       std::fprintf(stderr,
                    "epipole-fw: warning: no calibration: images are taken as rectified and "
                    "nothing gets a depth\n");

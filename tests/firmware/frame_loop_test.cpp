@@ -91,6 +91,7 @@ TEST(FrameLoop, RunsEveryStageOnEveryPairAndPublishesIt) {
     EXPECT_EQ(summaries[i].frame, i);
     EXPECT_GT(summaries[i].valid_disparity_permille, 500);
     EXPECT_GT(summaries[i].corners_right, 20);
+    EXPECT_EQ(summaries[i].flags, 0) << "trigger_ns is the recorded edge";
   }
   EXPECT_EQ(recorder.all<protocol::Obstacles>().size(), 90u);
   // Health once per second of the board's (virtual) clock: at 1 s and 2 s of the 3 s run.
@@ -103,7 +104,37 @@ TEST(FrameLoop, RunsEveryStageOnEveryPairAndPublishesIt) {
   // delay + readout of the simulated sensor (5 + 2 ms).
   EXPECT_EQ(health[0].latency_p50_us, 7000u);
   EXPECT_GT(health[0].stage_us[static_cast<std::size_t>(Stage::disparity)], 0u);
+  EXPECT_EQ(health[0].flags, 0) << "calibrated";
   EXPECT_EQ(s.health_messages, health.size());
+}
+
+// A board fresh from its package names a calibration file that `epipole calibrate` has not made
+// yet: the firmware runs without it, and every health message says so.
+TEST(FrameLoop, RunsUncalibratedUntilTheCalibrationFileIsMade) {
+  test::SimRig rig;
+  std::filesystem::remove(rig.dir.path() / "rig.yaml");
+  Firmware fw(rig.config, rig.images());
+  EXPECT_FALSE(fw.calibration());
+  EXPECT_EQ(fw.missing_calibration(), rig.dir.path() / "rig.yaml");
+  Recorder recorder;
+  fw.frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  EXPECT_EQ(fw.run(90, stop).frames, 90u);
+  // What runs without a calibration runs: corners and disparity on the images as they come.
+  for (const auto& f : recorder.frames) {
+    EXPECT_EQ(f.stages,
+              stage_bit(Stage::capture) | stage_bit(Stage::corners) | stage_bit(Stage::disparity));
+    EXPECT_NEAR(f.centre_disparity, rig.disparity * 16, 8);
+  }
+  EXPECT_EQ(recorder.all<protocol::Obstacles>().size(), 0u) << "no depth without calibration";
+  const auto health = recorder.all<protocol::Health>();
+  ASSERT_GE(health.size(), 2u);
+  for (const auto& h : health) EXPECT_EQ(h.flags, protocol::kHealthNotCalibrated);
+
+  // A file that is there but does not read is a configuration error, not a missing one.
+  std::ofstream(rig.dir.path() / "rig.yaml") << "version: [\n";
+  EXPECT_NE(test::error_of([&] { Firmware broken(rig.config, rig.images()); }).find("rig.yaml"),
+            std::string::npos);
 }
 
 TEST(FrameLoop, PublishesSparsePointsAtTheRigsDepthAndTheCalibrationHealth) {
@@ -557,6 +588,10 @@ TEST(FrameLoop, FreeRunningCamerasWithoutATriggerPairByTime) {
       longest_gap = std::max(longest_gap, f.frame - recorder.frames[i - 1].frame);
     }
   }
+  // ... and the frame messages say so.
+  const auto summaries = recorder.all<protocol::FrameSummary>();
+  ASSERT_FALSE(summaries.empty());
+  for (const auto& m : summaries) EXPECT_EQ(m.flags, protocol::kFrameTriggerFromCapture);
   // Pairs keep coming: no frame is within 15 ms while the phase crosses the 3.3 ms band in the
   // middle (33.3 - 2 x 15), at 0.33 ms a frame: about 10 frames, a few more with drops beside.
   EXPECT_LE(longest_gap, 16u);

@@ -223,8 +223,11 @@ TEST(Protocol, OverlongAndUnknownFramesAreCounted) {
   EXPECT_EQ(decode_all(decoder, stream).size(), 1u);
   EXPECT_EQ(decoder.stats().too_long, 1u);
 
-  // A well-formed frame of an unknown type and one of a future version.
-  for (const auto& [version, type] : {std::pair<int, int>{1, 0x55}, std::pair<int, int>{2, 0x01}}) {
+  // A well-formed frame of an unknown type, one of a future version and one of version 1 (no
+  // flags in health and frame yet).
+  for (const auto& [version, type] :
+       {std::pair<int, int>{kVersion, 0x55}, std::pair<int, int>{kVersion + 1, 0x01},
+        std::pair<int, int>{1, 0x01}}) {
     Bytes payload{static_cast<std::uint8_t>(version), static_cast<std::uint8_t>(type), 5, 0};
     const std::uint32_t c = crc32(payload);
     for (int i = 0; i < 4; ++i) payload.push_back(static_cast<std::uint8_t>(c >> (8 * i)));
@@ -233,7 +236,31 @@ TEST(Protocol, OverlongAndUnknownFramesAreCounted) {
     EXPECT_TRUE(decode_all(decoder, frame).empty());
   }
   EXPECT_EQ(decoder.stats().unknown_type, 1u);
-  EXPECT_EQ(decoder.stats().bad_version, 1u);
+  EXPECT_EQ(decoder.stats().bad_version, 2u);
+}
+
+// Version 2's flags: the last field of health (u16) and of frame (u8), as docs/protocol.md says.
+TEST(Protocol, FlagsAreTheLastFieldOfHealthAndFrame) {
+  const auto payload_of = [](const Message& m) {
+    const Bytes frame = frame_of(m, 0);
+    Bytes payload(kMaxPayloadSize);
+    const auto n = cobs_decode(std::span(frame.data(), frame.size() - 1), payload);
+    EXPECT_TRUE(n.has_value());
+    payload.resize(n.value_or(0));
+    return payload;
+  };
+  Health health;
+  health.flags = 0xA501;
+  const Bytes h = payload_of(health);
+  ASSERT_EQ(h.size(), kHeaderSize + 70 + kCrcSize);
+  EXPECT_EQ(h[0], 2) << "version";
+  EXPECT_EQ(h[kHeaderSize + 68], 0x01);
+  EXPECT_EQ(h[kHeaderSize + 69], 0xA5);
+  FrameSummary frame;
+  frame.flags = kFrameTriggerFromCapture;
+  const Bytes f = payload_of(frame);
+  ASSERT_EQ(f.size(), kHeaderSize + 26 + kCrcSize);
+  EXPECT_EQ(f[kHeaderSize + 25], kFrameTriggerFromCapture);
 }
 
 TEST(Protocol, BodiesWithWrongLengthsOrCountsAreRejected) {

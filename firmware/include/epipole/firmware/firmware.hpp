@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
@@ -16,8 +17,14 @@
 
 namespace epipole::firmware {
 
-// The calibration a board runs with: its simulated scene's, else its own; none when it names
-// none (then the images must already be rectified and nothing gets a depth).
+// The calibration file a board names: its simulated scene's, else its own; empty for none.
+std::filesystem::path board_calibration_file(const BoardConfig& config);
+
+// The calibration a board runs with; none when it names none, or names a file that is not there
+// yet (a board fresh from its package, before `epipole calibrate`): the firmware then runs
+// uncalibrated: the images are taken as rectified, nothing gets a depth, and every health
+// message says so (protocol::kHealthNotCalibrated). A file that is there but does not read is
+// an Error.
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config);
 
 // Scheduling the board asks for (threads: affinity, SCHED_FIFO) for the calling thread, which
@@ -43,6 +50,9 @@ class Firmware {
   Link& link() { return *link_; }
   FrameLoop& frame_loop() { return *loop_; }
   const std::optional<calib::StereoCalibration>& calibration() const { return calibration_; }
+  // The calibration file the board names that is not there yet; empty when it names none or
+  // the calibration was loaded.
+  const std::filesystem::path& missing_calibration() const { return missing_calibration_; }
   // The frame loop's buffers: vision stages and link queue (the cameras' buffers are the
   // drivers').
   std::size_t working_set_bytes() const;
@@ -52,6 +62,7 @@ class Firmware {
 
   BoardConfig config_;
   std::optional<calib::StereoCalibration> calibration_;
+  std::filesystem::path missing_calibration_;
   std::unique_ptr<Board> board_;
   std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<Link> link_;

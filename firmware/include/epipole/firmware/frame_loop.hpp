@@ -72,7 +72,8 @@ class FrameLoop {
   void apply_commands();
   protocol::AckStatus set_trigger_rate(const protocol::SetTriggerRate& command);
   protocol::AckStatus set_exposure(const protocol::SetExposure& command);
-  void publish(const FrameResult& result, hal::Nanoseconds latency);
+  // trigger_from_capture: result.trigger_ns is the left frame's time, not a trigger edge's.
+  void publish(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
   void send(const protocol::Message& message);
   FaultCounts faults();
 

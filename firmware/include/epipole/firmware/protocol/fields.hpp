@@ -31,6 +31,7 @@ void fields(Io& io, M& m) {
   io("unpaired_frames", m.unpaired_frames);
   io("bad_commands", m.bad_commands);
   io("messages_dropped", m.messages_dropped);
+  io("flags", m.flags);
 }
 
 template <class Io, class M>
@@ -44,6 +45,7 @@ void fields(Io& io, M& m) {
   io("valid_disparity_permille", m.valid_disparity_permille);
   io("detections", m.detections);
   io("points", m.points);
+  io("flags", m.flags);
 }
 
 template <class Io, class M>

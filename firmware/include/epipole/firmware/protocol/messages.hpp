@@ -6,10 +6,10 @@
 
 namespace epipole::protocol {
 
-// Epipole serial protocol, version 1 (docs/protocol.md). Every number is little-endian on the
-// wire; sizes here are the wire sizes.
+// Epipole serial protocol, version 2 (docs/protocol.md). Every number is little-endian on the
+// wire; sizes here are the wire sizes. Version 2 added the flags of health and frame.
 
-inline constexpr std::uint8_t kVersion = 1;
+inline constexpr std::uint8_t kVersion = 2;
 
 enum class MessageType : std::uint8_t {
   // firmware -> robot
@@ -39,6 +39,10 @@ enum class Stage : std::uint8_t {
   total = 7,
 };
 
+// Health flags.
+// No calibration file yet: images are taken as rectified and nothing gets a depth.
+inline constexpr std::uint16_t kHealthNotCalibrated = 1u << 0;
+
 // Once a second: rates, latencies, faults.
 struct Health {
   std::uint32_t uptime_ms = 0;
@@ -55,8 +59,13 @@ struct Health {
   std::uint16_t unpaired_frames = 0;
   std::uint16_t bad_commands = 0;
   std::uint16_t messages_dropped = 0;  // not sent: the link's byte budget or queue was full
+  std::uint16_t flags = 0;             // kHealth* bits: the firmware's state
   friend bool operator==(const Health&, const Health&) = default;
 };
+
+// Frame flags.
+// trigger_ns is the left frame's capture time: no trigger edge was recorded for the pair.
+inline constexpr std::uint8_t kFrameTriggerFromCapture = 1u << 0;
 
 // One per processed pair.
 struct FrameSummary {
@@ -68,6 +77,7 @@ struct FrameSummary {
   std::uint16_t valid_disparity_permille = 0;
   std::uint8_t detections = 0;
   std::uint16_t points = 0;
+  std::uint8_t flags = 0;  // kFrame* bits
   friend bool operator==(const FrameSummary&, const FrameSummary&) = default;
 };
 
