@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Builds the .deb of a configured build folder with cpack and checks what is in it: the
-# architecture, the dependencies, the firmware binary for that architecture (and that it runs:
+# architecture, the dependencies (computed by dpkg-shlibdeps: every library the firmware needs
+# is a versioned dependency), the firmware binary for that architecture (and that it runs:
 # under qemu-user for a cross build), the unit, the udev rules, the board files, the maintainer
-# scripts and the conffile.
+# scripts, the conffile, the copyright file and the changelog; and that lintian finds no error.
 #
 #   scripts/check-package.sh BUILD_DIR DEBIAN_ARCH      e.g. build/aarch64 arm64
 set -euo pipefail
@@ -25,13 +26,17 @@ deb=$(ls "$build"/epipole_*_"$arch".deb 2>/dev/null | head -1)
 [[ -n $deb ]] || fail "cpack made no epipole_*_$arch.deb in $build"
 
 [[ $(dpkg-deb -f "$deb" Architecture) == "$arch" ]] || fail "$deb: architecture is not $arch"
-dpkg-deb -f "$deb" Depends | grep -q 'libstdc++6' || fail "$deb: no dependency on libstdc++6"
+depends=$(dpkg-deb -f "$deb" Depends)
+for p in 'libc6 (>= ' 'libstdc++6 (>= ' 'libgcc-s1 (>= ' adduser init-system-helpers; do
+  grep -qF "$p" <<<"$depends" || fail "$deb: Depends has no '$p': $depends"
+done
 
 contents=$(dpkg-deb -c "$deb" | awk '{print $6}')
 for f in ./usr/bin/epipole-fw ./usr/lib/systemd/system/epipole.service \
   ./usr/lib/udev/rules.d/60-epipole.rules ./etc/epipole/board.yaml \
   ./usr/share/epipole/board/sim/board.yaml ./usr/share/epipole/board/raspberrypi5-ov9281/board.yaml \
-  ./usr/share/epipole/board/usb-stereo/board.yaml ./usr/share/doc/epipole/README.md; do
+  ./usr/share/epipole/board/usb-stereo/board.yaml ./usr/share/doc/epipole/README.md \
+  ./usr/share/doc/epipole/copyright ./usr/share/doc/epipole/changelog.gz; do
   grep -qxF "$f" <<<"$contents" || fail "$deb: $f is missing"
 done
 
@@ -42,7 +47,9 @@ for f in postinst prerm postrm conffiles; do
   [[ -f $control/DEBIAN/$f ]] || fail "$deb: control file $f is missing"
 done
 grep -qx /etc/epipole/board.yaml "$control/DEBIAN/conffiles" || fail "$deb: board.yaml is no conffile"
-sh -n "$control/DEBIAN/postinst" || fail "$deb: postinst is not valid sh"
+for f in postinst prerm postrm; do
+  sh -n "$control/DEBIAN/$f" || fail "$deb: $f is not valid sh"
+done
 
 dpkg-deb -x "$deb" "$control/root"
 fw="$control/root/usr/bin/epipole-fw"
@@ -50,4 +57,12 @@ readelf -h "$fw" | grep -q "Machine:.*$machine" || fail "$deb: epipole-fw is not
 grep -q '^Type=notify' "$control/root/usr/lib/systemd/system/epipole.service" ||
   fail "$deb: the unit is not Type=notify"
 version=$($qemu "$fw" --version) || fail "$deb: epipole-fw --version did not run"
+changelog=$(zcat "$control/root/usr/share/doc/epipole/changelog.gz" | head -1)
+[[ $changelog == "epipole ($(dpkg-deb -f "$deb" Version))"* ]] ||
+  fail "$deb: the changelog's last entry is not this version: $changelog"
+# Errors fail; warnings (no manual pages yet) are shown.
+lint_status=0
+lint=$(lintian --fail-on error --tag-display-limit 0 "$deb" 2>&1) || lint_status=$?
+grep -v 'root privileges' <<<"$lint" || true
+((lint_status == 0)) || fail "$deb: lintian reports errors (above)"
 echo "check-package: $deb ok ($(du -k "$deb" | cut -f1) KiB; $version)"

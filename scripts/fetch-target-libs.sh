@@ -1,14 +1,19 @@
 #!/usr/bin/env bash
 # Unpacks the board-side libraries Epipole links (Debian's :arm64 and :armhf packages of
 # yaml-cpp and libgpiod) into a cache folder that the cross toolchain files add to their search
-# path. Nothing is installed for the foreign architecture: the packages are downloaded with
-# apt-get download and unpacked with dpkg-deb. Idempotent.
+# path, and writes a dpkg database of them beside (dpkg/) with which scripts/package-depends.sh
+# computes the board package's dependencies. The database also holds Debian's C and C++
+# runtime packages of the target (libc6, libstdc++6, libgcc-s1), their files mapped onto the
+# cross toolchain's copies of the same libraries in /usr/<triple>/lib, which is what the
+# binaries link. Nothing is installed for the foreign architecture: the packages are downloaded
+# with apt-get download and unpacked with dpkg-deb. Idempotent.
 #
 #   scripts/fetch-target-libs.sh arm64|armhf ...
 #   EPIPOLE_TARGET_LIBS_DIR   parent folder (default: ${XDG_CACHE_HOME:-~/.cache}/epipole)
 set -euo pipefail
 
 packages=(libyaml-cpp-dev libyaml-cpp0.7 libgpiod-dev libgpiod2)
+runtime=(libc6 libstdc++6 libgcc-s1)
 parent=${EPIPOLE_TARGET_LIBS_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/epipole}
 sudo=""
 if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
@@ -28,11 +33,12 @@ for arch in "$@"; do
       ;;
   esac
   root="$parent/target-libs-$arch"
-  stamp="$root/.complete-v1"
+  stamp="$root/.complete-v2"
   if [[ -f $stamp ]]; then
     echo "fetch-target-libs: $root is complete"
     continue
   fi
+  triple=$(dpkg-architecture -a"$arch" -qDEB_HOST_MULTIARCH 2>/dev/null)
   # apt-get download of a foreign architecture needs it known to dpkg and its package lists.
   if ! dpkg --print-foreign-architectures | grep -qx "$arch"; then
     $sudo dpkg --add-architecture "$arch"
@@ -41,15 +47,37 @@ for arch in "$@"; do
   work=$(mktemp -d)
   (
     cd "$work"
-    if ! apt-get download -q "${packages[@]/%/:$arch}" >/dev/null 2>&1; then
+    wanted=("${packages[@]/%/:$arch}" "${runtime[@]/%/:$arch}")
+    if ! apt-get download -q "${wanted[@]}" >/dev/null 2>&1; then
       refresh_lists
-      apt-get download -q "${packages[@]/%/:$arch}" >/dev/null
+      apt-get download -q "${wanted[@]}" >/dev/null
     fi
     rm -rf "$root.partial"
-    mkdir -p "$root.partial"
+    db="$root.partial/dpkg"
+    mkdir -p "$db/info" "$db/updates"
+    echo 1 >"$db/info/format"  # multiarch names: info/<package>:<arch>.list
+    : >"$db/status"
     for deb in ./*.deb; do
-      dpkg-deb -x "$deb" "$root.partial"
-      dpkg-deb -f "$deb" Package Version Architecture | paste -sd' ' >>"$root.partial/.complete-v1"
+      package=$(dpkg-deb -f "$deb" Package)
+      name=$package
+      [[ $(dpkg-deb -f "$deb" Multi-Arch) == same ]] && name="$package:$arch"
+      dpkg-deb -e "$deb" control
+      for f in shlibs symbols; do
+        if [[ -f control/$f ]]; then cp "control/$f" "$db/info/$name.$f"; fi
+      done
+      rm -rf control
+      if [[ " ${runtime[*]} " == *" $package "* ]]; then
+        # The cross toolchain's copy of each shared library of the package.
+        dpkg-deb -c "$deb" | awk '{print $6}' |
+          sed -n "s|^\./\(usr/\)\{0,1\}lib/$triple/\([^/]*\.so[.0-9]*\)\$|/usr/$triple/lib/\2|p" \
+            >"$db/info/$name.list"
+      else
+        dpkg-deb -x "$deb" "$root.partial"
+        # Where the files are here, so that the libraries found in this folder are the package's.
+        dpkg-deb -c "$deb" | awk '$6 !~ /\/$/ {print $6}' | sed "s|^\.|$root|" >"$db/info/$name.list"
+        dpkg-deb -f "$deb" Package Version Architecture | paste -sd' ' >>"$root.partial/.complete-v2"
+      fi
+      { dpkg-deb -f "$deb" | grep -v '^Status:'; echo "Status: install ok installed"; echo; } >>"$db/status"
     done
   )
   rm -rf "$work" "$root"

@@ -18,10 +18,10 @@ packages=(
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user
   # the virtual board (docs/vboard.md): whole-system emulators, module tools, initramfs packing
   qemu-system-x86 qemu-system-arm kmod cpio xz-utils
-  # data fetching (apt-get download + dpkg-deb)
-  dpkg ca-certificates
-  # checking what the main job wrote (scripts/check-demo.sh)
-  jq
+  # data fetching (apt-get download + dpkg-deb), the package's dependencies (dpkg-shlibdeps)
+  dpkg dpkg-dev ca-certificates
+  # checking what the main job wrote (scripts/check-demo.sh) and the board package (lintian)
+  jq lintian
 )
 
 missing=()
