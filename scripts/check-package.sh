@@ -9,12 +9,18 @@
 set -euo pipefail
 build=$1
 arch=$2
+# The target's libraries (scripts/fetch-target-libs.sh) this build linked, for a cross build.
+target_libs=$(sed -n 's/^EPIPOLE_TARGET_LIBS:PATH=//p' "$build/CMakeCache.txt")
 case $arch in
-  arm64) machine=AArch64 qemu="qemu-aarch64 -L /usr/aarch64-linux-gnu" ;;
-  armhf) machine=ARM qemu="qemu-arm -L /usr/arm-linux-gnueabihf" ;;
-  amd64) machine=X86-64 qemu="" ;;
+  arm64) machine=AArch64 triple=aarch64-linux-gnu emulator=qemu-aarch64 ;;
+  armhf) machine=ARM triple=arm-linux-gnueabihf emulator=qemu-arm ;;
+  amd64) machine=X86-64 qemu=() ;;
   *) echo "check-package: unknown architecture $arch" >&2; exit 2 ;;
 esac
+if [[ $arch != amd64 ]]; then
+  qemu=("$emulator" -L "/usr/$triple"
+    -E "LD_LIBRARY_PATH=$target_libs/usr/lib/$triple:$target_libs/lib/$triple")
+fi
 
 fail() {
   echo "check-package: $*" >&2
@@ -56,7 +62,19 @@ fw="$control/root/usr/bin/epipole-fw"
 readelf -h "$fw" | grep -q "Machine:.*$machine" || fail "$deb: epipole-fw is not an $machine binary"
 grep -q '^Type=notify' "$control/root/usr/lib/systemd/system/epipole.service" ||
   fail "$deb: the unit is not Type=notify"
-version=$($qemu "$fw" --version) || fail "$deb: epipole-fw --version did not run"
+version=$("${qemu[@]}" "$fw" --version) || fail "$deb: epipole-fw --version did not run"
+# Every library the firmware needs comes from a package it depends on.
+depends_names=$(sed 's/ ([^)]*)//g; s/, /\n/g' <<<"$depends")
+for lib in $(LC_ALL=C readelf -d "$fw" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
+  if [[ $arch == amd64 ]]; then
+    owner=$(dpkg-query -S "*/$(gcc -dumpmachine)/$lib" 2>/dev/null | head -1)
+  else
+    owner=$(dpkg-query --admindir="$target_libs/dpkg" -S "*/$lib" 2>/dev/null | head -1)
+  fi
+  package=${owner%%:*}
+  [[ -n $package ]] || fail "$deb: no package of $arch holds $lib (NEEDED by epipole-fw)"
+  grep -qxF "$package" <<<"$depends_names" || fail "$deb: needs $lib of $package, not in Depends: $depends"
+done
 changelog=$(zcat "$control/root/usr/share/doc/epipole/changelog.gz" | head -1)
 [[ $changelog == "epipole ($(dpkg-deb -f "$deb" Version))"* ]] ||
   fail "$deb: the changelog's last entry is not this version: $changelog"

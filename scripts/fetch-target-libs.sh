@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Unpacks the board-side libraries Epipole links (Debian's :arm64 and :armhf packages of
-# yaml-cpp and libgpiod) into a cache folder that the cross toolchain files add to their search
-# path, and writes a dpkg database of them beside (dpkg/) with which scripts/package-depends.sh
+# yaml-cpp and libgpiod, linked statically, and libcamera with the libraries it needs at run
+# time) into a cache folder that the cross toolchain files add to their search path (and the
+# cross-built tests' library path under qemu), and writes a dpkg database of them beside (dpkg/) with which scripts/package-depends.sh
 # computes the board package's dependencies. The database also holds Debian's C and C++
 # runtime packages of the target (libc6, libstdc++6, libgcc-s1), their files mapped onto the
 # cross toolchain's copies of the same libraries in /usr/<triple>/lib, which is what the
@@ -13,7 +14,7 @@
 set -euo pipefail
 
 packages=(libyaml-cpp-dev libyaml-cpp0.7 libgpiod-dev libgpiod2)
-runtime=(libc6 libstdc++6 libgcc-s1)
+runtime=(libc6 libstdc++6 libgcc-s1 gcc-12-base)
 parent=${EPIPOLE_TARGET_LIBS_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/epipole}
 sudo=""
 if [[ $(id -u) -ne 0 ]]; then sudo="sudo"; fi
@@ -33,7 +34,7 @@ for arch in "$@"; do
       ;;
   esac
   root="$parent/target-libs-$arch"
-  stamp="$root/.complete-v2"
+  stamp="$root/.complete-v3"
   if [[ -f $stamp ]]; then
     echo "fetch-target-libs: $root is complete"
     continue
@@ -44,10 +45,21 @@ for arch in "$@"; do
     $sudo dpkg --add-architecture "$arch"
     refresh_lists
   fi
+  # libcamera-dev and everything it needs at run time (libcamera0.0.3, libudev1, gnutls, ...).
+  closure() {
+    apt-cache depends --recurse --no-recommends --no-suggests --no-conflicts --no-breaks \
+      --no-replaces --no-enhances "libcamera-dev:$arch" 2>/dev/null | sed -n "s/^\([a-z0-9][^ ]*\):$arch\$/\1/p"
+  }
+  camera=$(closure)
+  [[ -n $camera ]] || { refresh_lists; camera=$(closure); }
+  [[ -n $camera ]] || { echo "fetch-target-libs: no libcamera-dev:$arch in the package lists" >&2; exit 1; }
   work=$(mktemp -d)
   (
     cd "$work"
     wanted=("${packages[@]/%/:$arch}" "${runtime[@]/%/:$arch}")
+    for p in $camera; do
+      [[ " ${packages[*]} ${runtime[*]} " == *" $p "* ]] || wanted+=("$p:$arch")
+    done
     if ! apt-get download -q "${wanted[@]}" >/dev/null 2>&1; then
       refresh_lists
       apt-get download -q "${wanted[@]}" >/dev/null
@@ -75,7 +87,7 @@ for arch in "$@"; do
         dpkg-deb -x "$deb" "$root.partial"
         # Where the files are here, so that the libraries found in this folder are the package's.
         dpkg-deb -c "$deb" | awk '$6 !~ /\/$/ {print $6}' | sed "s|^\.|$root|" >"$db/info/$name.list"
-        dpkg-deb -f "$deb" Package Version Architecture | paste -sd' ' >>"$root.partial/.complete-v2"
+        dpkg-deb -f "$deb" Package Version Architecture | paste -sd' ' >>"$root.partial/.complete-v3"
       fi
       { dpkg-deb -f "$deb" | grep -v '^Status:'; echo "Status: install ok installed"; echo; } >>"$db/status"
     done

@@ -13,9 +13,10 @@ else()
 endif()
 set(CMAKE_FIND_ROOT_PATH ${EPIPOLE_TARGET_ROOT})
 
-# Board-side libraries (yaml-cpp, libgpiod) unpacked from Debian's packages of the target
-# architecture by scripts/fetch-target-libs.sh; the project links their static archives, so the
-# test programs need nothing more under qemu.
+# Board-side libraries (yaml-cpp, libgpiod, libcamera) unpacked from Debian's packages of the
+# target architecture by scripts/fetch-target-libs.sh; the project links yaml-cpp's and libgpiod's
+# static archives and libcamera's shared library, whose own libraries the linker and, under
+# qemu, the test programs find there too.
 if(DEFINED ENV{EPIPOLE_TARGET_LIBS_DIR})
   set(_target_libs_parent $ENV{EPIPOLE_TARGET_LIBS_DIR})
 elseif(DEFINED ENV{XDG_CACHE_HOME})
@@ -25,8 +26,14 @@ else()
 endif()
 set(EPIPOLE_TARGET_LIBS ${_target_libs_parent}/target-libs-${EPIPOLE_DEBIAN_ARCH}
     CACHE PATH "Target libraries unpacked by scripts/fetch-target-libs.sh")
+set(_target_lib_dirs ${EPIPOLE_TARGET_LIBS}/usr/lib/${EPIPOLE_CROSS_TRIPLE}
+                     ${EPIPOLE_TARGET_LIBS}/lib/${EPIPOLE_CROSS_TRIPLE})
 if(IS_DIRECTORY ${EPIPOLE_TARGET_LIBS})
   list(APPEND CMAKE_FIND_ROOT_PATH ${EPIPOLE_TARGET_LIBS})
+  foreach(_dir ${_target_lib_dirs})
+    string(APPEND CMAKE_EXE_LINKER_FLAGS_INIT " -Wl,-rpath-link,${_dir}")
+    string(APPEND CMAKE_SHARED_LINKER_FLAGS_INIT " -Wl,-rpath-link,${_dir}")
+  endforeach()
 endif()
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
@@ -36,5 +43,7 @@ set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
 # ctest runs the cross-built test programs under qemu-user with the target's libraries.
 find_program(EPIPOLE_QEMU_PATH ${EPIPOLE_QEMU})
 if(EPIPOLE_QEMU_PATH)
-  set(CMAKE_CROSSCOMPILING_EMULATOR ${EPIPOLE_QEMU_PATH} -L ${EPIPOLE_TARGET_ROOT})
+  list(JOIN _target_lib_dirs ":" _target_library_path)
+  set(CMAKE_CROSSCOMPILING_EMULATOR ${EPIPOLE_QEMU_PATH} -L ${EPIPOLE_TARGET_ROOT} -E
+                                    LD_LIBRARY_PATH=${_target_library_path})
 endif()

@@ -31,7 +31,10 @@ done
 cross=$(vboard_cross_prefix "$arch")
 if [[ -n $cross ]]; then
   triple=aarch64-linux-gnu
-  library_dirs=(/usr/$triple/lib)
+  # The cross toolchain's C and C++ runtime, then the target's libraries the build linked
+  # (libcamera and what it needs: scripts/fetch-target-libs.sh).
+  target_libs=$(sed -n 's/^EPIPOLE_TARGET_LIBS:PATH=//p' "$build/CMakeCache.txt")
+  library_dirs=(/usr/$triple/lib "$target_libs/usr/lib/$triple" "$target_libs/lib/$triple")
 else
   triple=$(gcc -dumpmachine)
   library_dirs=(/lib/$triple /usr/lib/$triple)
