@@ -49,6 +49,8 @@ Frame frame_of(std::span<const std::uint8_t> bytes) {
   frame.component_id = bytes[6];
   frame.message_id = bytes[7] | bytes[8] << 8 | static_cast<std::uint32_t>(bytes[9]) << 16;
   std::memcpy(frame.payload.data(), bytes.data() + kHeaderSize, frame.length);
+  frame.wire_size = kHeaderSize + frame.length + kChecksumSize +
+                    ((bytes[2] & kIncompatSigned) != 0 ? kSignatureSize : 0);
   return frame;
 }
 
@@ -97,14 +99,14 @@ std::uint16_t crc16_x25(std::span<const std::uint8_t> bytes, std::uint16_t crc) 
 }
 
 std::size_t encode_heartbeat(const Identity& identity, std::uint8_t sequence,
-                             std::span<std::uint8_t> out) {
+                             std::span<std::uint8_t> out, std::uint8_t system_status) {
   std::array<std::uint8_t, 9> payload{};
   ByteWriter w(payload);
   w.u32(0);                         // custom_mode
   w.u8(kMavTypeOnboardController);  // type
   w.u8(kMavAutopilotInvalid);       // autopilot: not a flight controller
   w.u8(0);                          // base_mode
-  w.u8(kMavStateActive);            // system_status
+  w.u8(system_status);              // system_status
   w.u8(3);                          // mavlink_version
   return finish_frame(std::span(payload.data(), w.size()), kHeartbeatId, identity, sequence, out);
 }
@@ -195,23 +197,23 @@ std::optional<Frame> StreamDecoder::push(std::uint8_t byte) {
     return std::nullopt;
   }
   buffer_[size_++] = byte;
-  for (;;) {
+  return next();
+}
+
+std::optional<Frame> StreamDecoder::next() {
+  while (size_ > 0) {
     std::size_t frame_size = 0;
     const Check check = check_frame(std::span(buffer_.data(), size_), frame_size);
-    if (check == Check::incomplete) return std::nullopt;
-    if (check == Check::ok) {
-      const Frame frame = frame_of(std::span(buffer_.data(), frame_size));
-      drop_front(frame_size);
-      if (have_sequence_) {
-        const auto step = static_cast<std::uint8_t>(frame.sequence - last_sequence_);
-        if (step != 0) stats_.lost += step - 1u;
-      }
-      have_sequence_ = true;
-      last_sequence_ = frame.sequence;
-      ++stats_.frames;
-      return frame;
-    }
     switch (check) {
+      case Check::incomplete:
+        return std::nullopt;
+      case Check::ok: {
+        const Frame frame = frame_of(std::span(buffer_.data(), frame_size));
+        drop_front(frame_size);
+        note_sequence(frame);
+        ++stats_.frames;
+        return frame;
+      }
       case Check::bad_flags:
         ++stats_.bad_flags;
         break;
@@ -221,18 +223,48 @@ std::optional<Frame> StreamDecoder::push(std::uint8_t byte) {
       case Check::bad_crc:
         ++stats_.bad_crc;
         break;
-      case Check::ok:
-      case Check::incomplete:
-      case Check::no_start_byte:  // the buffer always begins with the start byte
+      case Check::no_start_byte:  // bytes after a frame that a false start had held back
         break;
     }
-    // The start byte began no frame: resume at the next one inside what was buffered.
-    std::size_t next = 1;
-    while (next < size_ && buffer_[next] != kStx) ++next;
-    stats_.skipped_bytes += next;
-    drop_front(next);
-    if (size_ == 0) return std::nullopt;
+    resume_at_next_start_byte();
   }
+  return std::nullopt;
+}
+
+std::optional<Frame> StreamDecoder::finish() {
+  for (;;) {
+    if (auto frame = next()) return frame;
+    if (size_ == 0) return std::nullopt;
+    ++stats_.truncated;  // an incomplete frame is all that is left
+    resume_at_next_start_byte();
+  }
+}
+
+void StreamDecoder::note_sequence(const Frame& frame) {
+  for (Sender& s : senders_) {
+    if (!s.seen) {
+      s = {true, frame.system_id, frame.component_id, frame.sequence};
+      return;
+    }
+    if (s.system_id != frame.system_id || s.component_id != frame.component_id) continue;
+    const auto step = static_cast<std::uint8_t>(frame.sequence - s.last_sequence);
+    if (step > 128) {
+      ++stats_.restarts;  // behind: the sender started counting again
+    } else if (step > 0) {
+      stats_.lost += step - 1u;
+    }
+    s.last_sequence = frame.sequence;
+    return;
+  }
+  // More senders than followed: the others' sequence numbers are not checked.
+}
+
+// The buffer's first byte began no frame: decoding resumes at the next start byte after it.
+void StreamDecoder::resume_at_next_start_byte() {
+  std::size_t next = 1;
+  while (next < size_ && buffer_[next] != kStx) ++next;
+  stats_.skipped_bytes += next;
+  drop_front(next);
 }
 
 void StreamDecoder::drop_front(std::size_t bytes) {

@@ -99,15 +99,19 @@ class Printer {
   // Feeds bytes; false once enough messages were printed.
   bool feed(std::span<const std::uint8_t> bytes) {
     for (const std::uint8_t b : bytes) {
-      if (const auto json = decoder_.push(b)) {
-        std::cout << (options_.json ? json->dump() : to_text(*json)) << "\n";
-        if (options_.count > 0 && ++printed_ >= options_.count) return false;
+      for (auto json = decoder_.push(b); json; json = decoder_.next()) {
+        if (!print(*json)) return false;
       }
     }
     std::cout.flush();
     return true;
   }
-  void finish() const {
+  void finish() {
+    while (!enough()) {
+      const auto json = decoder_.finish();
+      if (!json) break;
+      print(*json);
+    }
     const nlohmann::json stats = decoder_.stats();
     if (options_.json) {
       std::cout << stats.dump() << "\n";
@@ -117,6 +121,14 @@ class Printer {
   }
 
  private:
+  // False once enough messages were printed.
+  bool print(const nlohmann::json& json) {
+    std::cout << (options_.json ? json.dump() : to_text(json)) << "\n";
+    ++printed_;
+    return !enough();
+  }
+  bool enough() const { return options_.count > 0 && printed_ >= options_.count; }
+
   const LinkOptions& options_;
   JsonStreamDecoder decoder_;
   int printed_ = 0;

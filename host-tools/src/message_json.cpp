@@ -52,6 +52,8 @@ nlohmann::json native_stats(const DecoderStats& s) {
                          s.bad_body + s.replays + s.lost}};
 }
 
+// errors: frames damaged, cut short or lost; messages of other kinds (a flight controller's own)
+// and bytes between frames are not errors.
 nlohmann::json mavlink_stats(const mavlink::StreamStats& s) {
   return {{"type", "decoder"},
           {"protocol", "mavlink"},
@@ -59,9 +61,11 @@ nlohmann::json mavlink_stats(const mavlink::StreamStats& s) {
           {"bad_crc", s.bad_crc},
           {"unknown_message", s.unknown_message},
           {"bad_flags", s.bad_flags},
+          {"truncated", s.truncated},
           {"skipped_bytes", s.skipped_bytes},
           {"lost", s.lost},
-          {"errors", s.bad_crc + s.unknown_message + s.bad_flags + s.skipped_bytes + s.lost}};
+          {"restarts", s.restarts},
+          {"errors", s.bad_crc + s.bad_flags + s.truncated + s.lost}};
 }
 
 }  // namespace
@@ -118,6 +122,20 @@ std::optional<nlohmann::json> JsonStreamDecoder::push(std::uint8_t byte) {
     if (const auto frame = mavlink_.push(byte)) return to_json(*frame);
   } else if (const auto decoded = native_.push(byte)) {
     return to_json(*decoded);
+  }
+  return std::nullopt;
+}
+
+std::optional<nlohmann::json> JsonStreamDecoder::next() {
+  if (protocol_ == Protocol::mavlink) {
+    if (const auto frame = mavlink_.next()) return to_json(*frame);
+  }
+  return std::nullopt;  // the native decoder delivers every frame when its 0x00 arrives
+}
+
+std::optional<nlohmann::json> JsonStreamDecoder::finish() {
+  if (protocol_ == Protocol::mavlink) {
+    if (const auto frame = mavlink_.finish()) return to_json(*frame);
   }
   return std::nullopt;
 }

@@ -23,8 +23,12 @@ class JsonStreamDecoder {
   using Protocol = firmware::BoardConfig::LinkProtocol;
   explicit JsonStreamDecoder(Protocol protocol) : protocol_(protocol) {}
 
-  // Feeds one byte; returns the message it completes.
+  // Feeds one byte; returns the message it completes. After a message, next() until none.
   std::optional<nlohmann::json> push(std::uint8_t byte);
+  // A further message complete in what was fed (MAVLink: frames held back by a false start).
+  std::optional<nlohmann::json> next();
+  // The stream has ended: what is still to be found in it, until none.
+  std::optional<nlohmann::json> finish();
   // {"type": "decoder", "protocol": ..., every counter of the decoder, "errors": their faults}.
   nlohmann::json stats() const;
 

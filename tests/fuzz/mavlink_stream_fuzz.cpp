@@ -1,6 +1,7 @@
 // libFuzzer target: arbitrary bytes into the MAVLink stream decoder (what `epipole link` and
 // `epipole sim` read a MAVLink board's link with). Every frame it delivers must decode as one of
-// its two messages, and no byte may be counted twice (in a frame and as skipped).
+// its two messages, and every byte must be in exactly one place: a delivered frame, the skipped
+// bytes, or the buffer (empty once the stream has finished).
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -12,16 +13,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace epipole::mavlink;
   StreamDecoder decoder;
   std::size_t frame_bytes = 0;
+  const auto take = [&](const std::optional<Frame>& frame) {
+    frame_bytes += frame->wire_size;
+    if (!decode_heartbeat(*frame) && !decode_obstacle_distance(*frame)) std::abort();
+  };
   for (std::size_t i = 0; i < size; ++i) {
-    const auto frame = decoder.push(data[i]);
-    if (!frame) continue;
-    frame_bytes += kHeaderSize + frame->length + kChecksumSize;
-    const bool heartbeat = decode_heartbeat(*frame).has_value();
-    const bool obstacles = decode_obstacle_distance(*frame).has_value();
-    if (heartbeat == obstacles) std::abort();  // exactly one of the two messages
+    for (auto frame = decoder.push(data[i]); frame; frame = decoder.next()) take(frame);
+    // Every byte so far is in a delivered frame, skipped, or still buffered: exactly one.
+    if (frame_bytes + decoder.stats().skipped_bytes + decoder.buffered() != i + 1) std::abort();
   }
-  const StreamStats& s = decoder.stats();
-  if (frame_bytes + s.skipped_bytes > size) {
+  for (auto frame = decoder.finish(); frame; frame = decoder.finish()) take(frame);
+  if (decoder.buffered() != 0 || frame_bytes + decoder.stats().skipped_bytes != size) {
     std::abort();
   }
   return 0;

@@ -24,6 +24,7 @@ inline constexpr std::uint8_t kObstacleDistanceCrcExtra = 23;
 
 inline constexpr std::uint8_t kMavTypeOnboardController = 18;
 inline constexpr std::uint8_t kMavAutopilotInvalid = 8;
+inline constexpr std::uint8_t kMavStateCalibrating = 2;  // not ready: no calibration yet
 inline constexpr std::uint8_t kMavStateActive = 4;
 inline constexpr std::uint8_t kMavCompIdObstacleAvoidance = 196;
 inline constexpr std::uint8_t kMavFrameBodyFrd = 12;
@@ -51,7 +52,8 @@ std::uint16_t crc16_x25(std::span<const std::uint8_t> bytes, std::uint16_t crc =
 
 // Each returns the frame's size; `out` must hold kMaxFrameSize bytes.
 std::size_t encode_heartbeat(const Identity& identity, std::uint8_t sequence,
-                             std::span<std::uint8_t> out);
+                             std::span<std::uint8_t> out,
+                             std::uint8_t system_status = kMavStateActive);
 std::size_t encode_obstacle_distance(const ObstacleDistance& message, const Identity& identity,
                                      std::uint8_t sequence, std::span<std::uint8_t> out);
 
@@ -69,6 +71,7 @@ struct Frame {
   std::uint32_t message_id = 0;
   std::array<std::uint8_t, 255> payload{};  // zero-extended past `length`, as receivers do
   std::uint8_t length = 0;
+  std::size_t wire_size = 0;  // the frame's bytes: header, payload, checksum (and signature)
 };
 
 // Parses one frame at the start of `bytes` (HEARTBEAT or OBSTACLE_DISTANCE: the checksum needs
@@ -97,26 +100,46 @@ struct StreamStats {
   std::uint64_t bad_crc = 0;          // a start byte whose frame's checksum did not match
   std::uint64_t unknown_message = 0;  // a frame of a message this decoder has no CRC extra for
   std::uint64_t bad_flags = 0;        // incompatibility flags other than signing
+  std::uint64_t truncated = 0;        // a frame the stream ended in (finish())
   std::uint64_t skipped_bytes = 0;    // bytes outside any valid frame
-  std::uint64_t lost = 0;             // sequence numbers skipped (frames lost on the way)
+  std::uint64_t lost = 0;             // sequence numbers a sender skipped (frames lost on the way)
+  std::uint64_t restarts = 0;         // a sender's sequence number went back: it restarted
 };
 
 // Turns an untrusted byte stream into MAVLink 2 frames of the messages above, as a flight
 // controller reads Epipole's output. Fixed memory, never throws: after a frame that does not
 // check, decoding resumes at the next start byte inside it, so a damaged frame costs only itself.
+// Such a false start can hold back whole frames behind it: after each frame push() returns, call
+// next() until it returns none; when the stream ends, finish() until it returns none.
 class StreamDecoder {
  public:
   // Feeds one byte; returns a frame when the byte completes a valid one.
   std::optional<Frame> push(std::uint8_t byte);
+  // A further frame already complete in what was fed.
+  std::optional<Frame> next();
+  // The stream has ended: the frame it ended in is counted as truncated, and frames inside it
+  // are still found.
+  std::optional<Frame> finish();
   const StreamStats& stats() const { return stats_; }
+  std::size_t buffered() const { return size_; }  // bytes fed but neither delivered nor skipped
 
  private:
+  // Sequence numbers are followed per sender (system and component); this many senders.
+  static constexpr std::size_t kSenders = 8;
+  struct Sender {
+    bool seen = false;
+    std::uint8_t system_id = 0;
+    std::uint8_t component_id = 0;
+    std::uint8_t last_sequence = 0;
+  };
+
+  void note_sequence(const Frame& frame);
+  void resume_at_next_start_byte();
   void drop_front(std::size_t bytes);
 
   std::array<std::uint8_t, kMaxFrameSize + kSignatureSize> buffer_{};
   std::size_t size_ = 0;
-  bool have_sequence_ = false;
-  std::uint8_t last_sequence_ = 0;
+  std::array<Sender, kSenders> senders_{};
   StreamStats stats_;
 };
 
