@@ -9,19 +9,34 @@
 
 namespace epipole::firmware {
 
-std::filesystem::path board_calibration_file(const BoardConfig& config) {
-  if (const BoardConfig::SimScene* scene = config.sim_scene();
-      scene != nullptr && config.cameras.backend == "sim" && !scene->calibration.empty()) {
-    return scene->calibration;
-  }
-  return config.calibration;
+namespace {
+
+const BoardConfig::SimScene* scene_with_calibration(const BoardConfig& config) {
+  const BoardConfig::SimScene* scene = config.sim_scene();
+  return scene != nullptr && config.cameras.backend == "sim" && !scene->calibration.empty()
+             ? scene
+             : nullptr;
+}
+
+}  // namespace
+
+std::filesystem::path missing_board_calibration(const BoardConfig& config) {
+  if (scene_with_calibration(config) != nullptr || config.calibration.empty()) return {};
+  // Not there, rather than there but unreadable (that one is an error when it is loaded).
+  std::error_code ec;
+  const auto status = std::filesystem::status(config.calibration, ec);
+  return status.type() == std::filesystem::file_type::not_found ? config.calibration
+                                                                : std::filesystem::path();
 }
 
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config) {
-  const std::filesystem::path file = board_calibration_file(config);
-  std::error_code ec;
-  if (file.empty() || !std::filesystem::exists(file, ec)) return std::nullopt;
-  return calib::load_calibration(file);
+  if (const BoardConfig::SimScene* scene = scene_with_calibration(config)) {
+    return calib::load_calibration(scene->calibration);
+  }
+  if (config.calibration.empty() || !missing_board_calibration(config).empty()) {
+    return std::nullopt;
+  }
+  return calib::load_calibration(config.calibration);
 }
 
 std::vector<std::string> apply_scheduling(const BoardConfig::Threads& threads) {
@@ -58,7 +73,7 @@ Firmware::~Firmware() = default;
 
 void Firmware::build(std::unique_ptr<Board> board) {
   calibration_ = load_board_calibration(config_);
-  if (!calibration_) missing_calibration_ = board_calibration_file(config_);
+  missing_calibration_ = missing_board_calibration(config_);
   board_ = std::move(board);
   pipeline_ = std::make_unique<Pipeline>(config_, calibration_);
   LinkConfig link;

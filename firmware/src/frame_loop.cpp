@@ -81,7 +81,10 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
                trigger_ && check_trigger(config, board) ? &trigger_->record() : nullptr),
       health_(board.clock().now()),
       snapshots_(config.snapshot_directory, config.width(), config.height()),
-      stages_(stage_mask(config.stages)) {}
+      stages_(stage_mask(config.stages)),
+      // The board names its calibration file, and none was loaded: it does not exist yet (a
+      // file that does not read, or a simulated scene's, stops the firmware at start-up).
+      not_calibrated_(!config.calibration.empty() && !pipeline.has_calibration()) {}
 
 FrameLoop::~FrameLoop() {
   finish();
@@ -93,7 +96,7 @@ void FrameLoop::start() {
   board_.right().start();
   if (trigger_) trigger_->start();
   link_.start();
-  if (link_.protocol() == LinkProtocol::mavlink) link_.publish_heartbeat();
+  if (link_.protocol() == LinkProtocol::mavlink) link_.publish_heartbeat(heartbeat_status());
   started_ = true;
 }
 
@@ -290,9 +293,9 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
     if (auto h = health_.due(clock.now(), faults())) {
       ++summary_.health_messages;
       if (link_.protocol() == LinkProtocol::mavlink) {
-        link_.publish_heartbeat();
+        link_.publish_heartbeat(heartbeat_status());
       } else {
-        if (!pipeline_.has_calibration()) h->flags |= protocol::kHealthNotCalibrated;
+        if (not_calibrated_) h->flags |= protocol::kHealthNotCalibrated;
         send(*h);
         if (last_calibration_health_ && last_calibration_health_->matches > 0) {
           const auto centipx = [](double px) {

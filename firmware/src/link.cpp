@@ -86,10 +86,10 @@ bool Link::publish(const protocol::Message& message) {
   return enqueue({encode_buffer_.data(), n});
 }
 
-bool Link::publish_heartbeat() {
+bool Link::publish_heartbeat(std::uint8_t system_status) {
   if (config_.protocol != LinkProtocol::mavlink) return false;
-  const std::size_t n =
-      mavlink::encode_heartbeat(config_.identity, mavlink_sequence_++, encode_buffer_);
+  const std::size_t n = mavlink::encode_heartbeat(config_.identity, mavlink_sequence_++,
+                                                  encode_buffer_, system_status);
   return enqueue({encode_buffer_.data(), n});
 }
 

@@ -131,9 +131,15 @@ TEST(FrameLoop, RunsUncalibratedUntilTheCalibrationFileIsMade) {
   ASSERT_GE(health.size(), 2u);
   for (const auto& h : health) EXPECT_EQ(h.flags, protocol::kHealthNotCalibrated);
 
-  // A file that is there but does not read is a configuration error, not a missing one.
+  // A file that is there but does not read is a configuration error, not a missing one; so is
+  // a simulated scene's calibration that is not there (a mistake in the board file, not a board
+  // waiting for its calibration).
   std::ofstream(rig.dir.path() / "rig.yaml") << "version: [\n";
   EXPECT_NE(test::error_of([&] { Firmware broken(rig.config, rig.images()); }).find("rig.yaml"),
+            std::string::npos);
+  BoardConfig scene = rig.config;
+  scene.sim.scenes[0].calibration = rig.dir.path() / "scene-rig.yaml";
+  EXPECT_NE(test::error_of([&] { Firmware missing(scene, rig.images()); }).find("scene-rig.yaml"),
             std::string::npos);
 }
 
@@ -658,28 +664,60 @@ TEST(FrameLoop, StopsWhenAskedAndDrainsTheLink) {
   EXPECT_EQ(summaries, 21u) << "everything published before the stop reached the robot";
 }
 
-TEST(FrameLoop, MavlinkModeSendsObstacleDistanceEveryFrame) {
-  LinkedRig linked("", BoardConfig::LinkProtocol::mavlink);
-  const std::atomic<bool> stop{false};
-  linked.fw->run(30, stop);
-  std::vector<std::uint8_t> bytes;
+// Everything the robot's end of a MAVLink board's link received, frame by frame.
+std::vector<mavlink::Frame> mavlink_frames(LinkedRig& linked) {
+  mavlink::StreamDecoder decoder;
+  std::vector<mavlink::Frame> frames;
   std::array<std::byte, 4096> buffer{};
   for (;;) {
     const hal::IoResult r = linked.robot->read(buffer, 200'000'000);
     if (r.status != hal::IoStatus::ok) break;
-    for (std::size_t i = 0; i < r.bytes; ++i) bytes.push_back(static_cast<std::uint8_t>(buffer[i]));
+    for (std::size_t i = 0; i < r.bytes; ++i) {
+      for (auto f = decoder.push(static_cast<std::uint8_t>(buffer[i])); f; f = decoder.next()) {
+        frames.push_back(*f);
+      }
+    }
   }
+  EXPECT_EQ(decoder.stats().skipped_bytes + decoder.stats().bad_crc + decoder.stats().lost, 0u)
+      << "every byte in a valid frame";
+  return frames;
+}
+
+TEST(FrameLoop, MavlinkModeSendsObstacleDistanceEveryFrame) {
+  LinkedRig linked("", BoardConfig::LinkProtocol::mavlink);
+  const std::atomic<bool> stop{false};
+  linked.fw->run(30, stop);
   int heartbeats = 0;
   int distances = 0;
-  for (std::size_t at = 0; at < bytes.size();) {
-    const auto f = mavlink::parse_frame(std::span(bytes.data() + at, bytes.size() - at));
-    ASSERT_TRUE(f) << "a valid MAVLink 2 frame at byte " << at;
-    heartbeats += f->message_id == mavlink::kHeartbeatId ? 1 : 0;
-    distances += f->message_id == mavlink::kObstacleDistanceId ? 1 : 0;
-    at += mavlink::kHeaderSize + f->length + mavlink::kChecksumSize;
+  for (const mavlink::Frame& f : mavlink_frames(linked)) {
+    if (const auto h = mavlink::decode_heartbeat(f)) {
+      ++heartbeats;
+      EXPECT_EQ(h->system_status, mavlink::kMavStateActive);
+    }
+    distances += mavlink::decode_obstacle_distance(f) ? 1 : 0;
   }
   EXPECT_EQ(distances, 30);
   EXPECT_GE(heartbeats, 1);
+}
+
+// Uncalibrated, a MAVLink board tells the flight controller it is not ready (and has no
+// obstacle distances to send: nothing gets a depth).
+TEST(FrameLoop, AnUncalibratedMavlinkBoardSaysItIsCalibrating) {
+  LinkedRig linked([](const test::SimRig& r) {
+    std::filesystem::remove(r.dir.path() / "rig.yaml");
+    BoardConfig c = r.parse("");
+    c.serial.protocol = BoardConfig::LinkProtocol::mavlink;
+    return c;
+  });
+  const std::atomic<bool> stop{false};
+  linked.fw->run(60, stop);
+  const std::vector<mavlink::Frame> frames = mavlink_frames(linked);
+  ASSERT_GE(frames.size(), 2u) << "the start-up heartbeat and one a second";
+  for (const mavlink::Frame& f : frames) {
+    const auto h = mavlink::decode_heartbeat(f);
+    ASSERT_TRUE(h) << "only heartbeats: message " << f.message_id;
+    EXPECT_EQ(h->system_status, mavlink::kMavStateCalibrating);
+  }
 }
 
 TEST(FrameLoop, CalibrationOfAnotherSizeIsAnError) {

@@ -17,15 +17,15 @@
 
 namespace epipole::firmware {
 
-// The calibration file a board names: its simulated scene's, else its own; empty for none.
-std::filesystem::path board_calibration_file(const BoardConfig& config);
-
-// The calibration a board runs with; none when it names none, or names a file that is not there
-// yet (a board fresh from its package, before `epipole calibrate`): the firmware then runs
-// uncalibrated: the images are taken as rectified, nothing gets a depth, and every health
-// message says so (protocol::kHealthNotCalibrated). A file that is there but does not read is
-// an Error.
+// The calibration a board runs with: its simulated scene's, else its own; none when it names
+// none, or when its own file does not exist yet (a board fresh from its package, before
+// `epipole calibrate`): the firmware then runs uncalibrated: the images are taken as rectified,
+// nothing gets a depth, and every health message says so (protocol::kHealthNotCalibrated). A
+// file that is there but does not read, or a simulated scene's that is missing, is an Error.
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config);
+
+// The board's own calibration file when it names one that does not exist yet; else empty.
+std::filesystem::path missing_board_calibration(const BoardConfig& config);
 
 // Scheduling the board asks for (threads: affinity, SCHED_FIFO) for the calling thread, which
 // every thread created after it inherits. Returns what could not be done (e.g. no permission

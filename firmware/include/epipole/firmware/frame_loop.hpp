@@ -76,6 +76,10 @@ class FrameLoop {
   void publish(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
   void send(const protocol::Message& message);
   FaultCounts faults();
+  // MAVLink's system status: calibrating (not ready) until the rig has its calibration.
+  std::uint8_t heartbeat_status() const {
+    return not_calibrated_ ? mavlink::kMavStateCalibrating : mavlink::kMavStateActive;
+  }
 
   const BoardConfig& config_;
   Board& board_;
@@ -86,6 +90,7 @@ class FrameLoop {
   HealthMonitor health_;
   SnapshotWriter snapshots_;
   StageMask stages_;
+  bool not_calibrated_;  // the board's calibration file does not exist yet
   FrameObserver* observer_ = nullptr;
   std::function<void()> heartbeat_;
   RunSummary summary_;

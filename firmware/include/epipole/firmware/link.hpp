@@ -60,7 +60,7 @@ class Link {
 
   // Frame loop side. Each returns false when the message was dropped.
   bool publish(const protocol::Message& message);
-  bool publish_heartbeat();
+  bool publish_heartbeat(std::uint8_t system_status = mavlink::kMavStateActive);
   bool publish_obstacle_distance(const mavlink::ObstacleDistance& message);
   bool next_command(Command& out);
 
