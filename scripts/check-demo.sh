@@ -37,6 +37,7 @@ while read -r scene; do
     "$(jq -c '.frames' <<<"$s") pairs but not as many '$per_frame' messages decoded"
   check '.decoder.errors == 0' "the serial stream was not decoded without errors: $(jq -c .decoder <<<"$s")"
   check '.pictures | length > 0' "no pictures"
+  check '.calibration == "yes"' "ran without its calibration"
   nonempty "$dir/serial.bin"
   tail -n 1 "$dir/serial.jsonl" 2>/dev/null | jq -e '.type == "decoder" and .errors == 0' >/dev/null 2>&1 ||
     problem "$dir/serial.jsonl does not end with an error-free decoder line"

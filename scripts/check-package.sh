@@ -67,9 +67,9 @@ version=$("${qemu[@]}" "$fw" --version) || fail "$deb: epipole-fw --version did 
 depends_names=$(sed 's/ ([^)]*)//g; s/, /\n/g' <<<"$depends")
 for lib in $(LC_ALL=C readelf -d "$fw" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
   if [[ $arch == amd64 ]]; then
-    owner=$(dpkg-query -S "*/$(gcc -dumpmachine)/$lib" 2>/dev/null | head -1)
+    owner=$(dpkg-query -S "*/$(gcc -dumpmachine)/$lib" 2>/dev/null | head -1 || true)
   else
-    owner=$(dpkg-query --admindir="$target_libs/dpkg" -S "*/$lib" 2>/dev/null | head -1)
+    owner=$(dpkg-query --admindir="$target_libs/dpkg" -S "*/$lib" 2>/dev/null | head -1 || true)
   fi
   package=${owner%%:*}
   [[ -n $package ]] || fail "$deb: no package of $arch holds $lib (NEEDED by epipole-fw)"

@@ -50,8 +50,8 @@ for arch in "$@"; do
     apt-cache depends --recurse --no-recommends --no-suggests --no-conflicts --no-breaks \
       --no-replaces --no-enhances "libcamera-dev:$arch" 2>/dev/null | sed -n "s/^\([a-z0-9][^ ]*\):$arch\$/\1/p"
   }
-  camera=$(closure)
-  [[ -n $camera ]] || { refresh_lists; camera=$(closure); }
+  camera=$(closure || true)
+  [[ -n $camera ]] || { refresh_lists; camera=$(closure || true); }
   [[ -n $camera ]] || { echo "fetch-target-libs: no libcamera-dev:$arch in the package lists" >&2; exit 1; }
   work=$(mktemp -d)
   (

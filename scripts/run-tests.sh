@@ -56,16 +56,18 @@ if [[ " $presets " == *" host "* ]]; then
   echo "=== demo: the main job (scripts/run-demo.sh) in a fresh copy of the tree, then a check of what it wrote"
   phase=$SECONDS
   demo=$(mktemp -d)
+  trap 'rm -rf "$demo"' EXIT
   mkdir "$demo/src" "$demo/data"
   git ls-files -z --cached --others --exclude-standard |
-    while IFS= read -r -d '' f; do [[ -e $f ]] && printf '%s\0' "$f"; done |
+    while IFS= read -r -d '' f; do
+      if [[ -e $f ]]; then printf '%s\0' "$f"; fi  # not a file deleted in the work tree
+    done |
     cpio -pdm0 --quiet "$demo/src"
   data=${EPIPOLE_DATA_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/epipole/data}
   cp -r "$data/." "$demo/data/"
   rm -rf "$demo/data/compiled"
   EPIPOLE_DATA_DIR="$demo/data" "$demo/src/scripts/run-demo.sh" "$demo/out"
   ./scripts/check-demo.sh "$demo/out"
-  rm -rf "$demo"
   timings+="  demo: ran and checked in $((SECONDS - phase)) s"$'\n'
 fi
 

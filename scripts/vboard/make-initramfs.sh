@@ -34,6 +34,10 @@ if [[ -n $cross ]]; then
   # The cross toolchain's C and C++ runtime, then the target's libraries the build linked
   # (libcamera and what it needs: scripts/fetch-target-libs.sh).
   target_libs=$(sed -n 's/^EPIPOLE_TARGET_LIBS:PATH=//p' "$build/CMakeCache.txt")
+  [[ -n $target_libs ]] || {
+    echo "make-initramfs: $build/CMakeCache.txt names no EPIPOLE_TARGET_LIBS" >&2
+    exit 1
+  }
   library_dirs=(/usr/$triple/lib "$target_libs/usr/lib/$triple" "$target_libs/lib/$triple")
 else
   triple=$(gcc -dumpmachine)
