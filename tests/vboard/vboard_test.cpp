@@ -108,7 +108,9 @@ TEST(EPIPOLE_VBOARD_SUITE, FirmwareRunsOnVividCamerasAndGpioSimTrigger) {
 // The cameras through the libcamera backend: two vimc instances, libcamera's vimc pipeline with
 // its IPA module, free-running (no trigger), paired by time (board-libcamera.yaml).
 TEST(EPIPOLE_VBOARD_SUITE, FirmwareRunsOnTwoVimcCamerasThroughLibcamera) {
-  constexpr int kLibcameraFrames = 10;
+  // Enough pairs to outlast the first health message (1 s) whatever the host's speed: vimc
+  // makes at most 60 frames a second (10 pairs took 0.3-1.1 s, and a fast run had no health).
+  constexpr int kLibcameraFrames = 90;
   const BoardRun run = boot_virtual_board(
       kArch, kInitramfs,
       "epipole.cameras=libcamera epipole.frames=" + std::to_string(kLibcameraFrames),
