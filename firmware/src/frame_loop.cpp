@@ -95,6 +95,10 @@ void FrameLoop::start() {
   board_.left().start();
   board_.right().start();
   if (trigger_) trigger_->start();
+  if (hal::SerialPort* serial = board_.serial(); serial != nullptr && !serial->is_open()) {
+    std::fprintf(stderr, "epipole-fw: serial port %s is not there yet: waiting for it\n",
+                 config_.serial.port.device.c_str());
+  }
   link_.start();
   if (link_.protocol() == LinkProtocol::mavlink) link_.publish_heartbeat(heartbeat_status());
   started_ = true;

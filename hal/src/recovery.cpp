@@ -1,10 +1,16 @@
 #include "epipole/hal/recovery.hpp"
 
 #include <algorithm>
+#include <cerrno>
 
 #include "epipole/core/error.hpp"
+#include "epipole/hal/device_missing.hpp"
 
 namespace epipole::hal {
+
+bool is_missing_device(int error) {
+  return error == ENOENT || error == ENODEV || error == ENXIO;
+}
 
 Backoff::Backoff(BackoffConfig config) : config_(config), delay_(config.initial) {
   require(config_.initial > 0 && config_.max >= config_.initial, "back-off: initial delay ",
@@ -49,6 +55,17 @@ bool RecoveringCamera::try_reopen() {
   lost_ = false;
   timeouts_in_a_row_ = 0;
   return true;
+}
+
+void RecoveringCamera::start() {
+  try {
+    camera_.start();
+  } catch (const DeviceMissing& e) {
+    ++counters_.losses;
+    last_error_ = e.what();
+    lost_ = true;
+    backoff_.failed(clock_.now());  // the first look again after the initial delay
+  }
 }
 
 void RecoveringCamera::reopen() {

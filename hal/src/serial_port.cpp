@@ -11,6 +11,7 @@
 #include <iterator>
 
 #include "epipole/core/error.hpp"
+#include "epipole/hal/device_missing.hpp"
 #include "fd_io.hpp"
 
 namespace epipole::hal {
@@ -50,7 +51,11 @@ TermiosSerialPort::TermiosSerialPort(SerialConfig config) : config_(std::move(co
   require(!config_.device.empty(), "serial port: no device given");
   require(is_supported_baud(config_.baud), "serial port ", config_.device, ": baud rate ",
           config_.baud, " is not supported (9600 .. 4000000, standard rates)");
-  open_device();
+  try {
+    open_device();
+  } catch (const DeviceMissing&) {
+    // Not there yet (a USB adapter at boot): closed until RecoveringSerialPort reopens it.
+  }
 }
 
 TermiosSerialPort::~TermiosSerialPort() {
@@ -59,7 +64,14 @@ TermiosSerialPort::~TermiosSerialPort() {
 
 void TermiosSerialPort::open_device() {
   const int fd = ::open(config_.device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
-  require(fd >= 0, "serial port ", config_.device, ": cannot open: ", std::strerror(errno));
+  if (fd < 0) {
+    const int error = errno;
+    if (is_missing_device(error)) {
+      throw DeviceMissing(
+          cat("serial port ", config_.device, ": not there (yet): ", std::strerror(error)));
+    }
+    throw Error(cat("serial port ", config_.device, ": cannot open: ", std::strerror(error)));
+  }
   termios tty{};
   if (tcgetattr(fd, &tty) != 0) {
     const int error = errno;

@@ -13,6 +13,7 @@
 #include <cstring>
 
 #include "epipole/core/error.hpp"
+#include "epipole/hal/device_missing.hpp"
 
 namespace epipole::hal {
 
@@ -165,6 +166,14 @@ V4l2ControlPlan plan_exposure_controls(const std::string& device, Nanoseconds ex
 V4l2Camera::V4l2Camera(CameraConfig config) : config_(std::move(config)) {
   validate(config_);
   name_ = "v4l2:" + config_.device;
+  try {
+    open_and_negotiate();
+  } catch (const DeviceMissing&) {
+    // Not there yet: start() says so, and RecoveringCamera waits for it.
+  }
+}
+
+void V4l2Camera::open_and_negotiate() {
   open_device();
   try {
     negotiate();
@@ -184,7 +193,14 @@ void V4l2Camera::fail(const char* what, int error) const {
 
 void V4l2Camera::open_device() {
   fd_ = ::open(config_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-  if (fd_ < 0) fail("cannot open", errno);
+  if (fd_ < 0) {
+    const int error = errno;
+    if (is_missing_device(error)) {
+      throw DeviceMissing(
+          cat("camera ", config_.device, ": not there (yet): ", std::strerror(error)));
+    }
+    fail("cannot open", error);
+  }
   v4l2_capability cap{};
   if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) {
     const int error = errno;
@@ -311,7 +327,7 @@ void V4l2Camera::set_exposure(Nanoseconds exposure, double gain) {
 
 void V4l2Camera::start() {
   if (streaming_) return;
-  require(fd_ >= 0, "camera ", config_.device, ": not open");
+  if (fd_ < 0) open_and_negotiate();  // it was not there when the camera was made
   const auto type = static_cast<std::uint32_t>(multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE
                                                             : V4L2_BUF_TYPE_VIDEO_CAPTURE);
   v4l2_requestbuffers req{};
@@ -378,13 +394,7 @@ void V4l2Camera::close_device() {
 void V4l2Camera::reopen() {
   const bool was_streaming = streaming_;
   close_device();
-  open_device();
-  try {
-    negotiate();
-  } catch (...) {
-    close_device();
-    throw;
-  }
+  open_and_negotiate();
   if (was_streaming) start();
 }
 

@@ -108,6 +108,31 @@ TEST(EpipoleFw, BadConfigurationIsOneLineAndExitCodeOne) {
   EXPECT_NE(code4, 0);
 }
 
+// Cameras and a serial adapter that are not there when the firmware starts (USB devices slower
+// than the service at boot) are waited for, said once in the journal, and no reason to exit.
+TEST(EpipoleFw, DevicesNotThereAtStartAreWaitedFor) {
+  const test::TempDir dir;
+  std::ofstream(dir.path() / "board.yaml")
+      << "version: 1\nname: late-devices\n"
+         "cameras: {backend: v4l2, left: /dev/video-epipole-late-0, right: "
+         "/dev/video-epipole-late-1, width: 160, height: 96, trigger: free_running}\n"
+         "trigger: {backend: none}\n"
+         "serial: {backend: termios, device: /dev/tty-epipole-late, baud: 115200}\n";
+  const Process p = start({"--board", (dir.path() / "board.yaml").string()});
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  ::kill(p.pid, SIGTERM);
+  const auto [code, out] = finish(p);
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("serial port /dev/tty-epipole-late is not there yet: waiting for it"),
+            std::string::npos)
+      << out;
+  for (const char* camera : {"/dev/video-epipole-late-0", "/dev/video-epipole-late-1"}) {
+    EXPECT_NE(out.find(std::string("camera ") + camera + ": not there (yet)"), std::string::npos)
+        << out;
+  }
+  EXPECT_NE(out.find("stopped after 0 pairs"), std::string::npos) << out;
+}
+
 TEST(EpipoleFw, RunsTheGivenNumberOfFrames) {
   BoardFolder board;
   const auto [code, out] = finish(start({"--board", board.path(), "--frames", "25"}));

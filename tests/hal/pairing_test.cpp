@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "epipole/core/error.hpp"
+#include "epipole/hal/device_missing.hpp"
 #include "epipole/hal/libcamera_camera.hpp"
 #include "epipole/hal/recovery.hpp"
 #include "epipole/hal/registry.hpp"
@@ -505,6 +506,71 @@ class FakePort final : public SerialPort {
   bool open = true;
 };
 
+// A camera whose device is not there until `present` (a USB camera slower to appear at boot than
+// the firmware): start() and reopen() throw DeviceMissing meanwhile, as the V4L2 backend does.
+class LateCamera final : public CameraSource {
+ public:
+  explicit LateCamera(CameraSource& camera) : camera_(camera) {}
+  const std::string& name() const override { return camera_.name(); }
+  const CameraConfig& config() const override { return camera_.config(); }
+  void start() override {
+    if (!present) throw DeviceMissing("camera late: not there (yet)");
+    camera_.start();
+  }
+  void stop() override { camera_.stop(); }
+  bool streaming() const override { return present && camera_.streaming(); }
+  AcquireResult acquire(Nanoseconds timeout) override {
+    if (!present) return {AcquireStatus::device_lost, {}};
+    return camera_.acquire(timeout);
+  }
+  void release(const Frame& frame) override { camera_.release(frame); }
+  void reopen() override {
+    if (!present) throw DeviceMissing("camera late: not there (yet)");
+    camera_.reopen();
+  }
+  void set_exposure(Nanoseconds exposure, double gain) override {
+    camera_.set_exposure(exposure, gain);
+  }
+  bool present = false;
+
+ private:
+  CameraSource& camera_;
+};
+
+TEST(Recovery, ACameraNotThereAtStartIsWaitedFor) {
+  Rig rig;
+  rig.left.stop();
+  LateCamera late(rig.left);
+  RecoveringCamera left(late, rig.board.clock, {.backoff = {.initial = 20 * kMs, .max = 80 * kMs}});
+  left.start();  // no exception: the camera is waited for
+  EXPECT_TRUE(left.recovering());
+  EXPECT_NE(left.last_error().find("not there"), std::string::npos) << left.last_error();
+  int lost = 0;
+  while (rig.board.clock.now() < 500 * kMs) {
+    EXPECT_EQ(left.acquire(kPeriod).status, AcquireStatus::device_lost);
+    ++lost;
+  }
+  const RecoveryCounters before = left.counters();
+  EXPECT_EQ(before.losses, 1u);
+  EXPECT_EQ(before.reopens, 0u);
+  // Tried again with back-off growing to its maximum: 20, 40, 80, 80, ... ms.
+  EXPECT_GE(before.reopen_attempts, 5u);
+  EXPECT_LE(before.reopen_attempts, 8u);
+  EXPECT_EQ(before.reopen_failures, before.reopen_attempts);
+  late.present = true;
+  int frames = 0;
+  while (rig.board.clock.now() < 1500 * kMs) {
+    const AcquireResult r = left.acquire(2 * kPeriod);
+    if (r.status != AcquireStatus::ok) continue;
+    ++frames;
+    left.release(r.frame);
+  }
+  EXPECT_FALSE(left.recovering());
+  EXPECT_EQ(left.counters().reopens, 1u);
+  EXPECT_GE(frames, 40) << "frames flow once it is there (50 Hz trigger)";
+  EXPECT_GT(lost, 0);
+}
+
 TEST(Recovery, SerialHangUpReopensWithBackoff) {
   VirtualClock clock;
   FakePort fake;
@@ -563,11 +629,16 @@ TEST(Registry, UnknownAndUnavailableBackends) {
     EXPECT_NE(std::string(e.what()).find("CAM_TRIG"), std::string::npos);
   }
   EXPECT_THROW(r.create_camera("sim", c), Error) << "no simulated board";
+  // A serial device that is not there (yet) is waited for: the port is made closed.
+  const auto late_port =
+      r.create_serial("termios", {.device = "/dev/nonexistent-tty", .baud = 115200});
+  EXPECT_FALSE(late_port->is_open());
   try {
-    r.create_serial("termios", {.device = "/dev/nonexistent-tty", .baud = 115200});
+    late_port->reopen();
     FAIL();
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("/dev/nonexistent-tty"), std::string::npos);
+  } catch (const DeviceMissing& e) {
+    EXPECT_NE(std::string(e.what()).find("/dev/nonexistent-tty: not there"), std::string::npos)
+        << e.what();
   }
   EXPECT_THROW(r.create_serial("uart", {.device = "/dev/ttyS0", .baud = 9600}), Error);
 }

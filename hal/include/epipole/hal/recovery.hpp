@@ -47,18 +47,19 @@ struct RecoveryConfig {
   int timeouts_before_reopen = 3;
 };
 
-// A camera that reopens its device with exponential back-off when it is lost or keeps timing
-// out, without restarting anything else. While it is recovering, acquire() waits for the next
-// attempt (at most the timeout) and reports device_lost; once reopened, frames flow again. A
-// corrupt frame is counted apart and passed on: the device still streams, so it ends a run of
-// timeouts and never makes it reopen. set_exposure() goes to the camera, and the last values
-// set are applied again after every reopen.
+// A camera that reopens its device with exponential back-off when it is lost, keeps timing out
+// or is not there when it starts, without restarting anything else. While it is recovering,
+// acquire() waits for the next attempt (at most the timeout) and reports device_lost; once
+// reopened, frames flow again. A corrupt frame is counted apart and passed on: the device still
+// streams, so it ends a run of timeouts and never makes it reopen. set_exposure() goes to the
+// camera, and the last values set are applied again after every reopen.
 class RecoveringCamera final : public CameraSource {
  public:
   RecoveringCamera(CameraSource& camera, Clock& clock, RecoveryConfig config = {});
   const std::string& name() const override { return camera_.name(); }
   const CameraConfig& config() const override { return camera_.config(); }
-  void start() override { camera_.start(); }
+  // A camera that is not there yet (DeviceMissing) starts lost: acquire() waits for it.
+  void start() override;
   void stop() override { camera_.stop(); }
   bool streaming() const override { return camera_.streaming(); }
   AcquireResult acquire(Nanoseconds timeout) override;

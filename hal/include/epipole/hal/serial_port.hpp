@@ -45,7 +45,8 @@ bool is_supported_baud(int baud);
 
 // A serial device through termios: raw mode, 8 data bits, no parity, 1 stop bit, no flow
 // control, receiver on, modem lines ignored (CLOCAL). Opening throws Error naming the device
-// and the setting that failed.
+// and the setting that failed; a device that is not there leaves the port closed (is_open()
+// false), and reopen() throws DeviceMissing until it is.
 class TermiosSerialPort final : public SerialPort {
  public:
   explicit TermiosSerialPort(SerialConfig config);

@@ -67,7 +67,9 @@ const char* v4l2_control_name(std::uint32_t id);
 
 // A V4L2 capture device (linux/videodev2.h only): single- or multi-planar, mmap streaming,
 // DQBUF with a poll timeout. Opening and format errors throw Error naming the device and the
-// setting; acquire()/release() never throw or allocate.
+// setting; a device node that is not there is no error until start(), which throws
+// DeviceMissing (as reopen() does while it is gone); acquire()/release() never throw or
+// allocate.
 class V4l2Camera final : public CameraSource {
  public:
   explicit V4l2Camera(CameraConfig config);
@@ -96,6 +98,7 @@ class V4l2Camera final : public CameraSource {
   };
   void open_device();
   void negotiate();
+  void open_and_negotiate();
   V4l2ControlInfo query_control(std::uint32_t id) const;
   void apply_exposure(Nanoseconds exposure, double gain, bool starting);
   void close_device();
