@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "epipole/core/error.hpp"
+#include "epipole/hal/device_missing.hpp"
 #include "epipole/hal/libcamera_camera.hpp"
 #include "epipole/hal/registry.hpp"
 #include "libcamera_formats.hpp"
@@ -224,8 +225,8 @@ void LibcameraCamera::Impl::open() {
   if (id.empty()) id = ids[select_camera(config.device, ids)];
   camera = manager->get(id);
   if (!camera) {
-    throw Error(cat("camera ", config.device, ": libcamera camera ", id,
-                    " is not present (cameras found: ", list_cameras(ids), ")"));
+    throw DeviceMissing(cat("camera ", config.device, ": libcamera camera ", id,
+                            " is not present (cameras found: ", list_cameras(ids), ")"));
   }
   const int r = camera->acquire();
   if (r < 0) {
@@ -441,12 +442,17 @@ LibcameraCamera::LibcameraCamera(CameraConfig config) : config_(std::move(config
   validate(config_);
   name_ = "libcamera:" + config_.device;
   impl_ = std::make_unique<Impl>(config_);
-  impl_->open();
+  try {
+    impl_->open();
+  } catch (const DeviceMissing&) {
+    // Not listed yet: start() looks again, and RecoveringCamera waits for it.
+  }
 }
 
 LibcameraCamera::~LibcameraCamera() = default;
 
 void LibcameraCamera::start() {
+  if (!impl_->camera) impl_->open();  // it was not there when the camera was made
   impl_->start();
 }
 

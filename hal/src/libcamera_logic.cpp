@@ -7,6 +7,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/hal/clock.hpp"
+#include "epipole/hal/device_missing.hpp"
 #include "epipole/hal/libcamera_camera.hpp"
 #include "libcamera_formats.hpp"
 
@@ -143,8 +144,8 @@ std::size_t select_camera(std::string_view device, std::span<const std::string> 
     for (const char c : device) index = index * 10 + static_cast<std::size_t>(c - '0');
     if (index < ids.size()) return index;
   }
-  throw Error(cat("camera ", device, ": no libcamera camera with that ", number ? "index" : "id",
-                  " (cameras found: ", list_cameras(ids), ")"));
+  throw DeviceMissing(cat("camera ", device, ": no libcamera camera with that ",
+                          number ? "index" : "id", " (cameras found: ", list_cameras(ids), ")"));
 }
 
 LibcameraExposureControls plan_libcamera_exposure(const std::string& device,

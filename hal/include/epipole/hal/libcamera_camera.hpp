@@ -69,8 +69,9 @@ GrayView gray_view(LibcameraLayout layout, const std::uint8_t* data, std::size_t
                    int height, std::size_t stride, MutableGrayView scratch);
 
 // The camera CameraConfig::device names: a libcamera camera id, else a decimal index (from 0, in
-// the order libcamera lists them; ids are stable across boots, indices may not be). Throws Error
-// naming the device and listing the cameras found.
+// the order libcamera lists them; ids are stable across boots, indices may not be). Throws
+// DeviceMissing naming the device and listing the cameras found: a camera that is not listed yet
+// (a USB camera at boot) is waited for.
 std::size_t select_camera(std::string_view device, std::span<const std::string> ids);
 // "0: <id>, 1: <id>" or "none", for errors.
 std::string list_cameras(std::span<const std::string> ids);
@@ -223,9 +224,11 @@ class LibcameraStream {
 // buffers (FrameBufferAllocator), maps their first planes and queues one request per buffer;
 // completed requests come from libcamera's thread through the LibcameraStream; release() queues the
 // request again. Camera::disconnected makes acquire() report device_lost; reopen() looks the camera
-// up again. libcamera has no external-trigger control: in TriggerMode::external the sensor must be
-// put into trigger mode by its driver (module parameter, device tree or sub-device control) and the
-// frame rate is left to the trigger.
+// up again. A camera libcamera does not list when this object is made is looked for again by
+// start() and reopen(), which throw DeviceMissing until it is there. libcamera has no
+// external-trigger control: in TriggerMode::external the sensor must be put into trigger mode by
+// its driver (module parameter, device tree or sub-device control) and the frame rate is left to
+// the trigger.
 class LibcameraCamera final : public CameraSource {
  public:
   explicit LibcameraCamera(CameraConfig config);
