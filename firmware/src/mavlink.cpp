@@ -19,6 +19,10 @@ std::optional<std::uint8_t> crc_extra_of(std::uint32_t message_id) {
 
 enum class Check { ok, incomplete, no_start_byte, bad_flags, unknown_message, bad_crc };
 
+std::uint32_t message_id_of(std::span<const std::uint8_t> header) {
+  return header[7] | header[8] << 8 | static_cast<std::uint32_t>(header[9]) << 16;
+}
+
 // Checks the frame at the start of `bytes`; `size` gets the frame's length (signature
 // included) once the header is complete.
 Check check_frame(std::span<const std::uint8_t> bytes, std::size_t& size) {
@@ -29,9 +33,7 @@ Check check_frame(std::span<const std::uint8_t> bytes, std::size_t& size) {
   const std::uint8_t length = bytes[1];
   size = kHeaderSize + length + kChecksumSize + ((flags & kIncompatSigned) ? kSignatureSize : 0);
   if (bytes.size() < size) return Check::incomplete;
-  const std::uint32_t message_id =
-      bytes[7] | bytes[8] << 8 | static_cast<std::uint32_t>(bytes[9]) << 16;
-  const auto extra = crc_extra_of(message_id);
+  const auto extra = crc_extra_of(message_id_of(bytes));
   if (!extra) return Check::unknown_message;
   std::uint16_t crc = crc16_x25(bytes.subspan(1, kHeaderSize - 1 + length));
   crc = crc16_x25(std::span(&*extra, 1), crc);
@@ -40,17 +42,16 @@ Check check_frame(std::span<const std::uint8_t> bytes, std::size_t& size) {
   return crc == received ? Check::ok : Check::bad_crc;
 }
 
-// The frame at the start of `bytes`, which check_frame() found valid.
-Frame frame_of(std::span<const std::uint8_t> bytes) {
+// The frame at the start of `bytes`, which check_frame() found valid and `size` bytes long.
+Frame frame_of(std::span<const std::uint8_t> bytes, std::size_t size) {
   Frame frame;
   frame.length = bytes[1];
   frame.sequence = bytes[4];
   frame.system_id = bytes[5];
   frame.component_id = bytes[6];
-  frame.message_id = bytes[7] | bytes[8] << 8 | static_cast<std::uint32_t>(bytes[9]) << 16;
+  frame.message_id = message_id_of(bytes);
   std::memcpy(frame.payload.data(), bytes.data() + kHeaderSize, frame.length);
-  frame.wire_size = kHeaderSize + frame.length + kChecksumSize +
-                    ((bytes[2] & kIncompatSigned) != 0 ? kSignatureSize : 0);
+  frame.wire_size = size;
   return frame;
 }
 
@@ -157,7 +158,7 @@ ObstacleDistance to_obstacle_distance(const protocol::Obstacles& sectors, std::u
 std::optional<Frame> parse_frame(std::span<const std::uint8_t> bytes) {
   std::size_t size = 0;
   if (check_frame(bytes, size) != Check::ok) return std::nullopt;
-  return frame_of(bytes);
+  return frame_of(bytes, size);
 }
 
 std::optional<Heartbeat> decode_heartbeat(const Frame& frame) {
@@ -208,7 +209,7 @@ std::optional<Frame> StreamDecoder::next() {
       case Check::incomplete:
         return std::nullopt;
       case Check::ok: {
-        const Frame frame = frame_of(std::span(buffer_.data(), frame_size));
+        const Frame frame = frame_of(std::span(buffer_.data(), size_), frame_size);
         drop_front(frame_size);
         note_sequence(frame);
         ++stats_.frames;
