@@ -18,24 +18,19 @@ const BoardConfig::SimScene* scene_with_calibration(const BoardConfig& config) {
              : nullptr;
 }
 
-}  // namespace
-
-std::filesystem::path missing_board_calibration(const BoardConfig& config) {
-  if (scene_with_calibration(config) != nullptr || config.calibration.empty()) return {};
-  // Not there, rather than there but unreadable (that one is an error when it is loaded).
+// Not there, rather than there but unreadable (that one is an error when it is loaded).
+bool not_there(const std::filesystem::path& file) {
   std::error_code ec;
-  const auto status = std::filesystem::status(config.calibration, ec);
-  return status.type() == std::filesystem::file_type::not_found ? config.calibration
-                                                                : std::filesystem::path();
+  return std::filesystem::status(file, ec).type() == std::filesystem::file_type::not_found;
 }
+
+}  // namespace
 
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config) {
   if (const BoardConfig::SimScene* scene = scene_with_calibration(config)) {
     return calib::load_calibration(scene->calibration);
   }
-  if (config.calibration.empty() || !missing_board_calibration(config).empty()) {
-    return std::nullopt;
-  }
+  if (config.calibration.empty() || not_there(config.calibration)) return std::nullopt;
   return calib::load_calibration(config.calibration);
 }
 
@@ -73,7 +68,6 @@ Firmware::~Firmware() = default;
 
 void Firmware::build(std::unique_ptr<Board> board) {
   calibration_ = load_board_calibration(config_);
-  missing_calibration_ = missing_board_calibration(config_);
   board_ = std::move(board);
   pipeline_ = std::make_unique<Pipeline>(config_, calibration_);
   LinkConfig link;

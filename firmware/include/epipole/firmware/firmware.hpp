@@ -24,9 +24,6 @@ namespace epipole::firmware {
 // file that is there but does not read, or a simulated scene's that is missing, is an Error.
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config);
 
-// The board's own calibration file when it names one that does not exist yet; else empty.
-std::filesystem::path missing_board_calibration(const BoardConfig& config);
-
 // Scheduling the board asks for (threads: affinity, SCHED_FIFO) for the calling thread, which
 // every thread created after it inherits. Returns what could not be done (e.g. no permission
 // for SCHED_FIFO), one line each; the firmware runs on without it.
@@ -51,8 +48,11 @@ class Firmware {
   FrameLoop& frame_loop() { return *loop_; }
   const std::optional<calib::StereoCalibration>& calibration() const { return calibration_; }
   // The calibration file the board names that is not there yet; empty when it names none or
-  // the calibration was loaded.
-  const std::filesystem::path& missing_calibration() const { return missing_calibration_; }
+  // the calibration was loaded (a scene's calibration or a file that does not read would have
+  // stopped the constructor).
+  std::filesystem::path missing_calibration() const {
+    return calibration_ ? std::filesystem::path() : config_.calibration;
+  }
   // The frame loop's buffers: vision stages and link queue (the cameras' buffers are the
   // drivers').
   std::size_t working_set_bytes() const;
@@ -62,7 +62,6 @@ class Firmware {
 
   BoardConfig config_;
   std::optional<calib::StereoCalibration> calibration_;
-  std::filesystem::path missing_calibration_;
   std::unique_ptr<Board> board_;
   std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<Link> link_;
