@@ -1,16 +1,11 @@
 #include "epipole/hal/recovery.hpp"
 
 #include <algorithm>
-#include <cerrno>
 
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
 
 namespace epipole::hal {
-
-bool is_missing_device(int error) {
-  return error == ENOENT || error == ENODEV || error == ENXIO;
-}
 
 Backoff::Backoff(BackoffConfig config) : config_(config), delay_(config.initial) {
   require(config_.initial > 0 && config_.max >= config_.initial, "back-off: initial delay ",

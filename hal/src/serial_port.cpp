@@ -10,6 +10,7 @@
 #include <cstring>
 #include <iterator>
 
+#include "device_node.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
 #include "fd_io.hpp"
@@ -63,15 +64,8 @@ TermiosSerialPort::~TermiosSerialPort() {
 }
 
 void TermiosSerialPort::open_device() {
-  const int fd = ::open(config_.device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) {
-    const int error = errno;
-    if (is_missing_device(error)) {
-      throw DeviceMissing(
-          cat("serial port ", config_.device, ": not there (yet): ", std::strerror(error)));
-    }
-    throw Error(cat("serial port ", config_.device, ": cannot open: ", std::strerror(error)));
-  }
+  const int fd = detail::open_device_node(
+      config_.device, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC, "serial port");
   termios tty{};
   if (tcgetattr(fd, &tty) != 0) {
     const int error = errno;

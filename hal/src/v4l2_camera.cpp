@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "device_node.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
 
@@ -192,15 +193,7 @@ void V4l2Camera::fail(const char* what, int error) const {
 }
 
 void V4l2Camera::open_device() {
-  fd_ = ::open(config_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-  if (fd_ < 0) {
-    const int error = errno;
-    if (is_missing_device(error)) {
-      throw DeviceMissing(
-          cat("camera ", config_.device, ": not there (yet): ", std::strerror(error)));
-    }
-    fail("cannot open", error);
-  }
+  fd_ = detail::open_device_node(config_.device, O_RDWR | O_NONBLOCK | O_CLOEXEC, "camera");
   v4l2_capability cap{};
   if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) {
     const int error = errno;

@@ -12,7 +12,4 @@ class DeviceMissing : public Error {
   using Error::Error;
 };
 
-// True for the errno values of opening a device node that is not there: ENOENT, ENODEV, ENXIO.
-bool is_missing_device(int error);
-
 }  // namespace epipole::hal
