@@ -98,20 +98,13 @@ class Printer {
                                                : JsonStreamDecoder::Protocol::epipole) {}
   // Feeds bytes; false once enough messages were printed.
   bool feed(std::span<const std::uint8_t> bytes) {
-    for (const std::uint8_t b : bytes) {
-      for (auto json = decoder_.push(b); json; json = decoder_.next()) {
-        if (!print(*json)) return false;
-      }
-    }
+    const bool more =
+        decoder_.feed(bytes, [this](const nlohmann::json& json) { return print(json); });
     std::cout.flush();
-    return true;
+    return more;
   }
   void finish() {
-    while (!enough()) {
-      const auto json = decoder_.finish();
-      if (!json) break;
-      print(*json);
-    }
+    if (!enough()) decoder_.finish([this](const nlohmann::json& json) { return print(json); });
     const nlohmann::json stats = decoder_.stats();
     if (options_.json) {
       std::cout << stats.dump() << "\n";

@@ -133,7 +133,7 @@ std::optional<nlohmann::json> JsonStreamDecoder::next() {
   return std::nullopt;  // the native decoder delivers every frame when its 0x00 arrives
 }
 
-std::optional<nlohmann::json> JsonStreamDecoder::finish() {
+std::optional<nlohmann::json> JsonStreamDecoder::finish_one() {
   if (protocol_ == Protocol::mavlink) {
     if (const auto frame = mavlink_.finish()) return to_json(*frame);
   }

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <span>
 
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/protocol/codec.hpp"
@@ -23,16 +24,32 @@ class JsonStreamDecoder {
   using Protocol = firmware::BoardConfig::LinkProtocol;
   explicit JsonStreamDecoder(Protocol protocol) : protocol_(protocol) {}
 
-  // Feeds one byte; returns the message it completes. After a message, next() until none.
-  std::optional<nlohmann::json> push(std::uint8_t byte);
-  // A further message complete in what was fed (MAVLink: frames held back by a false start).
-  std::optional<nlohmann::json> next();
-  // The stream has ended: what is still to be found in it, until none.
-  std::optional<nlohmann::json> finish();
+  // Feeds bytes; calls take(message) for every message they complete (MAVLink: with the frames
+  // a false start held back) while it returns true. False once it returned false.
+  template <class Take>
+  bool feed(std::span<const std::uint8_t> bytes, Take&& take) {
+    for (const std::uint8_t b : bytes) {
+      for (auto json = push(b); json; json = next()) {
+        if (!take(*json)) return false;
+      }
+    }
+    return true;
+  }
+  // The stream has ended: take() what is still to be found in it, while it returns true.
+  template <class Take>
+  void finish(Take&& take) {
+    for (auto json = finish_one(); json; json = finish_one()) {
+      if (!take(*json)) return;
+    }
+  }
   // {"type": "decoder", "protocol": ..., every counter of the decoder, "errors": their faults}.
   nlohmann::json stats() const;
 
  private:
+  std::optional<nlohmann::json> push(std::uint8_t byte);
+  std::optional<nlohmann::json> next();  // a further message complete in what was fed
+  std::optional<nlohmann::json> finish_one();
+
   Protocol protocol_;
   protocol::FrameDecoder native_;
   mavlink::StreamDecoder mavlink_;

@@ -58,7 +58,7 @@ class LinkRecorder {
   void finish() {
     stopping_ = true;
     thread_.join();
-    for (auto json = decoder_.finish(); json; json = decoder_.finish()) record(*json);
+    decoder_.finish([this](const nlohmann::json& json) { return record(json); });
     lines_ << decoder_.stats().dump() << "\n";
   }
   const std::map<std::string, int>& counts() const { return counts_; }
@@ -76,18 +76,16 @@ class LinkRecorder {
       }
       raw_.write(reinterpret_cast<const char*>(buffer.data()),
                  static_cast<std::streamsize>(r.bytes));
-      for (std::size_t i = 0; i < r.bytes; ++i) {
-        for (auto json = decoder_.push(static_cast<std::uint8_t>(buffer[i])); json;
-             json = decoder_.next()) {
-          record(*json);
-        }
-      }
+      decoder_.feed(std::span(reinterpret_cast<const std::uint8_t*>(buffer.data()), r.bytes),
+                    [this](const nlohmann::json& json) { return record(json); });
     }
   }
-  void record(const nlohmann::json& json) {
+  // Every message is kept: true.
+  bool record(const nlohmann::json& json) {
     lines_ << json.dump() << "\n";
     ++counts_[json["type"].get<std::string>()];
     if (json["type"] == "health") last_health_ = json;
+    return true;
   }
 
   hal::TermiosSerialPort port_;
