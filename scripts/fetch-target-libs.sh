@@ -2,8 +2,8 @@
 # Unpacks the board-side libraries Epipole links (Debian's :arm64 and :armhf packages of
 # yaml-cpp and libgpiod, linked statically, and libcamera with the libraries it needs at run
 # time) into a cache folder that the cross toolchain files add to their search path (and the
-# cross-built tests' library path under qemu), and writes a dpkg database of them beside (dpkg/) with which scripts/package-depends.sh
-# computes the board package's dependencies. The database also holds Debian's C and C++
+# cross-built tests' library path under qemu), and writes a dpkg database of them beside
+# (dpkg/), from which scripts/package-depends.sh computes the board package's dependencies. The database also holds Debian's C and C++
 # runtime packages of the target (libc6, libstdc++6, libgcc-s1), their files mapped onto the
 # cross toolchain's copies of the same libraries in /usr/<triple>/lib, which is what the
 # binaries link. Nothing is installed for the foreign architecture: the packages are downloaded
