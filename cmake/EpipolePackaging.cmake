@@ -6,6 +6,8 @@ include(GNUInstallDirs)
 install(FILES ${PROJECT_SOURCE_DIR}/firmware/service/epipole.service
         DESTINATION lib/systemd/system)
 install(FILES ${PROJECT_SOURCE_DIR}/firmware/service/60-epipole.rules DESTINATION lib/udev/rules.d)
+install(FILES ${PROJECT_SOURCE_DIR}/firmware/service/epipole-modules.conf
+        DESTINATION lib/modules-load.d RENAME epipole.conf)
 # The virtual board's files are the test command's, not a board's.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/board/ DESTINATION share/epipole/board
         PATTERN vboard EXCLUDE)

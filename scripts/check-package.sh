@@ -39,7 +39,8 @@ done
 
 contents=$(dpkg-deb -c "$deb" | awk '{print $6}')
 for f in ./usr/bin/epipole-fw ./usr/lib/systemd/system/epipole.service \
-  ./usr/lib/udev/rules.d/60-epipole.rules ./etc/epipole/board.yaml \
+  ./usr/lib/udev/rules.d/60-epipole.rules ./usr/lib/modules-load.d/epipole.conf \
+  ./etc/epipole/board.yaml \
   ./usr/share/epipole/board/sim/board.yaml ./usr/share/epipole/board/raspberrypi5-ov9281/board.yaml \
   ./usr/share/epipole/board/usb-stereo/board.yaml ./usr/share/doc/epipole/README.md \
   ./usr/share/doc/epipole/copyright ./usr/share/doc/epipole/changelog.gz; do
@@ -62,6 +63,11 @@ fw="$control/root/usr/bin/epipole-fw"
 readelf -h "$fw" | grep -q "Machine:.*$machine" || fail "$deb: epipole-fw is not an $machine binary"
 grep -q '^Type=notify' "$control/root/usr/lib/systemd/system/epipole.service" ||
   fail "$deb: the unit is not Type=notify"
+# The unit's sandbox: systemd's exposure score (0 safe .. 10 unsafe) at most 2.5.
+unit="$control/root/usr/lib/systemd/system/epipole.service"
+security=$(systemd-analyze security --offline=true --threshold=25 "$unit" 2>&1) ||
+  fail "$deb: the unit's exposure is above 2.5: $(tail -1 <<<"$security")"
+exposure=$(sed -n 's/.*Overall exposure level for [^:]*: \([0-9.]* [A-Z]*\).*/\1/p' <<<"$security")
 version=$("${qemu[@]}" "$fw" --version) || fail "$deb: epipole-fw --version did not run"
 # Every library the firmware needs comes from a package it depends on.
 depends_names=$(sed 's/ ([^)]*)//g; s/, /\n/g' <<<"$depends")
@@ -83,4 +89,4 @@ lint_status=0
 lint=$(lintian --fail-on error --tag-display-limit 0 "$deb" 2>&1) || lint_status=$?
 grep -v 'root privileges' <<<"$lint" || true
 ((lint_status == 0)) || fail "$deb: lintian reports errors (above)"
-echo "check-package: $deb ok ($(du -k "$deb" | cut -f1) KiB; $version)"
+echo "check-package: $deb ok ($(du -k "$deb" | cut -f1) KiB; $version; exposure $exposure)"
