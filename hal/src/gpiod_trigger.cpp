@@ -21,49 +21,86 @@ constexpr Nanoseconds kPerSecond = 1'000'000'000;
 GpiodTrigger::GpiodTrigger(TriggerConfig config) : config_(std::move(config)) {
   validate(config_);
   period_ = period_of(config_.rate_hz);
-  if (config_.chip.empty()) {
-    line_ = gpiod_line_find(config_.line.c_str());
-    if (line_ == nullptr) {
-      throw Error(cat("trigger ", config_.line, ": no GPIO line of that name on any chip",
-                      errno != 0 && errno != ENOENT ? cat(" (", std::strerror(errno), ")") : ""));
-    }
-  } else {
-    chip_ = gpiod_chip_open_lookup(config_.chip.c_str());
-    if (chip_ == nullptr) {
-      throw Error(cat("trigger ", config_.line, ": cannot open GPIO chip ", config_.chip, ": ",
-                      std::strerror(errno)));
-    }
-    line_ = gpiod_chip_find_line(chip_, config_.line.c_str());
-    if (line_ == nullptr) {
-      gpiod_chip_close(chip_);
-      chip_ = nullptr;
-      throw Error(cat("trigger ", config_.line, ": no GPIO line of that name on ", config_.chip));
-    }
-  }
+  reason_.reserve(256);
+  set_reason("not started");
 }
 
 GpiodTrigger::~GpiodTrigger() {
   stop();
+}
+
+std::string GpiodTrigger::unavailable_reason() const {
+  const std::lock_guard lock(reason_mutex_);
+  return requested_.load(std::memory_order_acquire) ? std::string() : reason_;
+}
+
+void GpiodTrigger::set_reason(std::string reason) {
+  const std::lock_guard lock(reason_mutex_);
+  reason_ = std::move(reason);
+}
+
+bool GpiodTrigger::acquire() {
+  errno = 0;
+  if (config_.chip.empty()) {
+    line_ = gpiod_line_find(config_.line.c_str());
+    if (line_ == nullptr) {
+      set_reason(cat("no GPIO line of that name on any chip",
+                     errno != 0 && errno != ENOENT ? cat(" (", std::strerror(errno), ")") : ""));
+    }
+  } else {
+    chip_ = gpiod_chip_open_lookup(config_.chip.c_str());
+    if (chip_ == nullptr) {
+      set_reason(cat("cannot open GPIO chip ", config_.chip, ": ", std::strerror(errno)));
+    } else if (line_ = gpiod_chip_find_line(chip_, config_.line.c_str()); line_ == nullptr) {
+      set_reason(cat("no GPIO line of that name on ", config_.chip));
+    }
+  }
+  const Nanoseconds now = clock_.now();
+  if (line_ != nullptr) {
+    const int r = config_.role == TriggerRole::master
+                      ? gpiod_line_request_output(line_, kConsumer, 0)
+                      : gpiod_line_request_rising_edge_events(line_, kConsumer);
+    if (r == 0) {
+      // Edge numbers go on from where they were: a master's schedule puts the next one now.
+      const Nanoseconds period = period_.load(std::memory_order_acquire);
+      schedule_.start(now - static_cast<Nanoseconds>(next_) * period, period);
+      backoff_.succeeded();
+      requested_.store(true, std::memory_order_release);
+      return true;
+    }
+    set_reason(cat("cannot request the line as ",
+                   config_.role == TriggerRole::master ? "output" : "rising-edge input", ": ",
+                   std::strerror(errno)));
+  }
+  release(nullptr);
+  backoff_.failed(now);
+  return false;
+}
+
+void GpiodTrigger::release(const char* reason) {
+  if (reason != nullptr) set_reason(cat("the line went away: ", reason));
+  if (requested_.exchange(false, std::memory_order_acq_rel)) gpiod_line_release(line_);
   if (chip_ != nullptr) {
     gpiod_chip_close(chip_);
   } else if (line_ != nullptr) {
     gpiod_line_close_chip(line_);
   }
+  chip_ = nullptr;
+  line_ = nullptr;
+}
+
+EdgeResult GpiodTrigger::line_went_away() {
+  release(std::strerror(errno));
+  backoff_.failed(clock_.now());
+  return {EdgeStatus::lost, {}};
 }
 
 void GpiodTrigger::start() {
-  if (requested_) return;
-  const int r = config_.role == TriggerRole::master
-                    ? gpiod_line_request_output(line_, kConsumer, 0)
-                    : gpiod_line_request_rising_edge_events(line_, kConsumer);
-  if (r != 0) {
-    throw Error(cat("trigger ", config_.line, ": cannot request the line as ",
-                    config_.role == TriggerRole::master ? "output" : "rising-edge input", ": ",
-                    std::strerror(errno)));
-  }
-  requested_ = true;
-  schedule_.start(clock_.now(), period_.load(std::memory_order_acquire));
+  if (started_) return;
+  started_ = true;
   next_ = 0;
+  backoff_.succeeded();
+  acquire();
 }
 
 void GpiodTrigger::set_rate(double rate_hz) {
@@ -73,14 +110,22 @@ void GpiodTrigger::set_rate(double rate_hz) {
 }
 
 void GpiodTrigger::stop() {
-  if (!requested_) return;
-  gpiod_line_release(line_);
-  requested_ = false;
+  if (!started_) return;
+  started_ = false;
+  release(nullptr);
+  set_reason("stopped");
 }
 
 EdgeResult GpiodTrigger::wait_edge(Nanoseconds timeout) {
-  if (!requested_) return {EdgeStatus::lost, {}};
   timeout = std::max<Nanoseconds>(timeout, 0);
+  if (!requested_.load(std::memory_order_relaxed)) {
+    if (!started_) return {EdgeStatus::lost, {}};
+    const Nanoseconds now = clock_.now();
+    if (!backoff_.due(now) || !acquire()) {
+      clock_.sleep_until(std::min(now + timeout, backoff_.next_attempt()));
+      return {EdgeStatus::lost, {}};
+    }
+  }
   if (config_.role == TriggerRole::master) {
     const Nanoseconds period = period_.load(std::memory_order_acquire);
     if (period != schedule_.period()) {  // set_rate(): from the last edge fired on
@@ -97,10 +142,10 @@ EdgeResult GpiodTrigger::wait_edge(Nanoseconds timeout) {
       return {EdgeStatus::timeout, {}};
     }
     clock_.sleep_until(edge);
-    if (gpiod_line_set_value(line_, 1) != 0) return {EdgeStatus::lost, {}};
+    if (gpiod_line_set_value(line_, 1) != 0) return line_went_away();
     const Nanoseconds fired = clock_.now();
     clock_.sleep_until(fired + config_.pulse_width);
-    if (gpiod_line_set_value(line_, 0) != 0) return {EdgeStatus::lost, {}};
+    if (gpiod_line_set_value(line_, 0) != 0) return line_went_away();
     return {EdgeStatus::ok, TriggerEdge{next_++, fired}};
   }
   const timespec ts{static_cast<time_t>(timeout / kPerSecond),
@@ -108,7 +153,7 @@ EdgeResult GpiodTrigger::wait_edge(Nanoseconds timeout) {
   const int r = gpiod_line_event_wait(line_, &ts);
   if (r == 0) return {EdgeStatus::timeout, {}};
   gpiod_line_event event{};
-  if (r < 0 || gpiod_line_event_read(line_, &event) != 0) return {EdgeStatus::lost, {}};
+  if (r < 0 || gpiod_line_event_read(line_, &event) != 0) return line_went_away();
   const Nanoseconds stamp = static_cast<Nanoseconds>(event.ts.tv_sec) * kPerSecond +
                             static_cast<Nanoseconds>(event.ts.tv_nsec);
   return {EdgeStatus::ok, TriggerEdge{next_++, stamp}};

@@ -1,9 +1,11 @@
 #pragma once
 
 #include <atomic>
+#include <mutex>
 #include <string>
 
 #include "epipole/hal/clock.hpp"
+#include "epipole/hal/recovery.hpp"
 #include "epipole/hal/trigger.hpp"
 
 struct gpiod_chip;
@@ -14,7 +16,11 @@ namespace epipole::hal {
 class BackendRegistry;
 
 // The trigger line through libgpiod's 1.x API (Debian bookworm: 1.6), the line looked up by
-// name (in config.chip when given, else on every chip). A master drives the line: wait_edge()
+// name (in config.chip when given, else on every chip) when it starts. A line that is not there
+// (its chip's driver not loaded yet, a GPIO expander unplugged) or that cannot be requested is
+// no error: wait_edge() reports it lost and looks for it again with back-off, and a line whose
+// chip goes away while in use is given back and looked for the same way; available() and
+// unavailable_reason() say so. A master drives the line: wait_edge()
 // sleeps on the monotonic clock to the next period, raises the line for pulse_width and reports
 // the edge. A slave requests rising-edge events and reports each with the kernel's timestamp.
 // set_rate() (a master only) may come from another thread while one waits in wait_edge(): the
@@ -34,12 +40,26 @@ class GpiodTrigger final : public TriggerLine {
   void stop() override;
   EdgeResult wait_edge(Nanoseconds timeout) override;
   void set_rate(double rate_hz) override;
+  bool available() const override { return requested_.load(std::memory_order_acquire); }
+  std::string unavailable_reason() const override;
 
  private:
+  // Finds the line and requests it; on failure keeps the reason and schedules the next try.
+  bool acquire();
+  // Gives the line back and closes its chip (it may be gone).
+  void release(const char* reason);
+  void set_reason(std::string reason);
+  // A read or write on the line failed (its chip removed): released, looked for again later.
+  EdgeResult line_went_away();
+
   TriggerConfig config_;
   gpiod_chip* chip_ = nullptr;  // when opened by name
   gpiod_line* line_ = nullptr;
-  bool requested_ = false;
+  bool started_ = false;
+  std::atomic<bool> requested_{false};
+  Backoff backoff_;
+  mutable std::mutex reason_mutex_;
+  std::string reason_;  // why the line is not requested
   MonotonicClock clock_;
   std::atomic<Nanoseconds> period_;  // written by set_rate(), read by wait_edge()
   EdgeSchedule schedule_;            // wait_edge()'s thread only

@@ -61,6 +61,12 @@ class TriggerLine {
   // (with_rate()); nothing changes then. May be called while another thread waits in
   // wait_edge(); config() belongs to the thread that calls set_rate(). Never allocates.
   virtual void set_rate(double rate_hz) = 0;
+  // False while the line cannot be used: not there (yet), or gone with its chip. A hardware
+  // line is then looked for again with back-off by wait_edge(), which reports it lost. Both may
+  // be called from any thread; the reason allocates, so callers ask for it when available()
+  // changes.
+  virtual bool available() const { return true; }
+  virtual std::string unavailable_reason() const { return {}; }
 };
 
 // The edge times of a master line whose rate may change: edge n comes at the time of the
