@@ -84,7 +84,8 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
       stages_(stage_mask(config.stages)),
       // The board names its calibration file, and none was loaded: it does not exist yet (a
       // file that does not read, or a simulated scene's, stops the firmware at start-up).
-      not_calibrated_(!config.calibration.empty() && !pipeline.has_calibration()) {}
+      not_calibrated_(!config.calibration.empty() && !pipeline.has_calibration()),
+      no_cascade_(!pipeline.missing_cascade().empty()) {}
 
 FrameLoop::~FrameLoop() {
   finish();
@@ -293,6 +294,7 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
       board_.sim() != nullptr && config_.sim.charge_compute ? &board_.sim()->clock : nullptr;
   bool left_lost = false;
   bool right_lost = false;
+  bool trigger_missing = false;
   const auto note_health = [&] {
     if (auto h = health_.due(clock.now(), faults())) {
       ++summary_.health_messages;
@@ -300,6 +302,7 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
         link_.publish_heartbeat(heartbeat_status());
       } else {
         if (not_calibrated_) h->flags |= protocol::kHealthNotCalibrated;
+        if (no_cascade_) h->flags |= protocol::kHealthNoCascade;
         send(*h);
         if (last_calibration_health_ && last_calibration_health_->matches > 0) {
           const auto centipx = [](double px) {
@@ -322,6 +325,17 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
         std::fprintf(stderr, "epipole-fw: camera %s %s%s%s\n", camera->name().c_str(),
                      *lost ? "lost, reopening" : "recovered", *lost ? ": " : "",
                      *lost ? camera->last_error().c_str() : "");
+      }
+    }
+    // And when the trigger line is not there (the firmware goes on without its edges).
+    if (trigger_ && trigger_->line().available() == trigger_missing) {
+      trigger_missing = !trigger_missing;
+      const std::string& line = config_.trigger.line.line;
+      if (trigger_missing) {
+        std::fprintf(stderr, "epipole-fw: trigger %s not there, waiting for it: %s\n", line.c_str(),
+                     trigger_->line().unavailable_reason().c_str());
+      } else {
+        std::fprintf(stderr, "epipole-fw: trigger %s found\n", line.c_str());
       }
     }
     if (heartbeat_) heartbeat_();

@@ -9,10 +9,12 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/build_info.hpp"
 #include "epipole/firmware/firmware.hpp"
+#include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/service.hpp"
 
 namespace {
@@ -77,6 +79,12 @@ int main(int argc, char** argv) {
       std::fprintf(stderr,
                    "epipole-fw: warning: no calibration: images are taken as rectified and "
                    "nothing gets a depth\n");
+    }
+    if (const std::filesystem::path& cascade = fw.pipeline().missing_cascade(); !cascade.empty()) {
+      std::fprintf(stderr,
+                   "epipole-fw: no detection: the cascade %s does not exist yet; running without "
+                   "it. Make it with `%s` and restart (docs/deploy.md)\n",
+                   cascade.c_str(), firmware::cascade_compile_command(cascade).c_str());
     }
     fw.frame_loop().set_heartbeat([&service] { service.watchdog(); });
     service.ready();

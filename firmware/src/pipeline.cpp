@@ -100,11 +100,8 @@ struct Pipeline::Stages {
   }
 };
 
-namespace {
-
-// The command that compiles a missing cascade: from OpenCV's XML of the same name in the data
-// cache of scripts/fetch-data.sh when it is there.
-std::string compile_command_for(const std::filesystem::path& compiled) {
+// From OpenCV's XML of the same name in the data cache of scripts/fetch-data.sh when it is there.
+std::string cascade_compile_command(const std::filesystem::path& compiled) {
   std::string xml = "CASCADE.xml";
   for (const char* family : {"haarcascades", "lbpcascades"}) {
     std::filesystem::path candidate = default_data_directory() / "cascades" / family;
@@ -115,6 +112,8 @@ std::string compile_command_for(const std::filesystem::path& compiled) {
   return cat("epipole cascade-compile ", xml, " ", compiled.string());
 }
 
+namespace {
+
 vision::CascadeModel board_cascade(const BoardConfig& board) {
   const std::filesystem::path& file = board.detector.cascade;
   if (file.extension() == ".xml") {
@@ -124,11 +123,6 @@ vision::CascadeModel board_cascade(const BoardConfig& board) {
                     file.string(), " ",
                     std::filesystem::path(file).replace_extension(".bin").string(),
                     "` and name the .bin"));
-  }
-  std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) {
-    throw Error(cat("detector.cascade: ", file.string(), " does not exist: make it with `",
-                    compile_command_for(file), "`"));
   }
   return load_compiled_cascade(file);
 }
@@ -186,8 +180,14 @@ Pipeline::Pipeline(const BoardConfig& board,
     const auto& P1 = calibration->left.projection;
     obstacles_ = std::make_unique<ObstacleSectors>(o, *triangulator_, P1(0, 0), P1(0, 2));
   }
-  // The detector, when the board has a cascade (or one is given) and detection is on.
-  if (cascade != nullptr || (board.stages.detect && !board.detector.cascade.empty())) {
+  // The detector, when the board has a cascade (or one is given) and detection is on; a
+  // compiled cascade that was not made yet leaves detection off until it is.
+  const bool board_cascade_named = board.stages.detect && !board.detector.cascade.empty();
+  std::error_code ec;
+  if (cascade == nullptr && board_cascade_named && board.detector.cascade.extension() != ".xml" &&
+      !std::filesystem::exists(board.detector.cascade, ec)) {
+    missing_cascade_ = board.detector.cascade;
+  } else if (cascade != nullptr || board_cascade_named) {
     const vision::CascadeModel model = cascade != nullptr ? *cascade : board_cascade(board);
     detector_ = std::make_unique<vision::CascadeDetector>(model, cascade_config(board), path);
     depths_.resize(static_cast<std::size_t>(protocol::kMaxDetections));

@@ -91,6 +91,7 @@ class FrameLoop {
   SnapshotWriter snapshots_;
   StageMask stages_;
   bool not_calibrated_;  // the board's calibration file does not exist yet
+  bool no_cascade_;      // nor its compiled cascade, with detection on
   FrameObserver* observer_ = nullptr;
   std::function<void()> heartbeat_;
   RunSummary summary_;

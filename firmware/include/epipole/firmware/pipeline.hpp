@@ -1,9 +1,11 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "epipole/calib/calibration.hpp"
@@ -58,13 +60,18 @@ struct FrameResult {
   StageTimes times{};
 };
 
+// The one command that makes a missing compiled cascade (epipole cascade-compile).
+std::string cascade_compile_command(const std::filesystem::path& compiled);
+
 // The vision stages of the frame loop, built once from the board configuration (and the rig's
 // calibration, when there is one) with all their memory; process() never allocates.
 class Pipeline {
  public:
   // Throws Error when the calibration does not fit the board (size), a stage's configuration
-  // is not valid, or the detector's cascade (a compiled file, epipole cascade-compile) cannot
-  // be read. `cascade`: the model to use instead of the board's file (tests, the host tool).
+  // is not valid, or the detector's cascade (a compiled file, epipole cascade-compile) is
+  // OpenCV's XML or does not read; one that does not exist yet leaves detection off
+  // (missing_cascade()). `cascade`: the model to use instead of the board's file (tests, the host
+  // tool).
   Pipeline(const BoardConfig& board, const std::optional<calib::StereoCalibration>& calibration,
            SimdPath path = best_simd_path(), const vision::CascadeModel* cascade = nullptr);
   ~Pipeline();
@@ -78,6 +85,9 @@ class Pipeline {
   // The stages this pipeline can run (rectification needs a calibration, and so on).
   StageMask available() const { return available_; }
   bool has_calibration() const { return triangulator_ != nullptr; }
+  // The compiled cascade the board names for detection that is not there yet (detection is off
+  // until it is made and the firmware restarted); empty otherwise.
+  const std::filesystem::path& missing_cascade() const { return missing_cascade_; }
   const calib::Triangulator* triangulator() const { return triangulator_.get(); }
   const ObstacleSectors* obstacle_sectors() const { return obstacles_.get(); }
   std::size_t working_set_bytes() const;
@@ -91,6 +101,7 @@ class Pipeline {
   std::vector<std::uint32_t> point_order_;
   std::vector<calib::RectifiedMatch> rectified_matches_;
   std::unique_ptr<vision::CascadeDetector> detector_;
+  std::filesystem::path missing_cascade_;
   std::unique_ptr<DetectionDepthEstimator> depth_estimator_;
   std::vector<DetectionDepth> depths_;
   calib::CalibrationHealth calibration_health_;

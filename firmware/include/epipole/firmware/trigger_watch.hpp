@@ -29,6 +29,7 @@ class TriggerWatch {
   void set_period(hal::Nanoseconds period) { period_.store(period); }
 
   const hal::TriggerRecord& record() const { return record_; }
+  const hal::TriggerLine& line() const { return line_; }
   // Times the line went quiet for more than three periods, or reported itself lost.
   std::uint64_t losses() const { return losses_.load(); }
 

@@ -42,6 +42,8 @@ enum class Stage : std::uint8_t {
 // Health flags.
 // No calibration file yet: images are taken as rectified and nothing gets a depth.
 inline constexpr std::uint16_t kHealthNotCalibrated = 1u << 0;
+// Detection is on but its compiled cascade does not exist yet: nothing is detected.
+inline constexpr std::uint16_t kHealthNoCascade = 1u << 1;
 
 // Once a second: rates, latencies, faults.
 struct Health {
