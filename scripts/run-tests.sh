@@ -2,7 +2,9 @@
 # Every test: installs what is missing, fetches the data sets, builds the host, host-asan,
 # aarch64 and armhf presets and runs all their tests (the cross-built ones under qemu-user),
 # then builds the libFuzzer targets (fuzz preset) and runs each from its seed corpus. The cross
-# presets also build the board's .deb and check its contents (scripts/check-package.sh). Last, it
+# presets also build the board's .deb and check its contents (scripts/check-package.sh). Then the
+# virtual board's tests, and the deployment test installs the arm64 package on Debian booted with
+# systemd (as root: debootstrap makes its root filesystem once). Last, it
 # runs the main job (scripts/run-demo.sh) in a fresh copy of the tree with a fresh copy of the
 # data sets and checks what it wrote (scripts/check-demo.sh): a broken main job fails the tests.
 # This is the README's test command and what CI runs.
@@ -33,8 +35,9 @@ for preset in $presets; do
   built=$((SECONDS - phase))
   echo "=== $preset: test"
   phase=$SECONDS
-  # The virtual board (label vboard) boots the aarch64 build's firmware too: it runs last.
-  ctest --preset "$preset" --output-junit "junit-$preset.xml" -LE vboard
+  # The virtual board (label vboard) boots the aarch64 build's firmware too, and the deployment
+  # test (label deploy) installs its package: they run last.
+  ctest --preset "$preset" --output-junit "junit-$preset.xml" -LE 'vboard|deploy'
   case $preset in
     aarch64) ./scripts/check-package.sh build/aarch64 arm64 ;;
     armhf) ./scripts/check-package.sh build/armhf armhf ;;
@@ -48,6 +51,15 @@ if [[ " $presets " == *" host "* && " $presets " == *" aarch64 "* ]]; then
   # A virtual machine on a shared CI machine: a failed test gets one more run, reported by ctest.
   ctest --preset host -L vboard --output-junit junit-vboard.xml --repeat until-pass:2
   timings+="  vboard: tested in $((SECONDS - phase)) s"$'\n'
+  echo "=== deploy: the arm64 package installed and run on Debian booted with systemd (docs/deploy.md)"
+  phase=$SECONDS
+  if [[ $(id -u) -eq 0 ]]; then
+    ctest --preset host -L deploy --output-junit junit-deploy.xml --output-on-failure
+    timings+="  deploy: tested in $((SECONDS - phase)) s"$'\n'
+  else
+    echo "deploy: NOT RUN: making its root filesystem (debootstrap) needs root; run as root to include it"
+    timings+="  deploy: not run (needs root)"$'\n'
+  fi
 fi
 
 if [[ " $presets " == *" host "* ]]; then

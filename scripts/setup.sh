@@ -18,10 +18,13 @@ packages=(
   g++-aarch64-linux-gnu g++-arm-linux-gnueabihf qemu-user
   # the virtual board (docs/vboard.md): whole-system emulators, module tools, initramfs packing
   qemu-system-x86 qemu-system-arm kmod cpio xz-utils
+  # the deployment test (docs/deploy.md): a Debian root filesystem, its disk image and overlays
+  debootstrap qemu-utils e2fsprogs
   # data fetching (apt-get download + dpkg-deb), the package's dependencies (dpkg-shlibdeps)
   dpkg dpkg-dev ca-certificates
-  # checking what the main job wrote (scripts/check-demo.sh) and the board package (lintian)
-  jq lintian
+  # checking what the main job wrote (scripts/check-demo.sh) and the board package (lintian,
+  # systemd-analyze for the unit's sandbox)
+  jq lintian systemd
 )
 
 missing=()

@@ -26,17 +26,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-pid_t start_board(const std::string& arch, const std::string& initramfs,
-                  const std::string& kernel_arguments, const std::string& socket_path,
-                  const std::string& console_path, LinkKind link) {
-  std::vector<std::string> words = {std::string(source_dir()) + "/scripts/vboard/boot.sh", arch,
-                                    initramfs};
-  std::istringstream in(kernel_arguments);
-  for (std::string w; in >> w;) words.push_back(w);
+// The board's command with its standard output and error in the console file.
+pid_t start_board(const std::vector<std::string>& command, const Environment& environment,
+                  const std::string& console_path) {
+  std::vector<std::string> words = command;
   std::vector<char*> argv;
   for (std::string& w : words) argv.push_back(w.data());
   argv.push_back(nullptr);
-  const std::string uart = "socket:" + socket_path;
 
   const pid_t pid = fork();
   if (pid < 0) throw std::runtime_error("fork failed");
@@ -47,8 +43,7 @@ pid_t start_board(const std::string& arch, const std::string& initramfs,
     dup2(null, 0);
     dup2(console, 1);
     dup2(console, 2);
-    setenv("EPIPOLE_VBOARD_UART", uart.c_str(), 1);
-    setenv("EPIPOLE_VBOARD_LINK", link == LinkKind::usb_serial ? "usb" : "uart", 1);
+    for (const auto& [name, value] : environment) setenv(name.c_str(), value.c_str(), 1);
     execv(argv[0], argv.data());
     _exit(127);
   }
@@ -122,15 +117,27 @@ void parse_console(BoardRun& run) {
 BoardRun boot_virtual_board(const std::string& arch, const std::string& initramfs,
                             const std::string& kernel_arguments, int timeout_s,
                             double disconnect_after_s, LinkKind link) {
+  std::vector<std::string> command = {std::string(source_dir()) + "/scripts/vboard/boot.sh", arch,
+                                      initramfs};
+  std::istringstream in(kernel_arguments);
+  for (std::string w; in >> w;) command.push_back(w);
+  return run_board(command, "EPIPOLE_VBOARD_UART",
+                   {{"EPIPOLE_VBOARD_LINK", link == LinkKind::usb_serial ? "usb" : "uart"}},
+                   "vboard-" + arch, timeout_s, disconnect_after_s);
+}
+
+BoardRun run_board(const std::vector<std::string>& command, const std::string& link_variable,
+                   Environment environment, const std::string& name, int timeout_s,
+                   double disconnect_after_s) {
   BoardRun run;
-  const std::string base = ::testing::TempDir() + "vboard-" + std::to_string(getpid()) + "-" + arch;
+  const std::string base = ::testing::TempDir() + name + "-" + std::to_string(getpid());
   const std::string socket_path = base + ".sock", console_path = base + ".console";
   unlink(socket_path.c_str());
   const auto start = Clock::now();
   const auto deadline = start + std::chrono::seconds(timeout_s);
+  environment.emplace_back(link_variable, "socket:" + socket_path);
 
-  const pid_t qemu =
-      start_board(arch, initramfs, kernel_arguments, socket_path, console_path, link);
+  const pid_t qemu = start_board(command, environment, console_path);
   if (int fd = connect_link(socket_path, qemu, deadline); fd >= 0) {
     if (disconnect_after_s > 0) {
       while (run.link.empty() && Clock::now() < deadline)

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "epipole/firmware/protocol/codec.hpp"
@@ -54,5 +55,15 @@ enum class LinkKind {
 BoardRun boot_virtual_board(const std::string& arch, const std::string& initramfs,
                             const std::string& kernel_arguments, int timeout_s,
                             double disconnect_after_s = 0, LinkKind link = LinkKind::uart);
+
+using Environment = std::vector<std::pair<std::string, std::string>>;
+
+// Runs a board's boot command (a script that execs QEMU) with the extra environment and its
+// link on a unix socket ("socket:PATH" in the variable `link_variable`), reads the link until
+// QEMU closes it, and decodes it; the console is the command's output. `name` names its files
+// in the test's temporary folder. boot_virtual_board() is this with scripts/vboard/boot.sh.
+BoardRun run_board(const std::vector<std::string>& command, const std::string& link_variable,
+                   Environment environment, const std::string& name, int timeout_s,
+                   double disconnect_after_s = 0);
 
 }  // namespace epipole::test
