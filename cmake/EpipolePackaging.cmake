@@ -5,7 +5,9 @@
 include(GNUInstallDirs)
 install(FILES ${PROJECT_SOURCE_DIR}/firmware/service/epipole.service
         DESTINATION lib/systemd/system)
-install(FILES ${PROJECT_SOURCE_DIR}/firmware/service/60-epipole.rules DESTINATION lib/udev/rules.d)
+# The flagship board's device rules (its trigger's chip, its cameras' DMA heaps).
+install(FILES ${PROJECT_SOURCE_DIR}/board/raspberrypi5-ov9281/udev.rules DESTINATION lib/udev/rules.d
+        RENAME 60-epipole.rules)
 install(FILES ${PROJECT_SOURCE_DIR}/firmware/service/epipole-modules.conf
         DESTINATION lib/modules-load.d RENAME epipole.conf)
 # The virtual board's files are the test command's, not a board's.

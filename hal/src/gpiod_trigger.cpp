@@ -6,7 +6,9 @@
 #include <cerrno>
 #include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <memory>
+#include <vector>
 
 #include "epipole/core/error.hpp"
 #include "epipole/hal/registry.hpp"
@@ -39,14 +41,43 @@ void GpiodTrigger::set_reason(std::string reason) {
   reason_ = std::move(reason);
 }
 
+bool GpiodTrigger::find_on_any_chip() {
+  // libgpiod's own search (gpiod_line_find) fails as soon as one chip does not open, and a
+  // service user is given only the chips its board uses (the udev rules): those that do not
+  // open are skipped and counted.
+  std::vector<std::filesystem::path> chips;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/dev", ec)) {
+    if (entry.path().filename().string().starts_with("gpiochip")) chips.push_back(entry.path());
+  }
+  std::sort(chips.begin(), chips.end());
+  int closed = 0;
+  std::string why;
+  for (const std::filesystem::path& path : chips) {
+    gpiod_chip* chip = gpiod_chip_open(path.c_str());
+    if (chip == nullptr) {
+      ++closed;
+      why = std::strerror(errno);
+      continue;
+    }
+    if (gpiod_line* line = gpiod_chip_find_line(chip, config_.line.c_str()); line != nullptr) {
+      chip_ = chip;
+      line_ = line;
+      return true;
+    }
+    gpiod_chip_close(chip);
+  }
+  set_reason(cat("no GPIO line of that name on any chip",
+                 closed > 0 ? cat(" (", closed, " of ", chips.size(), " chips do not open: ", why,
+                                  "; the udev rules give the board's chips to the gpio group)")
+                            : ""));
+  return false;
+}
+
 bool GpiodTrigger::acquire() {
   errno = 0;
   if (config_.chip.empty()) {
-    line_ = gpiod_line_find(config_.line.c_str());
-    if (line_ == nullptr) {
-      set_reason(cat("no GPIO line of that name on any chip",
-                     errno != 0 && errno != ENOENT ? cat(" (", std::strerror(errno), ")") : ""));
-    }
+    find_on_any_chip();
   } else {
     chip_ = gpiod_chip_open_lookup(config_.chip.c_str());
     if (chip_ == nullptr) {
@@ -80,11 +111,7 @@ bool GpiodTrigger::acquire() {
 void GpiodTrigger::release(const char* reason) {
   if (reason != nullptr) set_reason(cat("the line went away: ", reason));
   if (requested_.exchange(false, std::memory_order_acq_rel)) gpiod_line_release(line_);
-  if (chip_ != nullptr) {
-    gpiod_chip_close(chip_);
-  } else if (line_ != nullptr) {
-    gpiod_line_close_chip(line_);
-  }
+  if (chip_ != nullptr) gpiod_chip_close(chip_);  // the line is the chip's
   chip_ = nullptr;
   line_ = nullptr;
 }

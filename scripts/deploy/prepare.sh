@@ -67,7 +67,7 @@ done
 echo "prepare: $(echo "$wanted" | wc -w) dependencies in the local repository"
 
 install -m 0755 "$guest/run.sh" "$payload/run.sh"
-install -m 0644 "$guest/board.yaml" "$payload/board.yaml"
+install -m 0644 "$guest/board.yaml" "$guest/udev.rules" "$payload/"
 size=$(du -sm "$payload" | cut -f1)
 mke2fs -q -t ext4 -L epipole-test -d "$payload" "$output/payload.img" "$((size + 32))M"
 qemu-img create -q -f qcow2 -b "$rootfs/rootfs.img" -F raw "$output/disk.qcow2"

@@ -69,10 +69,10 @@ TEST(Deployment, InstallRunFaultsUpgradesRemoveAndPurge) {
         "active (running) with the package's board file", "runs as the epipole user",
         "journal: not calibrated", "journal: waits for the missing cameras",
         "journal: waits for the missing trigger line", "no crash loop", "watchdog pinged",
-        "restarted with the edited board file", "restarted after kill -9",
-        "journal: cameras recovered", "recovered without a restart", "the edited board file kept",
-        "restarted by the upgrade", "still disabled", "the board file kept (a conffile)",
-        "purged: nothing of the package left"}) {
+        "only the trigger's chip for the gpio group", "restarted with the edited board file",
+        "restarted after kill -9", "journal: cameras recovered", "recovered without a restart",
+        "the edited board file kept", "restarted by the upgrade", "still disabled",
+        "the board file kept (a conffile)", "purged: nothing of the package left"}) {
     EXPECT_FALSE(lines_with(run.console, std::string("deploy: ok: ") + step).empty()) << step;
   }
 

@@ -60,6 +60,15 @@ stays_up() {
 apt() { apt-get -y -q -o Dpkg::Use-Pty=0 "$@" >/tmp/apt.log 2>&1 || { cat /tmp/apt.log; return 1; }; }
 restarted() { systemctl restart epipole.service && within 30 is_active; }
 stopped() { ! is_active; }
+# The gpio-sim chip is the gpio group's; the machine's own PL061 stays root's.
+only_the_trigger_chip() {
+  for chip in /dev/gpiochip*; do
+    driver=$(basename "$(readlink -f "/sys/bus/gpio/devices/${chip#/dev/}/../driver")")
+    group=$(stat -c %G "$chip")
+    echo "  $chip ($driver): group $group"
+    if [ "$driver" = gpio-sim ]; then [ "$group" = gpio ] || return 1; else [ "$group" = root ] || return 1; fi
+  done
+}
 cameras_recovered() { [ "$(journal_since "$1" | grep -c 'camera .* recovered')" -ge 2 ]; }
 # The package as built (no suffix), or as the upgrade the suffix names.
 package() { ls "$here"/epipole_*_arm64.deb | grep -e "_[0-9.]*${1}_arm64.deb\$" | head -1; }
@@ -91,11 +100,17 @@ check "runs as the epipole user" runs_as_epipole
 check "journal: not calibrated" within 20 journal_has "$t" "not calibrated"
 check "journal: waits for the missing cameras" within 20 journal_has "$t" "camera .* lost, reopening"
 check "journal: waits for the missing trigger line" within 20 journal_has "$t" "trigger GPIO17 .*waiting"
+say "journal says: $(journal_since "$t" | grep -m1 'trigger GPIO17')"
 check "no crash loop (10 s, no restart)" stays_up 10
 check "watchdog pinged" watchdog_pinged
 
-# 2. The admin's board file: the firmware streams over the UART, uncalibrated.
+# 2. The admin's board file and its device rules (which replace the package's: the trigger's
+# chip is another one): the firmware streams over the UART, uncalibrated.
 cp "$here/board.yaml" /etc/epipole/board.yaml
+cp "$here/udev.rules" /etc/udev/rules.d/60-epipole.rules
+check "the board's rules applied" sh -c 'udevadm control --reload &&
+  udevadm trigger --action=change --subsystem-match=gpio && udevadm settle -t 30'
+check "only the trigger's chip for the gpio group" only_the_trigger_chip
 t=$(date +%s)
 check "restarted with the edited board file" restarted
 say "streaming"
@@ -152,9 +167,9 @@ check "apt purge" apt purge epipole
 leftovers() {
   dpkg-query -W epipole >/dev/null 2>&1 && echo "dpkg still knows epipole"
   getent passwd epipole
-  # (the test's own runner is epipole-deploy-test.service)
+  # (the test's own runner is epipole-deploy-test.service; the admin's rules are the admin's)
   find /etc /var/lib /usr /run/systemd/system /run/udev/rules.d -name '*epipole*' \
-    -not -name 'epipole-deploy-test*' 2>/dev/null
+    -not -name 'epipole-deploy-test*' -not -path /etc/udev/rules.d/60-epipole.rules 2>/dev/null
   systemctl list-unit-files --no-legend epipole.service 2>/dev/null
 }
 nothing_left() { [ -z "$(leftovers)" ] || { leftovers; false; }; }

@@ -46,6 +46,8 @@ class GpiodTrigger final : public TriggerLine {
  private:
   // Finds the line and requests it; on failure keeps the reason and schedules the next try.
   bool acquire();
+  // Looks for the line on every chip that opens; keeps the reason when it is on none.
+  bool find_on_any_chip();
   // Gives the line back and closes its chip (it may be gone).
   void release(const char* reason);
   void set_reason(std::string reason);
@@ -53,7 +55,7 @@ class GpiodTrigger final : public TriggerLine {
   EdgeResult line_went_away();
 
   TriggerConfig config_;
-  gpiod_chip* chip_ = nullptr;  // when opened by name
+  gpiod_chip* chip_ = nullptr;  // the chip of line_, owned
   gpiod_line* line_ = nullptr;
   bool started_ = false;
   std::atomic<bool> requested_{false};
