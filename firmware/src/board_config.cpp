@@ -42,10 +42,11 @@ class BoardReader {
   BoardConfig read(const std::string& text) {
     const YAML::Node root = f_.parse(text);
     f_.require_map(root, "");
-    f_.only_keys(root, "",
-                 {"version", "name", "cameras", "trigger", "pairing", "serial", "calibration",
-                  "stages", "corners", "stereo", "sparse", "detector", "obstacles", "threads",
-                  "memory_budget_mb", "snapshot_directory", "sim"});
+    f_.only_keys(
+        root, "",
+        {"version", "name", "cameras", "trigger", "pairing", "serial", "calibration", "stages",
+         "corners", "stereo", "sparse", "detector", "obstacles", "threads", "memory_budget_mb",
+         "snapshot_directory", "snapshot_limit", "snapshot_min_free_mb", "sim"});
     const int version = f_.integer(f_.child(root, "", "version"), "version");
     if (version < 1 || version > BoardConfig::kVersion) {
       f_.fail("version", cat(version, " is not a board file version this firmware reads (1..",
@@ -76,6 +77,8 @@ class BoardReader {
     if (const YAML::Node n = f_.optional_child(root, "", "snapshot_directory"); n.IsDefined()) {
       c.snapshot_directory = path(n, "snapshot_directory");
     }
+    integer(root, "", "snapshot_limit", c.snapshot_limit, 1, 1'000'000);
+    number(root, "", "snapshot_min_free_mb", c.snapshot_min_free_mb, 0, 1e7);
     read_sim(root, c);
     return c;
   }
@@ -460,6 +463,30 @@ class BoardReader {
 
 }  // namespace
 
+std::string frame_timing_problem(hal::Nanoseconds period, hal::Nanoseconds exposure,
+                                 hal::Nanoseconds camera_timeout) {
+  const auto ms = [](hal::Nanoseconds ns) { return static_cast<double>(ns) / 1e6; };
+  if (period > 0 && exposure >= period) {
+    return cat("an exposure of ", ms(exposure), " ms does not fit in the frame period of ",
+               ms(period), " ms");
+  }
+  if (period > 0 && period + exposure >= camera_timeout) {
+    return cat("a frame every ", ms(period), " ms",
+               exposure > 0 ? cat(" exposed ", ms(exposure), " ms") : "",
+               " does not come within the cameras' timeout of ", ms(camera_timeout),
+               " ms (cameras.timeout_ms): they would time out and be reopened again and again");
+  }
+  return {};
+}
+
+std::string watchdog_problem(const BoardConfig& c, hal::Nanoseconds watchdog_interval) {
+  if (watchdog_interval <= 0 || 2 * c.cameras.timeout < watchdog_interval) return {};
+  return cat("cameras.timeout_ms ", c.cameras.timeout / 1'000'000,
+             " is not below half the service's watchdog interval of ",
+             watchdog_interval / 1'000'000,
+             " ms (WatchdogSec): a wait for a late pair would let the watchdog fire");
+}
+
 void validate(const BoardConfig& c, const std::string& file) {
   const auto fail = [&](const std::string& key, const std::string& message) {
     throw Error(cat(file, ": ", key, ": ", message));
@@ -491,6 +518,16 @@ void validate(const BoardConfig& c, const std::string& file) {
            cat(c.pairing.tolerance / 1000, " us is not below half the cameras' frame period (",
                std::llround(1e6 / fps), " us at ", fps,
                " fps): without a trigger, frames are paired by time"));
+    }
+  }
+  for (const hal::CameraConfig* camera : {&c.cameras.left, &c.cameras.right}) {
+    const hal::Nanoseconds period = c.trigger.backend != "none"
+                                        ? c.pairing.trigger_period
+                                        : hal::period_of(std::max(camera->fps, 1e-3));
+    if (const std::string problem =
+            frame_timing_problem(period, camera->exposure, c.cameras.timeout);
+        !problem.empty()) {
+      fail(c.trigger.backend != "none" ? "trigger.rate_hz" : "cameras.fps", problem);
     }
   }
   if (c.stages.disparity && c.stereo.max_disparity >= c.width()) {

@@ -46,8 +46,12 @@ struct Reader {
   void operator()(const char*, T& value) {
     if constexpr (std::is_same_v<T, AckStatus>) {
       const std::uint8_t raw = in.u8();
-      valid = valid && raw <= static_cast<std::uint8_t>(AckStatus::unsupported);
+      valid = valid && raw <= static_cast<std::uint8_t>(AckStatus::duplicate);
       value = static_cast<AckStatus>(raw);
+    } else if constexpr (std::is_same_v<T, AckReason>) {
+      const std::uint8_t raw = in.u8();
+      valid = valid && raw <= static_cast<std::uint8_t>(AckReason::not_a_command);
+      value = static_cast<AckReason>(raw);
     } else if constexpr (std::is_same_v<T, std::int32_t>) {
       value = in.i32();
     } else if constexpr (sizeof(T) == 1) {
@@ -238,17 +242,19 @@ std::optional<DecodedMessage> FrameDecoder::finish_frame() {
     ++stats_.bad_body;
     return std::nullopt;
   }
-  // Sequence numbers: a small step back is a replay (dropped); a large one is a sender that
-  // restarted; a step forward of more than one means frames were lost on the way.
+  // Sequence numbers: 0 out of turn, or a large step back, is a sender that restarted; a small
+  // step back is a replay; a step forward of more than one means frames were lost on the way.
   if (have_sequence_) {
     const auto step =
         static_cast<std::int16_t>(static_cast<std::uint16_t>(sequence - last_sequence_));
-    if (step <= 0 && step > -kReplayWindow) {
-      ++stats_.replays;
-      return std::nullopt;
-    }
-    if (step <= -kReplayWindow) {
+    const bool restarted = (sequence == 0 && step != 1) || step <= -kReplayWindow;
+    if (restarted) {
       ++stats_.resyncs;
+    } else if (step <= 0) {
+      ++stats_.replays;
+      if (!deliver_replays_) return std::nullopt;
+      ++stats_.frames;
+      return DecodedMessage{sequence, std::move(*message), true};
     } else {
       stats_.lost += static_cast<std::uint64_t>(step - 1);
     }
@@ -257,6 +263,12 @@ std::optional<DecodedMessage> FrameDecoder::finish_frame() {
   last_sequence_ = sequence;
   ++stats_.frames;
   return DecodedMessage{sequence, std::move(*message)};
+}
+
+void FrameDecoder::reset() {
+  size_ = 0;
+  overflowed_ = false;
+  have_sequence_ = false;
 }
 
 }  // namespace epipole::protocol

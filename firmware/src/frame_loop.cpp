@@ -22,6 +22,10 @@ T saturate(std::uint64_t v) {
   return static_cast<T>(std::min<std::uint64_t>(v, std::numeric_limits<T>::max()));
 }
 
+// The link's thread goes round every few milliseconds, and gives up a write the port takes
+// nothing of within Link::kStuckWrite: longer than this, it is stuck.
+constexpr hal::Nanoseconds kLinkAlive = 2 * Link::kStuckWrite;
+
 constexpr StageMask kAlwaysOn = stage_bit(Stage::capture) | stage_bit(Stage::publish);
 constexpr StageMask kKnownStages = kAlwaysOn | stage_bit(Stage::rectify) |
                                    stage_bit(Stage::corners) | stage_bit(Stage::disparity) |
@@ -80,7 +84,9 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
       grabber_(board.left(), board.right(), board.clock(), pairing_config(config, board.sim()),
                trigger_ && check_trigger(config, board) ? &trigger_->record() : nullptr),
       health_(board.clock().now()),
-      snapshots_(config.snapshot_directory, config.width(), config.height()),
+      snapshots_(config.snapshot_directory, config.width(), config.height(),
+                 {config.snapshot_limit,
+                  static_cast<std::uint64_t>(config.snapshot_min_free_mb * 1024 * 1024)}),
       stages_(stage_mask(config.stages)),
       // The board names its calibration file, and none was loaded: it does not exist yet (a
       // file that does not read, or a simulated scene's, stops the firmware at start-up).
@@ -111,8 +117,42 @@ void FrameLoop::finish() {
   if (trigger_) trigger_->stop();
   board_.left().stop();
   board_.right().stop();
-  link_.stop();
   snapshots_.flush();
+  // Before the link goes: the robot hears of every snapshot it asked for.
+  answer_snapshots();
+  if (snapshot_pending_) {  // asked for, but no pair came before the stop
+    snapshot_pending_ = false;
+    answer(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::failed});
+  }
+  link_.stop();
+}
+
+FrameLoop::Verdict FrameLoop::request_snapshot(std::uint16_t sequence) {
+  using protocol::AckReason;
+  using protocol::AckStatus;
+  if (snapshot_pending_) return {AckStatus::rejected, AckReason::busy};
+  switch (snapshots_.can_take()) {
+    case SnapshotRefusal::none:
+      snapshot_pending_ = true;  // taken from the next pair, answered once written
+      snapshot_sequence_ = sequence;
+      return {AckStatus::ok, AckReason::none};
+    case SnapshotRefusal::disabled:
+      return {AckStatus::unsupported, AckReason::none};
+    case SnapshotRefusal::busy:
+      return {AckStatus::rejected, AckReason::busy};
+    case SnapshotRefusal::limit:
+    case SnapshotRefusal::no_space:
+      break;
+  }
+  return {AckStatus::rejected, AckReason::storage};
+}
+
+void FrameLoop::answer_snapshots() {
+  while (const std::optional<SnapshotDone> done = snapshots_.finished()) {
+    answer(done->sequence,
+           done->ok ? Verdict{protocol::AckStatus::ok, protocol::AckReason::none}
+                    : Verdict{protocol::AckStatus::rejected, protocol::AckReason::failed});
+  }
 }
 
 FaultCounts FrameLoop::faults() {
@@ -121,20 +161,17 @@ FaultCounts FrameLoop::faults() {
   const auto& l = board_.left_recovery().counters();
   const auto& r = board_.right_recovery().counters();
   f.unpaired_frames = p.unpaired_left + p.unpaired_right;
-  f.dropped_pairs =
-      summary_.stale + std::max(p.unpaired_left + p.mismatched_left + p.out_of_order_left +
-                                    p.off_trigger_left + p.corrupt_left,
-                                p.unpaired_right + p.mismatched_right + p.out_of_order_right +
-                                    p.off_trigger_right + p.corrupt_right);
+  f.triggers = grabber_.pairer().ledger().at_newest_published();
   f.camera_timeouts = l.timeouts + r.timeouts;
   f.camera_reopens = l.reopens + r.reopens;
   if (trigger_) f.trigger_losses = trigger_->losses();
   if (const hal::RecoveringSerialPort* s = board_.serial_recovery()) {
-    f.link_reopens = s->counters().reopens;
+    f.link_reopens = s->reopens();  // counted on the link's thread
   }
   const LinkCounters link = link_.counters();
   f.bad_commands = link.rejected_frames + rejected_commands_;
   f.messages_dropped = link.messages_dropped;
+  f.snapshot_failures = snapshots_.failures();
   return f;
 }
 
@@ -144,67 +181,108 @@ void FrameLoop::send(const protocol::Message& message) {
 }
 
 void FrameLoop::apply_commands() {
+  using protocol::AckReason;
+  using protocol::AckStatus;
   Command c;
   while (link_.next_command(c)) {
     ++summary_.commands;
-    protocol::CommandAck ack;
-    ack.command_sequence = c.sequence;
-    ack.status = protocol::AckStatus::unsupported;
-    if (const auto* s = std::get_if<protocol::SetStages>(&c.message)) {
+    Verdict v{AckStatus::rejected, AckReason::not_a_command};
+    if (c.overflow) {
+      v = {AckStatus::rejected, AckReason::busy};
+    } else if (c.replay) {
+      v = {AckStatus::duplicate, AckReason::none};  // answered again, not applied again
+    } else if (const auto* s = std::get_if<protocol::SetStages>(&c.message)) {
+      v = {AckStatus::rejected, AckReason::out_of_range};
       if ((s->enabled_mask & ~kKnownStages) == 0) {
         stages_ = static_cast<StageMask>(s->enabled_mask | kAlwaysOn);
-        ack.status = protocol::AckStatus::ok;
-      } else {
-        ack.status = protocol::AckStatus::rejected;
+        v = {AckStatus::ok, AckReason::none};
       }
     } else if (std::holds_alternative<protocol::Snapshot>(c.message)) {
-      if (snapshots_.enabled() && !snapshot_pending_) {
-        snapshot_pending_ = true;
-        snapshot_sequence_ = c.sequence;
-        continue;  // acknowledged with the next pair, when it is taken
-      }
-      ack.status = protocol::AckStatus::rejected;
+      v = request_snapshot(c.sequence);
+      if (v.status == AckStatus::ok) continue;  // answered once it is written
     } else if (const auto* t = std::get_if<protocol::SetTriggerRate>(&c.message)) {
-      ack.status = set_trigger_rate(*t);
+      v = set_trigger_rate(*t);
     } else if (const auto* e = std::get_if<protocol::SetExposure>(&c.message)) {
-      ack.status = set_exposure(*e);
-    } else {
-      // A message the firmware sends, not a command.
-      ack.status = protocol::AckStatus::rejected;
+      v = set_exposure(*e);
     }
-    if (ack.status == protocol::AckStatus::rejected) ++rejected_commands_;
-    send(ack);
+    answer(c.sequence, v);
   }
 }
 
-protocol::AckStatus FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& command) {
+void FrameLoop::answer(std::uint16_t sequence, Verdict verdict) {
+  protocol::CommandAck ack;
+  ack.command_sequence = sequence;
+  ack.status = verdict.status;
+  ack.reason = verdict.reason;
+  if (verdict.status == protocol::AckStatus::rejected ||
+      verdict.status == protocol::AckStatus::duplicate) {
+    ++rejected_commands_;
+  }
+  send(ack);
+}
+
+// The period frames come at: the trigger's, or free running the cameras'.
+hal::Nanoseconds FrameLoop::frame_period() const {
+  if (const hal::Nanoseconds p = grabber_.pairer().config().trigger_period; p > 0) return p;
+  return hal::period_of(std::max(config_.cameras.left.fps, config_.cameras.right.fps));
+}
+
+FrameLoop::Verdict FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& command) {
+  using protocol::AckReason;
+  using protocol::AckStatus;
   hal::TriggerLine* line = board_.trigger();
-  if (line == nullptr || !trigger_) return protocol::AckStatus::unsupported;
+  if (line == nullptr || !trigger_) return {AckStatus::unsupported, AckReason::none};
   const double rate_hz = command.rate_millihz / 1000.0;
+  const auto rejected = [&](AckReason reason, const std::string& why) {
+    std::fprintf(stderr, "epipole-fw: set_trigger_rate %u mHz rejected: %s\n",
+                 static_cast<unsigned>(command.rate_millihz), why.c_str());
+    return Verdict{AckStatus::rejected, reason};
+  };
   hal::StereoPairer& pairer = grabber_.pairer();
   const hal::Nanoseconds old_period = pairer.config().trigger_period;
   try {
     hal::with_rate(line->config(), rate_hz);  // a possible rate (and a master line) first
-    const hal::Nanoseconds period = hal::period_of(rate_hz);
-    pairer.set_trigger_period(period);  // the tolerances must stay below half the period
-    try {
-      line->set_rate(rate_hz);
-    } catch (const Error&) {
-      pairer.set_trigger_period(old_period);
-      throw;
-    }
-    trigger_->set_period(period);
   } catch (const Error& e) {
-    std::fprintf(stderr, "epipole-fw: set_trigger_rate %u mHz rejected: %s\n",
-                 static_cast<unsigned>(command.rate_millihz), e.what());
-    return protocol::AckStatus::rejected;
+    return rejected(AckReason::out_of_range, e.what());
   }
-  return protocol::AckStatus::ok;
+  const hal::Nanoseconds period = hal::period_of(rate_hz);
+  const hal::Nanoseconds exposure =
+      std::max(board_.left().config().exposure, board_.right().config().exposure);
+  if (const std::string problem = frame_timing_problem(period, exposure, config_.cameras.timeout);
+      !problem.empty()) {
+    return rejected(AckReason::timing, problem);
+  }
+  try {
+    pairer.set_trigger_period(period);  // the tolerances must stay below half the period
+  } catch (const Error& e) {
+    return rejected(AckReason::timing, e.what());
+  }
+  try {
+    line->set_rate(rate_hz);
+  } catch (const Error& e) {
+    pairer.set_trigger_period(old_period);
+    return rejected(AckReason::out_of_range, e.what());
+  }
+  trigger_->set_period(period);
+  return {AckStatus::ok, AckReason::none};
 }
 
-protocol::AckStatus FrameLoop::set_exposure(const protocol::SetExposure& command) {
+FrameLoop::Verdict FrameLoop::set_exposure(const protocol::SetExposure& command) {
+  using protocol::AckReason;
+  using protocol::AckStatus;
   const hal::Nanoseconds exposure = exposure_of(command);
   const double gain = gain_of(command);
+  const auto rejected = [&](AckReason reason, const std::string& why) {
+    std::fprintf(stderr, "epipole-fw: set_exposure %u us, %u cdB rejected: %s\n",
+                 static_cast<unsigned>(command.exposure_us),
+                 static_cast<unsigned>(command.gain_centidb), why.c_str());
+    return Verdict{AckStatus::rejected, reason};
+  };
+  if (const std::string problem =
+          frame_timing_problem(frame_period(), exposure, config_.cameras.timeout);
+      !problem.empty()) {
+    return rejected(AckReason::timing, problem);
+  }
   hal::CameraSource& left = board_.left();
   hal::CameraSource& right = board_.right();
   const hal::Nanoseconds left_exposure = left.config().exposure;
@@ -218,12 +296,9 @@ protocol::AckStatus FrameLoop::set_exposure(const protocol::SetExposure& command
       throw;
     }
   } catch (const Error& e) {
-    std::fprintf(stderr, "epipole-fw: set_exposure %u us, %u cdB rejected: %s\n",
-                 static_cast<unsigned>(command.exposure_us),
-                 static_cast<unsigned>(command.gain_centidb), e.what());
-    return protocol::AckStatus::rejected;
+    return rejected(AckReason::out_of_range, e.what());
   }
-  return protocol::AckStatus::ok;
+  return {AckStatus::ok, AckReason::none};
 }
 
 void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool trigger_from_capture) {
@@ -338,12 +413,14 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
         std::fprintf(stderr, "epipole-fw: trigger %s found\n", line.c_str());
       }
     }
-    if (heartbeat_) heartbeat_();
+    // The service watchdog hears from the firmware only while the link's thread goes round too.
+    if (heartbeat_ && link_.alive(kLinkAlive)) heartbeat_();
   };
 
   while (!stop.load(std::memory_order_relaxed) &&
          (max_frames == 0 || summary_.frames < max_frames)) {
     apply_commands();
+    answer_snapshots();
     hal::PairResult got = grabber_.next(config_.cameras.timeout);
     // Health before the new pair is recorded: the window that ended holds the pairs before it.
     note_health();
@@ -362,11 +439,13 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
       hal::PairResult newer = grabber_.next(0);
       camera_lost = newer.status == hal::PairStatus::device_lost;
       if (newer.status != hal::PairStatus::ok) break;
+      grabber_.pairer().ledger().stale(got.pair.left.sequence);
       grabber_.release(got.pair);
       got = newer;
       ++summary_.stale;
     }
     if (camera_lost) {
+      grabber_.pairer().ledger().stale(got.pair.left.sequence);
       grabber_.release(got.pair);
       ++summary_.stale;
       continue;
@@ -398,12 +477,12 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
     times[static_cast<std::size_t>(Stage::publish)] = t2 - t1;
     times[static_cast<std::size_t>(Stage::total)] = t2 - t0;
     health_.record(latency, times);
+    grabber_.pairer().ledger().published(pair.left.sequence);
     if (snapshot_pending_) {
-      protocol::CommandAck ack;
-      ack.command_sequence = snapshot_sequence_;
-      ack.status = snapshots_.take(r) ? protocol::AckStatus::ok : protocol::AckStatus::rejected;
       snapshot_pending_ = false;
-      send(ack);
+      if (!snapshots_.take(r, snapshot_sequence_)) {  // the disk filled meanwhile
+        answer(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::storage});
+      }
     }
     if (observer_ != nullptr) observer_->on_frame(r);
     grabber_.release(pair);

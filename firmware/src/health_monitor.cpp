@@ -12,6 +12,10 @@ template <typename T>
 T saturate(std::uint64_t value) {
   return static_cast<T>(std::min<std::uint64_t>(value, std::numeric_limits<T>::max()));
 }
+// A total since start as the message carries it: modulo 2^32.
+std::uint32_t wrapped(std::uint64_t total) {
+  return static_cast<std::uint32_t>(total);
+}
 std::uint32_t to_us(hal::Nanoseconds ns) {
   return saturate<std::uint32_t>(static_cast<std::uint64_t>(std::max<hal::Nanoseconds>(ns, 0)) /
                                  1000);
@@ -36,9 +40,13 @@ void HealthMonitor::record(hal::Nanoseconds latency, const StageTimes& stages) {
 std::optional<protocol::Health> HealthMonitor::due(hal::Nanoseconds now, const FaultCounts& f) {
   if (now - window_start_ < window_) return std::nullopt;
   protocol::Health h;
-  h.uptime_ms = saturate<std::uint32_t>(static_cast<std::uint64_t>(now - start_) / 1'000'000);
-  h.frames = saturate<std::uint32_t>(frames_);
-  h.dropped = saturate<std::uint32_t>(f.dropped_pairs);
+  h.uptime_ms = wrapped(static_cast<std::uint64_t>(now - start_) / 1'000'000);
+  h.frames = wrapped(frames_);
+  h.dropped = wrapped(f.triggers.dropped());
+  h.dropped_stale = wrapped(f.triggers.stale);
+  h.dropped_one_side = wrapped(f.triggers.one_side);
+  h.dropped_both_sides = wrapped(f.triggers.both_sides);
+  h.dropped_corrupt = wrapped(f.triggers.corrupt);
   // Frames per second over the window's nominal length (the window is checked when a frame
   // arrives, a little after it ended), or over the real time after a stall.
   const bool stalled = now - window_start_ >= 2 * window_;
@@ -61,13 +69,14 @@ std::optional<protocol::Health> HealthMonitor::due(hal::Nanoseconds now, const F
       h.stage_us[i] = to_us(stage_sums_[i] / window_frames_);
     }
   }
-  h.camera_timeouts = saturate<std::uint16_t>(f.camera_timeouts);
-  h.camera_reopens = saturate<std::uint16_t>(f.camera_reopens);
-  h.trigger_losses = saturate<std::uint16_t>(f.trigger_losses);
-  h.link_reopens = saturate<std::uint16_t>(f.link_reopens);
-  h.unpaired_frames = saturate<std::uint16_t>(f.unpaired_frames);
-  h.bad_commands = saturate<std::uint16_t>(f.bad_commands);
-  h.messages_dropped = saturate<std::uint16_t>(f.messages_dropped);
+  h.camera_timeouts = wrapped(f.camera_timeouts);
+  h.camera_reopens = wrapped(f.camera_reopens);
+  h.trigger_losses = wrapped(f.trigger_losses);
+  h.link_reopens = wrapped(f.link_reopens);
+  h.unpaired_frames = wrapped(f.unpaired_frames);
+  h.bad_commands = wrapped(f.bad_commands);
+  h.messages_dropped = wrapped(f.messages_dropped);
+  h.snapshot_failures = wrapped(f.snapshot_failures);
   // The next window starts where this one should have ended, so windows do not drift; after a
   // long gap (a stall) it starts now.
   window_start_ = stalled ? now : window_start_ + window_;

@@ -12,7 +12,8 @@ namespace epipole::firmware {
 using detail::steady_now;
 
 namespace {
-constexpr hal::Nanoseconds kWriteTimeout = 100'000'000;
+// One write attempt; commands are read between attempts.
+constexpr hal::Nanoseconds kWriteTimeout = 50'000'000;
 constexpr hal::Nanoseconds kIdlePoll = 5'000'000;
 std::uint64_t rejected(const protocol::DecoderStats& s) {
   return s.bad_cobs + s.too_long + s.bad_crc + s.bad_version + s.unknown_type + s.bad_body;
@@ -102,11 +103,24 @@ bool Link::publish_obstacle_distance(const mavlink::ObstacleDistance& message) {
 
 bool Link::next_command(Command& out) {
   const std::lock_guard lock(mutex_);
-  if (commands_size_ == 0) return false;
-  out = commands_[commands_head_];
-  commands_head_ = (commands_head_ + 1) % kMaxCommands;
-  --commands_size_;
-  return true;
+  if (commands_size_ > 0) {
+    out = commands_[commands_head_];
+    commands_head_ = (commands_head_ + 1) % kMaxCommands;
+    --commands_size_;
+    return true;
+  }
+  if (overflowed_size_ > 0) {
+    out = Command{overflowed_[overflowed_head_], protocol::Message{}, false, true};
+    overflowed_head_ = (overflowed_head_ + 1) % kMaxCommands;
+    --overflowed_size_;
+    return true;
+  }
+  return false;
+}
+
+bool Link::alive(hal::Nanoseconds age) const {
+  if (!thread_.joinable()) return true;
+  return steady_now() - last_round_.load() <= age;
 }
 
 LinkCounters Link::counters() const {
@@ -127,17 +141,27 @@ bool Link::write_front() {
   }
   std::size_t written = 0;
   bool ok = true;
+  hal::Nanoseconds progress = steady_now();  // when the port last took a byte
   while (written < length) {
     const std::span<const std::byte> rest(
         reinterpret_cast<const std::byte*>(write_buffer_.data()) + written, length - written);
     const hal::IoResult r = port_->write(rest, kWriteTimeout);
     written += r.bytes;
+    const hal::Nanoseconds now = steady_now();
+    last_round_ = now;
+    if (r.bytes > 0) progress = now;
     if (r.status == hal::IoStatus::ok) continue;
-    // A timeout leaves the frame half written only while the port is stuck; give up on it when
-    // stopping (the drain deadline) or when the port is gone.
-    if (r.status != hal::IoStatus::timeout ||
-        (stopping_ && steady_now() >= drain_deadline_.load())) {
+    if (r.status != hal::IoStatus::timeout) {
+      ok = false;  // the port is gone: the frame with it
+      break;
+    }
+    // The robot is not reading (or the line is slow): its commands are still read, and the
+    // frame is given up once the port took nothing for kStuckWrite, or when stopping.
+    read_commands(0);
+    if (now - progress >= kStuckWrite || (stopping_ && now >= drain_deadline_.load())) {
       ok = false;
+      const std::lock_guard lock(mutex_);
+      ++counters_.stuck_writes;
       break;
     }
   }
@@ -157,6 +181,9 @@ bool Link::write_front() {
 
 void Link::read_commands(hal::Nanoseconds timeout) {
   const hal::IoResult r = port_->read(read_buffer_, timeout);
+  if (r.status == hal::IoStatus::closed || r.status == hal::IoStatus::hung_up) {
+    decoder_.reset();  // whoever is there when it opens again starts afresh
+  }
   if (r.status != hal::IoStatus::ok) {
     // A closed port (waiting for its next reopen attempt) returns at once: do not spin.
     if (r.status != hal::IoStatus::timeout && timeout > 0) {
@@ -171,19 +198,26 @@ void Link::read_commands(hal::Nanoseconds timeout) {
     const std::lock_guard lock(mutex_);
     counters_.rejected_frames += rejected(decoder_.stats()) - rejected_before;
     if (!decoded) continue;
+    ++counters_.commands;
     if (commands_size_ == kMaxCommands) {
-      ++counters_.rejected_frames;  // the frame loop is not taking commands
+      // More than the frame loop takes between two pairs: answered "busy" if there is room.
+      if (overflowed_size_ == kMaxCommands) {
+        ++counters_.rejected_frames;
+      } else {
+        overflowed_[(overflowed_head_ + overflowed_size_) % kMaxCommands] = decoded->sequence;
+        ++overflowed_size_;
+      }
       continue;
     }
-    commands_[(commands_head_ + commands_size_) % kMaxCommands] = {decoded->sequence,
-                                                                   decoded->message};
+    commands_[(commands_head_ + commands_size_) % kMaxCommands] = {
+        decoded->sequence, decoded->message, decoded->replay, false};
     ++commands_size_;
-    ++counters_.commands;
   }
 }
 
 void Link::run() {
   for (;;) {
+    last_round_ = steady_now();
     const bool wrote = write_front();
     if (stopping_) {
       bool empty = false;

@@ -55,6 +55,10 @@ int main(int argc, char** argv) {
       config.sim.scene = scene;
       firmware::validate(config, board_path);
     }
+    if (const std::string problem = firmware::watchdog_problem(config, service.watchdog_interval());
+        !problem.empty()) {
+      throw Error(board_path + ": " + problem);
+    }
     install_signal_handlers();
     for (const std::string& problem : firmware::apply_scheduling(config.threads)) {
       std::fprintf(stderr, "epipole-fw: warning: %s\n", problem.c_str());

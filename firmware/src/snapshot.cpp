@@ -1,6 +1,7 @@
 #include "epipole/firmware/snapshot.hpp"
 
 #include <fcntl.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -57,12 +58,19 @@ void copy(GrayView from, GrayImage& to) {
 
 }  // namespace
 
-SnapshotWriter::SnapshotWriter(std::filesystem::path directory, int width, int height)
-    : directory_(directory.string()) {
+SnapshotWriter::SnapshotWriter(std::filesystem::path directory, int width, int height,
+                               SnapshotLimits limits)
+    : directory_(directory.string()), limits_(limits) {
   if (directory_.empty()) return;
   std::error_code ec;
   std::filesystem::create_directories(directory, ec);
   require(!ec, "snapshot directory ", directory_, ": ", ec.message());
+  // Four 8-bit images, one 16-bit, and their headers.
+  bytes_each_ = 6 * static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) + 5 * 64;
+  for (const auto& entry : std::filesystem::directory_iterator(directory, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.starts_with("snapshot-") && name.ends_with("-left-raw.pgm")) ++existing_;
+  }
   for (GrayImage* image : {&left_raw_, &right_raw_, &left_, &right_}) {
     *image = GrayImage(width, height);
   }
@@ -79,12 +87,23 @@ SnapshotWriter::~SnapshotWriter() {
   if (thread_.joinable()) thread_.join();
 }
 
-bool SnapshotWriter::take(const FrameResult& r) {
-  if (!enabled()) return false;
+SnapshotRefusal SnapshotWriter::can_take() const {
+  if (!enabled()) return SnapshotRefusal::disabled;
   {
     const std::lock_guard lock(mutex_);
-    if (pending_) return false;
+    if (pending_) return SnapshotRefusal::busy;
   }
+  if (count() >= limits_.max_count) return SnapshotRefusal::limit;
+  struct statvfs fs {};
+  if (::statvfs(directory_.c_str(), &fs) == 0) {
+    const std::uint64_t free = static_cast<std::uint64_t>(fs.f_bavail) * fs.f_frsize;
+    if (free < bytes_each_ + limits_.min_free_bytes) return SnapshotRefusal::no_space;
+  }
+  return SnapshotRefusal::none;
+}
+
+bool SnapshotWriter::take(const FrameResult& r, std::uint16_t sequence) {
+  if (can_take() != SnapshotRefusal::none) return false;
   copy(r.left_raw, left_raw_);
   copy(r.right_raw, right_raw_);
   copy(r.left, left_);
@@ -103,9 +122,17 @@ bool SnapshotWriter::take(const FrameResult& r) {
   {
     const std::lock_guard lock(mutex_);
     pending_ = true;
+    sequence_ = sequence;
   }
   wake_.notify_all();
   return true;
+}
+
+std::optional<SnapshotDone> SnapshotWriter::finished() {
+  const std::lock_guard lock(mutex_);
+  std::optional<SnapshotDone> done = done_;
+  done_.reset();
+  return done;
 }
 
 void SnapshotWriter::flush() {
@@ -139,6 +166,7 @@ void SnapshotWriter::run() {
     const bool ok = write_all();
     (ok ? written_ : failures_)++;
     lock.lock();
+    done_ = SnapshotDone{sequence_, ok};
     pending_ = false;
     wake_.notify_all();
   }

@@ -129,6 +129,7 @@ bool RecoveringSerialPort::ensure_open() {
     return false;
   }
   ++counters_.reopens;
+  reopens_.store(counters_.reopens, std::memory_order_relaxed);
   backoff_.succeeded();
   return true;
 }

@@ -260,7 +260,7 @@ AcquireResult SimCamera::acquire(Nanoseconds timeout) {
     queue_size_ = 0;
     return {AcquireStatus::device_lost, {}};
   }
-  if (p.damaged) return {AcquireStatus::corrupt, {}};  // the driver requeued the buffer
+  if (p.damaged) return corrupt_frame(p.reported_sequence, p.timestamp);  // buffer requeued
   const auto free = std::find(held_.begin(), held_.end(), 0);
   if (free == held_.end()) {
     ++overruns_;  // every buffer is lent out: the frame is lost

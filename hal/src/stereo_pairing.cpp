@@ -49,6 +49,10 @@ bool StereoPairer::on_trigger(const Frame& left, const Frame& right) const {
   return fits(left.timestamp) && fits(right.timestamp);
 }
 
+void StereoPairer::note_seen(Side side, std::uint32_t number) {
+  if (config_.match_sequences || side == Side::left) ledger_.seen(side, number);
+}
+
 void StereoPairer::drop_front(Side side, std::uint64_t& counter) {
   Queue& q = queue(side);
   camera(side).release(q.front());
@@ -74,6 +78,7 @@ bool StereoPairer::push(Side side, const Frame& camera_frame) {
   q.has_last = true;
   q.last = frame.sequence;
   q.last_time = frame.timestamp;
+  if (!config_.match_sequences || q.numbered) note_seen(side, frame.sequence);
   if (q.size == kCapacity)
     drop_front(side, left ? counters_.unpaired_left : counters_.unpaired_right);
   q.frames[(q.head + q.size) % kCapacity] = frame;
@@ -105,6 +110,7 @@ bool StereoPairer::fronts_match_by_time() {
     const Frame& l = left_q_.front();
     const Frame& r = right_q_.front();
     if (l.clock != r.clock) {
+      ledger_.damaged(l.sequence);
       drop_front(Side::left, counters_.mismatched_left);
       drop_front(Side::right, counters_.mismatched_right);
       continue;
@@ -135,7 +141,11 @@ void StereoPairer::number(Side side, std::uint32_t offset) {
   Queue& q = queue(side);
   q.numbered = true;
   q.offset = offset;
-  for (std::size_t i = 0; i < q.size; ++i) q.frames[(q.head + i) % kCapacity].sequence += offset;
+  for (std::size_t i = 0; i < q.size; ++i) {
+    Frame& f = q.frames[(q.head + i) % kCapacity];
+    f.sequence += offset;
+    note_seen(side, f.sequence);
+  }
   q.last += offset;
   ++(side == Side::left ? counters_.renumbered_left : counters_.renumbered_right);
 }
@@ -170,6 +180,7 @@ bool StereoPairer::renumber() {
     // Both reopened, no record: the pairs' numbers go on after the last one.
     const std::uint32_t next = has_pair_number_ ? last_pair_number_ + 1 : 0;
     numbers_are_the_triggers_ = false;
+    ledger_.restart(next);
     number(Side::left, next - l);
     number(Side::right, next - r);
   } else if (!left_q_.numbered) {
@@ -198,11 +209,13 @@ void StereoPairer::match() {
       const Nanoseconds dt =
           l.timestamp > r.timestamp ? l.timestamp - r.timestamp : r.timestamp - l.timestamp;
       if (dt > config_.tolerance || l.clock != r.clock) {
+        ledger_.damaged(l.sequence);
         drop_front(Side::left, counters_.mismatched_left);
         drop_front(Side::right, counters_.mismatched_right);
         continue;
       }
       if (!on_trigger(l, r)) {
+        ledger_.damaged(l.sequence);
         drop_front(Side::left, counters_.off_trigger_left);
         drop_front(Side::right, counters_.off_trigger_right);
         continue;
@@ -234,8 +247,14 @@ void StereoPairer::reset(Side side) {
   if (config_.match_sequences) q.numbered = false;
 }
 
-void StereoPairer::count_corrupt(Side side) {
+void StereoPairer::count_corrupt(Side side, std::uint32_t camera_sequence) {
   ++(side == Side::left ? counters_.corrupt_left : counters_.corrupt_right);
+  const Queue& q = queue(side);
+  if (!config_.match_sequences) {
+    if (side == Side::left) ledger_.damaged(camera_sequence);
+  } else if (q.numbered) {
+    ledger_.damaged(camera_sequence + q.offset);
+  }
 }
 
 // ----------------------------------------------------------------------------------------------
@@ -254,7 +273,7 @@ AcquireStatus StereoGrabber::acquire(Side side, Nanoseconds timeout) {
   } else if (r.status == AcquireStatus::device_lost) {
     pairer_.reset(side);
   } else if (r.status == AcquireStatus::corrupt) {
-    pairer_.count_corrupt(side);
+    pairer_.count_corrupt(side, r.frame.sequence);
   }
   return r.status;
 }

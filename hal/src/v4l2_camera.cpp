@@ -421,9 +421,11 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
   const Buffer& mapped = buffers_[buf.index];
   const std::size_t bytes = std::min(used == 0 ? mapped.length : used, mapped.length);
   const std::size_t need = plane_bytes(format_, config_.width, config_.height, bytes_per_line_);
+  const Nanoseconds timestamp = static_cast<Nanoseconds>(buf.timestamp.tv_sec) * 1'000'000'000 +
+                                static_cast<Nanoseconds>(buf.timestamp.tv_usec) * 1'000;
   if (buffer_status(buf.flags, used, mapped.length, need) == AcquireStatus::corrupt) {
     (void)xioctl(fd_, VIDIOC_QBUF, &buf);  // a damaged frame: give it back at once
-    return {AcquireStatus::corrupt, {}};
+    return corrupt_frame(buf.sequence, timestamp);
   }
   MutableGrayView scratch;
   if (!scratch_.empty()) scratch = scratch_[buf.index].view();
@@ -431,8 +433,7 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
   frame.gray = gray_view(format_, static_cast<const std::uint8_t*>(mapped.data), bytes,
                          config_.width, config_.height, bytes_per_line_, scratch);
   frame.sequence = buf.sequence;
-  frame.timestamp = static_cast<Nanoseconds>(buf.timestamp.tv_sec) * 1'000'000'000 +
-                    static_cast<Nanoseconds>(buf.timestamp.tv_usec) * 1'000;
+  frame.timestamp = timestamp;
   frame.clock = timestamp_clock(buf.flags);
   frame.buffer = static_cast<int>(buf.index);
   frame.generation = generation_;

@@ -38,7 +38,9 @@ TEST(BoardConfig, ReadsEveryKey) {
       "threads: {count: 3, affinity: [0, 1], realtime_priority: 10, lock_memory: true}\n"
       "detector: {cascade: face.bin, scale_factor: 1.2, min_neighbors: 4, min_size: 40}\n"
       "memory_budget_mb: 8\n"
-      "snapshot_directory: snaps\n");
+      "snapshot_directory: snaps\n"
+      "snapshot_limit: 12\n"
+      "snapshot_min_free_mb: 500\n");
   EXPECT_EQ(c.name, "test-sim");
   EXPECT_EQ(c.width(), 160);
   EXPECT_EQ(c.height(), 96);
@@ -66,6 +68,8 @@ TEST(BoardConfig, ReadsEveryKey) {
   EXPECT_EQ(c.detector.min_neighbors, 4);
   EXPECT_EQ(*c.memory_budget_bytes, 8u * 1024 * 1024);
   EXPECT_EQ(c.snapshot_directory, rig.dir.path() / "snaps");
+  EXPECT_EQ(c.snapshot_limit, 12);
+  EXPECT_EQ(c.snapshot_min_free_mb, 500.0);
   ASSERT_NE(c.sim_scene(), nullptr);
   EXPECT_EQ(c.sim_scene()->synthesize_disparity, 8);
 }
@@ -107,6 +111,13 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
        "stereo.max_disparity: 256 is not smaller than the width 160"},
       {"tolerance", "", "pairing: {tolerance_us: 20000}\n",
        "pairing.tolerance_us: 20000 us is not below half the trigger period"},
+      {"a rate the cameras' timeout cannot follow", "rate_hz: 30", "rate_hz: 5",
+       "trigger.rate_hz: a frame every 200 ms does not come within the cameras' timeout of 100 "
+       "ms"},
+      {"an exposure longer than the period", "trigger: external",
+       "trigger: external, exposure_us: 40000",
+       "trigger.rate_hz: an exposure of 40 ms does not fit in the frame period of 33.3333 ms"},
+      {"snapshot limit", "", "snapshot_limit: 0\n", "snapshot_limit: 0 is outside 1..1000000"},
       {"termios without device", "serial: {backend: none}", "serial: {backend: termios}",
        "serial.device: a termios serial port needs a device"},
       {"bad baud", "serial: {backend: none}",

@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -17,6 +19,7 @@
 #include "error_of.hpp"
 #include "sim_rig.hpp"
 #include "test_paths.hpp"
+#include "trigger_accounting.hpp"
 
 namespace epipole::firmware {
 namespace {
@@ -254,11 +257,10 @@ TEST(FrameLoop, RunsWithoutDetectionUntilTheCompiledCascadeIsMade) {
   for (const auto& h : health) EXPECT_EQ(h.flags, protocol::kHealthNoCascade);
 }
 
-TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
-  // A trigger far faster than the host can process: the loop takes the freshest pair and
-  // counts the ones it skipped; latency stays bounded instead of growing. At 320x240 a pair
-  // takes several of the 1 kHz trigger's periods (at 160x96 some runs took less than one).
-  test::SimRig rig(320, 240, 8, "");
+// A trigger far faster than the host can process, the compute time charged to the virtual
+// clock. At 320x240 a pair takes several of the 1 kHz trigger's periods (at 160x96 some runs
+// took less than one): make `rig` that size.
+BoardConfig outrun_by_the_trigger(const test::SimRig& rig) {
   BoardConfig config = rig.parse("");
   config.trigger.line.rate_hz = 1000;
   config.trigger.line.pulse_width = 100'000;
@@ -266,13 +268,23 @@ TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
   config.pairing.tolerance = 200'000;
   config.pairing.edge_tolerance = 200'000;
   config.sim.charge_compute = true;
-  Firmware fw(config, rig.images());
+  return config;
+}
+
+TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
+  // The loop takes the freshest pair and counts the ones it skipped; latency stays bounded
+  // instead of growing.
+  test::SimRig rig(320, 240, 8, "");
+  Firmware fw(outrun_by_the_trigger(rig), rig.images());
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
   const RunSummary s = fw.run(40, stop);
   EXPECT_EQ(s.frames, 40u);
-  EXPECT_GT(s.stale + s.pairing.unpaired_left + s.pairing.unpaired_right, 0u);
+  // Skipped as stale, or (the slower the build, the likelier) overrun in the cameras' queues.
+  const hal::TriggerAccount& t = s.faults.triggers;
+  EXPECT_GT(t.stale + t.both_sides + t.one_side, 0u);
+  EXPECT_EQ(t.published + t.dropped(), recorder.frames.back().frame + 1u);
   for (std::size_t i = 1; i < recorder.frames.size(); ++i) {
     EXPECT_GT(recorder.frames[i].frame, recorder.frames[i - 1].frame);
   }
@@ -293,7 +305,7 @@ TEST(FrameLoop, DroppedFramesAreCountedAndNeverMispaired) {
   EXPECT_EQ(s.frames, 150u);
   const hal::PairingCounters& p = s.pairing;
   EXPECT_GT(p.unpaired_left + p.unpaired_right, 5u) << "10 % of frames dropped on each side";
-  EXPECT_GT(s.faults.dropped_pairs, 5u);
+  EXPECT_GT(s.faults.triggers.dropped(), 5u);
   for (const auto& f : recorder.frames) {
     EXPECT_NEAR(f.centre_disparity, rig.disparity * 16, 8) << "frame " << f.frame;
   }
@@ -301,6 +313,87 @@ TEST(FrameLoop, DroppedFramesAreCountedAndNeverMispaired) {
   ASSERT_FALSE(health.empty());
   EXPECT_GT(health.back().unpaired_frames, 0);
   EXPECT_GT(health.back().dropped, 0u);
+}
+
+// Every trigger accounted for at each health message the loop sent.
+int expect_every_trigger_accounted(const Recorder& recorder) {
+  return test::expect_triggers_accounted(
+      recorder.messages, [](const protocol::Message& m) -> const auto& { return m; });
+}
+
+TEST(FrameLoop, EachLostTriggerIsCountedOnceUnderItsCause) {
+  test::SimRig rig;
+  Firmware fw(rig.config, rig.images());
+  const auto inject = [&](hal::Side side, hal::SimFaultKind kind, std::uint32_t sequence) {
+    hal::SimFault f;
+    f.kind = kind;
+    f.sequence = sequence;
+    fw.board().sim_camera(side)->inject(f);
+  };
+  inject(hal::Side::left, hal::SimFaultKind::drop, 10);   // one side
+  inject(hal::Side::right, hal::SimFaultKind::drop, 11);  // the other side, the next trigger
+  inject(hal::Side::left, hal::SimFaultKind::drop, 20);   // both sides
+  inject(hal::Side::right, hal::SimFaultKind::drop, 20);
+  inject(hal::Side::left, hal::SimFaultKind::damaged, 30);  // the driver says damaged
+  inject(hal::Side::right, hal::SimFaultKind::drop, 40);    // a damaged frame and a lost one
+  inject(hal::Side::left, hal::SimFaultKind::damaged, 40);
+  Recorder recorder;
+  fw.frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = fw.run(60, stop);
+  ASSERT_EQ(s.frames, 60u);
+  const hal::TriggerAccount& t = s.faults.triggers;
+  EXPECT_EQ(t.published, 60u);
+  EXPECT_EQ(t.one_side, 2u) << "10 and 11: counted once each, whichever side lost them";
+  EXPECT_EQ(t.both_sides, 1u) << "20";
+  EXPECT_EQ(t.corrupt, 2u) << "30, and 40 (damaged on one side, lost on the other)";
+  EXPECT_EQ(t.stale, 0u) << "the loop keeps up at the board's rate";
+  EXPECT_EQ(t.published + t.dropped(), recorder.frames.back().frame + 1u);
+  EXPECT_EQ(recorder.frames.back().frame, 64u);
+  EXPECT_GT(expect_every_trigger_accounted(recorder), 0);
+}
+
+TEST(FrameLoop, EveryTriggerIsAccountedForWithRandomDropsOnBothSides) {
+  test::SimRig rig;
+  BoardConfig config = rig.config;
+  config.sim.drop_rate = 0.1;  // on each side, independently
+  config.sim.seed = 11;
+  Firmware fw(config, rig.images());
+  Recorder recorder;
+  fw.frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = fw.run(400, stop);
+  ASSERT_EQ(s.frames, 400u);
+  EXPECT_GE(expect_every_trigger_accounted(recorder), 10);
+  const hal::TriggerAccount& t = s.faults.triggers;
+  EXPECT_EQ(t.published + t.dropped(), recorder.frames.back().frame + 1u);
+  // About 18 % of the triggers lose one side and 1 % both: of some 490 triggers.
+  EXPECT_GT(t.one_side, 50u);
+  EXPECT_LT(t.one_side, 130u);
+  EXPECT_GE(t.both_sides, 1u);
+  EXPECT_EQ(t.corrupt, 0u);
+  // One unpaired frame per one-sided loss.
+  EXPECT_EQ(s.pairing.unpaired_left + s.pairing.unpaired_right, t.one_side);
+}
+
+TEST(FrameLoop, EveryTriggerIsAccountedForWhenTheTriggerOutrunsTheLoop) {
+  // With drops: pairs go stale, the simulated cameras overrun (both sides lose the frame), and
+  // one side drops at random.
+  test::SimRig rig(320, 240, 8, "");
+  BoardConfig config = outrun_by_the_trigger(rig);
+  config.sim.drop_rate = 0.1;
+  config.sim.seed = 4;
+  Firmware fw(config, rig.images());
+  Recorder recorder;
+  fw.frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = fw.run(300, stop);
+  ASSERT_EQ(s.frames, 300u);
+  expect_every_trigger_accounted(recorder);
+  const hal::TriggerAccount& t = s.faults.triggers;
+  EXPECT_EQ(t.published + t.dropped(), recorder.frames.back().frame + 1u);
+  EXPECT_GT(t.stale + t.both_sides, 0u) << "the loop could not follow 1 kHz";
+  EXPECT_GT(t.one_side, 0u);
 }
 
 TEST(FrameLoop, RecoversFromALostCameraWithoutRestarting) {
@@ -352,12 +445,13 @@ struct LinkedRig {
     robot = std::make_unique<hal::TermiosSerialPort>(
         hal::SerialConfig{fw->board().serial_peer(), 115200});
   }
-  // The acknowledgements the robot received, in command order.
-  std::vector<protocol::CommandAck> acks() {
+  // The acknowledgements the robot received, in command order (or as they came).
+  std::vector<protocol::CommandAck> acks(bool sorted = true) {
     std::vector<protocol::CommandAck> out;
     for (const auto& m : receive()) {
       if (const auto* a = std::get_if<protocol::CommandAck>(&m.message)) out.push_back(*a);
     }
+    if (!sorted) return out;
     std::sort(out.begin(), out.end(),
               [](const auto& a, const auto& b) { return a.command_sequence < b.command_sequence; });
     return out;
@@ -420,8 +514,9 @@ TEST(FrameLoop, AppliesTheRobotsCommandsAndAcknowledgesThem) {
   }
   ASSERT_EQ(acks.size(), 3u);
   EXPECT_EQ(acks[0].status, protocol::AckStatus::ok);
-  EXPECT_EQ(acks[1].status, protocol::AckStatus::ok) << "the snapshot was taken";
+  EXPECT_EQ(acks[1].status, protocol::AckStatus::ok) << "the snapshot was written";
   EXPECT_EQ(acks[2].status, protocol::AckStatus::rejected);
+  EXPECT_EQ(acks[2].reason, protocol::AckReason::out_of_range);
   // The snapshot's files.
   std::size_t files = 0;
   for (const auto& e : std::filesystem::directory_iterator(linked.rig.dir.path() / "snapshots")) {
@@ -456,6 +551,12 @@ std::vector<protocol::AckStatus> statuses(const std::vector<protocol::CommandAck
   return out;
 }
 
+std::vector<protocol::AckReason> reasons(const std::vector<protocol::CommandAck>& acks) {
+  std::vector<protocol::AckReason> out;
+  for (const auto& a : acks) out.push_back(a.reason);
+  return out;
+}
+
 TEST(FrameLoop, SetTriggerRateChangesThePeriodOfTheTriggers) {
   using protocol::AckStatus;
   LinkedRig linked;
@@ -467,15 +568,21 @@ TEST(FrameLoop, SetTriggerRateChangesThePeriodOfTheTriggers) {
           {protocol::SetTriggerRate{15'000},     // 15 Hz
            protocol::SetTriggerRate{0},          // impossible
            protocol::SetTriggerRate{2'000'000},  // 2 kHz: impossible
-           protocol::SetTriggerRate{400'000}},   // 400 Hz: 2.5 ms < twice the 2 ms tolerance
+           protocol::SetTriggerRate{400'000},    // 400 Hz: 2.5 ms < twice the 2 ms tolerance
+           protocol::SetTriggerRate{4'000}},     // 4 Hz: a frame every 250 ms, timeout 100 ms
           200);
   linked.fw->frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
   const RunSummary s = linked.fw->run(150, stop);
-  EXPECT_EQ(statuses(linked.acks()),
+  using protocol::AckReason;
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  EXPECT_EQ(statuses(acks),
             (std::vector<AckStatus>{AckStatus::ok, AckStatus::rejected, AckStatus::rejected,
-                                    AckStatus::rejected}));
-  EXPECT_EQ(s.faults.bad_commands, 3u);
+                                    AckStatus::rejected, AckStatus::rejected}));
+  EXPECT_EQ(reasons(acks), (std::vector<AckReason>{AckReason::none, AckReason::out_of_range,
+                                                   AckReason::out_of_range, AckReason::timing,
+                                                   AckReason::timing}));
+  EXPECT_EQ(s.faults.bad_commands, 4u);
   EXPECT_EQ(linked.fw->board().trigger()->config().rate_hz, 15.0);
   EXPECT_NO_THROW(hal::with_rate(linked.fw->board().trigger()->config(), 400.0))
       << "the line could run at 400 Hz: the pairing tolerance is what refused it";
@@ -501,6 +608,82 @@ TEST(FrameLoop, SetTriggerRateChangesThePeriodOfTheTriggers) {
   EXPECT_EQ(health[0].fps_centi, 3000);
   EXPECT_NEAR(health.back().fps_centi, 1500, 100) << "health follows the new rate";
   EXPECT_EQ(health.back().latency_p50_us, 7000u) << "the cameras' own delay, as before";
+}
+
+TEST(FrameLoop, ARobotThatRestartsItsSequenceIsAnsweredAndARepeatIsNotAppliedTwice) {
+  using protocol::AckStatus;
+  LinkedRig linked;
+  Recorder recorder;
+  const auto stages = [](StageMask mask) { return protocol::SetStages{mask}; };
+  const StageMask some = stage_bit(Stage::rectify) | stage_bit(Stage::corners);
+  send_at(recorder, linked, 5, {stages(some), stages(some)}, 300);
+  send_at(recorder, linked, 15, {stages(some)}, 301);  // 301 again: its ack was lost, say
+  // The robot rebooted: its numbers start again at 0 (before, 0..299 were taken for replays).
+  send_at(recorder, linked, 25, {stages(some), stages(0x8000)}, 0);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = linked.fw->run(45, stop);
+  const std::vector<protocol::CommandAck> acks = linked.acks(false);
+  std::vector<std::uint16_t> sequences;
+  for (const auto& a : acks) sequences.push_back(a.command_sequence);
+  EXPECT_EQ(sequences, (std::vector<std::uint16_t>{300, 301, 301, 0, 1}));
+  EXPECT_EQ(statuses(acks),
+            (std::vector<AckStatus>{AckStatus::ok, AckStatus::ok, AckStatus::duplicate,
+                                    AckStatus::ok, AckStatus::rejected}));
+  EXPECT_EQ(s.commands, 5u);
+  EXPECT_EQ(s.faults.bad_commands, 2u) << "the repeat and the unknown stage";
+}
+
+TEST(FrameLoop, SnapshotsAreAnsweredOnceWrittenAndStopAtTheirLimit) {
+  using protocol::AckStatus;
+  LinkedRig linked("snapshot_directory: snapshots\nsnapshot_limit: 1\n");
+  Recorder recorder;
+  recorder.also = [](const FrameResult&) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  };
+  send_at(recorder, linked, 5, {protocol::Snapshot{}, protocol::Snapshot{}}, 10);
+  send_at(recorder, linked, 40, {protocol::Snapshot{}}, 12);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  linked.fw->run(60, stop);
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  ASSERT_EQ(acks.size(), 3u);
+  EXPECT_EQ(acks[0].status, AckStatus::ok);
+  // The second came with the first: it is refused as busy (the first is still pending), or, if
+  // the link thread read it only once the first was on disk, for the limit.
+  EXPECT_EQ(acks[1].status, AckStatus::rejected);
+  EXPECT_TRUE(acks[1].reason == protocol::AckReason::busy ||
+              acks[1].reason == protocol::AckReason::storage)
+      << static_cast<int>(acks[1].reason);
+  EXPECT_EQ(acks[2].status, AckStatus::rejected);
+  EXPECT_EQ(acks[2].reason, protocol::AckReason::storage) << "snapshot_limit: 1";
+}
+
+TEST(FrameLoop, ASnapshotThatCannotBeWrittenIsRejectedAndCountedInHealth) {
+  using protocol::AckStatus;
+  LinkedRig linked("snapshot_directory: snapshots\n");
+  // The folder is replaced by a file once the firmware made it: every write fails, as root too.
+  const std::filesystem::path folder = linked.rig.dir.path() / "snapshots";
+  std::filesystem::remove_all(folder);
+  std::FILE* file = std::fopen(folder.c_str(), "w");
+  ASSERT_NE(file, nullptr);
+  std::fclose(file);
+  Recorder recorder;
+  recorder.also = [](const FrameResult&) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  };
+  send_at(recorder, linked, 5, {protocol::Snapshot{}}, 7);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = linked.fw->run(150, stop);
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  ASSERT_EQ(acks.size(), 1u);
+  EXPECT_EQ(acks[0].status, AckStatus::rejected);
+  EXPECT_EQ(acks[0].reason, protocol::AckReason::failed);
+  EXPECT_EQ(s.faults.snapshot_failures, 1u);
+  const auto health = recorder.all<protocol::Health>();
+  ASSERT_FALSE(health.empty());
+  EXPECT_EQ(health.back().snapshot_failures, 1u);
 }
 
 TEST(FrameLoop, SetExposureReachesBothCameras) {
@@ -545,9 +728,13 @@ TEST(FrameLoop, SetExposureReachesBothCameras) {
   linked.fw->frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
   linked.fw->run(80, stop);
-  EXPECT_EQ(statuses(linked.acks()),
-            (std::vector<AckStatus>{AckStatus::ok, AckStatus::ok, AckStatus::rejected,
-                                    AckStatus::rejected}));
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  EXPECT_EQ(statuses(acks), (std::vector<AckStatus>{AckStatus::ok, AckStatus::ok,
+                                                    AckStatus::rejected, AckStatus::rejected}));
+  ASSERT_EQ(acks.size(), 4u);
+  EXPECT_EQ(acks[2].reason, protocol::AckReason::timing)
+      << "20 s does not fit in the trigger's period";
+  EXPECT_EQ(acks[3].reason, protocol::AckReason::out_of_range);
   for (const hal::Side side : {hal::Side::left, hal::Side::right}) {
     const hal::CameraConfig& c = linked.fw->board().sim_camera(side)->config();
     EXPECT_EQ(c.exposure, 6'000'000);

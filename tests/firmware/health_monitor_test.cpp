@@ -21,8 +21,13 @@ TEST(HealthMonitor, ReportsRatesPercentilesAndStageMeansOncePerWindow) {
   EXPECT_FALSE(monitor.due(999 * kMs, {})) << "the window is not over yet";
   FaultCounts faults;
   faults.camera_timeouts = 3;
-  faults.unpaired_frames = 70'000;  // saturates in the message
+  faults.unpaired_frames = (std::uint64_t{1} << 32) + 70'000;  // wraps in the message
   faults.messages_dropped = 5;
+  faults.snapshot_failures = 2;
+  faults.triggers.stale = 1;
+  faults.triggers.one_side = 2;
+  faults.triggers.both_sides = 3;
+  faults.triggers.corrupt = 4;
   const auto h = monitor.due(1000 * kMs, faults);
   ASSERT_TRUE(h);
   EXPECT_EQ(h->frames, 100u);
@@ -33,9 +38,15 @@ TEST(HealthMonitor, ReportsRatesPercentilesAndStageMeansOncePerWindow) {
   EXPECT_EQ(h->stage_us[static_cast<std::size_t>(protocol::Stage::rectify)], 2000u);
   EXPECT_EQ(h->stage_us[static_cast<std::size_t>(protocol::Stage::total)], 10'000u);
   EXPECT_EQ(h->stage_us[static_cast<std::size_t>(protocol::Stage::detect)], 0u);
-  EXPECT_EQ(h->camera_timeouts, 3);
-  EXPECT_EQ(h->unpaired_frames, 0xFFFF);
-  EXPECT_EQ(h->messages_dropped, 5);
+  EXPECT_EQ(h->camera_timeouts, 3u);
+  EXPECT_EQ(h->unpaired_frames, 70'000u) << "modulo 2^32: it goes on, never stops";
+  EXPECT_EQ(h->messages_dropped, 5u);
+  EXPECT_EQ(h->snapshot_failures, 2u);
+  EXPECT_EQ(h->dropped, 10u);
+  EXPECT_EQ(h->dropped_stale, 1u);
+  EXPECT_EQ(h->dropped_one_side, 2u);
+  EXPECT_EQ(h->dropped_both_sides, 3u);
+  EXPECT_EQ(h->dropped_corrupt, 4u);
 
   // The next window: one frame, then silence; a window without frames still reports.
   monitor.record(7 * kMs, stages);

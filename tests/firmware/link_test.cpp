@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -120,6 +123,111 @@ TEST(Link, CommandsFromTheRobotReachTheFrameLoop) {
   EXPECT_TRUE(std::holds_alternative<protocol::Snapshot>(commands[1].message));
   EXPECT_EQ(link.counters().commands, 2u);
   EXPECT_GE(link.counters().rejected_frames, 1u);
+}
+
+// A port at whose far end the robot stopped reading: every write times out (after a little of
+// its timeout, so that the test runs quickly) having taken nothing; reads return what the test
+// queued, as the robot goes on sending.
+class StuckPort final : public hal::SerialPort {
+ public:
+  hal::IoResult read(std::span<std::byte> buffer, hal::Nanoseconds timeout) override {
+    {
+      const std::lock_guard lock(mutex_);
+      if (!incoming_.empty()) {
+        const std::size_t n = std::min(buffer.size(), incoming_.size());
+        std::copy_n(incoming_.begin(), n, buffer.begin());
+        incoming_.erase(incoming_.begin(), incoming_.begin() + static_cast<std::ptrdiff_t>(n));
+        return {hal::IoStatus::ok, n};
+      }
+    }
+    std::this_thread::sleep_for(
+        std::chrono::nanoseconds(std::min<hal::Nanoseconds>(timeout, 1'000'000)));
+    return {hal::IoStatus::timeout, 0};
+  }
+  hal::IoResult write(std::span<const std::byte>, hal::Nanoseconds timeout) override {
+    std::this_thread::sleep_for(std::chrono::nanoseconds(timeout / 10));
+    ++writes_;
+    return {hal::IoStatus::timeout, 0};
+  }
+  bool is_open() const override { return true; }
+  void reopen() override {}
+  void close() override {}
+
+  void receive(const protocol::Message& m, std::uint16_t sequence) {
+    std::array<std::uint8_t, protocol::kMaxFrameSize> frame{};
+    const std::size_t n = protocol::encode_frame(m, sequence, frame);
+    const std::lock_guard lock(mutex_);
+    for (std::size_t i = 0; i < n; ++i) incoming_.push_back(static_cast<std::byte>(frame[i]));
+  }
+  int writes() const { return writes_.load(); }
+
+ private:
+  std::mutex mutex_;
+  std::vector<std::byte> incoming_;
+  std::atomic<int> writes_{0};
+};
+
+std::vector<Command> commands_within(Link& link, std::size_t count, hal::Nanoseconds limit) {
+  std::vector<Command> out;
+  const auto end = std::chrono::steady_clock::now() + std::chrono::nanoseconds(limit);
+  while (out.size() < count && std::chrono::steady_clock::now() < end) {
+    Command c;
+    while (link.next_command(c)) out.push_back(c);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return out;
+}
+
+TEST(Link, ARobotThatStopsReadingDoesNotWedgeTheLink) {
+  StuckPort port;
+  hal::VirtualClock clock;
+  Link link(&port, clock, {});
+  link.start();
+  for (std::uint32_t i = 0; i < 4; ++i) EXPECT_TRUE(link.publish(obstacles(i)));
+  // The robot still sends commands while it reads nothing: they come through within a second.
+  port.receive(protocol::SetStages{0x03}, 1);
+  const std::vector<Command> first = commands_within(link, 1, 1'000'000'000);
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(first[0].sequence, 1);
+  EXPECT_TRUE(link.alive(2 * Link::kStuckWrite)) << "the thread goes round while it writes";
+  // Each frame is given up after Link::kStuckWrite without progress, and counted.
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (link.counters().stuck_writes < 2 && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  const LinkCounters c = link.counters();
+  EXPECT_GE(c.stuck_writes, 2u);
+  EXPECT_EQ(c.messages_dropped, c.stuck_writes);
+  EXPECT_EQ(c.messages_sent, 0u);
+  port.receive(protocol::Snapshot{}, 2);
+  EXPECT_EQ(commands_within(link, 1, 1'000'000'000).size(), 1u) << "still reading commands";
+  const auto before_stop = std::chrono::steady_clock::now();
+  link.stop(0);
+  EXPECT_LT(std::chrono::steady_clock::now() - before_stop, std::chrono::seconds(2))
+      << "stop() is not held up by the stuck port";
+  EXPECT_GT(port.writes(), 2);
+}
+
+TEST(Link, CommandsBeyondTheQueueAreKeptToBeAnsweredBusy) {
+  StuckPort port;
+  hal::VirtualClock clock;
+  Link link(&port, clock, {});
+  link.start();
+  for (std::uint16_t i = 0; i < 20; ++i) port.receive(protocol::SetStages{0x03}, i);
+  // Nothing takes commands until all 20 were read.
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  while (link.counters().commands < 20 && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  const std::vector<Command> got = commands_within(link, 20, 1'000'000'000);
+  link.stop(0);
+  ASSERT_EQ(got.size(), 20u);
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(got[i].sequence, i);
+    EXPECT_EQ(got[i].overflow, i >= 16) << i;
+    EXPECT_FALSE(got[i].replay);
+  }
+  EXPECT_EQ(link.counters().rejected_frames, 0u) << "every one answered";
 }
 
 TEST(Link, StopFinishesWhatWasQueued) {

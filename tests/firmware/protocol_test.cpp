@@ -75,9 +75,19 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
   health.latency_p50_us = rng();
   health.latency_p99_us = rng();
   for (auto& s : health.stage_us) s = rng();
-  health.camera_timeouts = u16();
-  health.bad_commands = u16();
-  health.messages_dropped = u16();
+  health.dropped_stale = rng();
+  health.dropped_one_side = rng();
+  health.dropped_both_sides = rng();
+  health.dropped_corrupt = rng();
+  health.camera_timeouts = rng();
+  health.camera_reopens = rng();
+  health.trigger_losses = rng();
+  health.link_reopens = rng();
+  health.unpaired_frames = rng();
+  health.bad_commands = rng();
+  health.messages_dropped = rng();
+  health.snapshot_failures = rng();
+  health.flags = u16();
   FrameSummary summary{rng(), (std::uint64_t{rng()} << 32) | rng(), rng(), u16(), u16(), 999, 3,
                        u16()};
   Detections detections;
@@ -102,7 +112,7 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
           obstacles,
           points,
           CalibrationHealth{12, 34, 56},
-          CommandAck{4242, AckStatus::rejected},
+          CommandAck{4242, AckStatus::rejected, AckReason::timing},
           SetTriggerRate{30'000},
           SetExposure{5000, 120},
           SetStages{0x3F},
@@ -214,6 +224,59 @@ TEST(Protocol, ReplaysAreDroppedAndLossesCounted) {
   EXPECT_EQ(decoder.stats().resyncs, 1u);
 }
 
+TEST(Protocol, ASenderThatRestartsFromZeroIsHeardAtOnce) {
+  // A robot that rebooted after command 20 starts again at 0: 0 is never a replay, and 1, 2
+  // follow it (before the rule, 0..19 were all taken for replays and dropped unanswered).
+  const Message m = SetStages{1};
+  FrameDecoder decoder;
+  Bytes stream;
+  for (const int seq : {18, 19, 20, 0, 1, 2}) {
+    const Bytes f = frame_of(m, static_cast<std::uint16_t>(seq));
+    stream.insert(stream.end(), f.begin(), f.end());
+  }
+  std::vector<std::uint16_t> sequences;
+  for (const auto& d : decode_all(decoder, stream)) sequences.push_back(d.sequence);
+  EXPECT_EQ(sequences, (std::vector<std::uint16_t>{18, 19, 20, 0, 1, 2}));
+  EXPECT_EQ(decoder.stats().resyncs, 1u);
+  EXPECT_EQ(decoder.stats().replays, 0u);
+  EXPECT_EQ(decoder.stats().lost, 0u);
+
+  // 0 right after 65535 is the count wrapping, not a restart.
+  FrameDecoder wrapping;
+  Bytes wrap;
+  for (const int seq : {65534, 65535, 0, 1}) {
+    const Bytes f = frame_of(m, static_cast<std::uint16_t>(seq));
+    wrap.insert(wrap.end(), f.begin(), f.end());
+  }
+  EXPECT_EQ(decode_all(wrapping, wrap).size(), 4u);
+  EXPECT_EQ(wrapping.stats().resyncs + wrapping.stats().replays + wrapping.stats().lost, 0u);
+}
+
+TEST(Protocol, ReplaysCanBeDeliveredFlaggedAndADecoderReset) {
+  const Message m = SetStages{1};
+  FrameDecoder decoder(true);  // as the link reads commands: a command sent again is answered
+  Bytes stream;
+  for (const int seq : {5, 6, 6, 4}) {
+    const Bytes f = frame_of(m, static_cast<std::uint16_t>(seq));
+    stream.insert(stream.end(), f.begin(), f.end());
+  }
+  const Bytes half = frame_of(m, 7);
+  stream.insert(stream.end(), half.begin(), half.begin() + 5);  // the link drops mid-frame
+  const auto decoded = decode_all(decoder, stream);
+  ASSERT_EQ(decoded.size(), 4u);
+  EXPECT_FALSE(decoded[0].replay);
+  EXPECT_FALSE(decoded[1].replay);
+  EXPECT_TRUE(decoded[2].replay);
+  EXPECT_TRUE(decoded[3].replay);
+  EXPECT_EQ(decoder.stats().replays, 2u);
+  // The link reopened: the half frame is forgotten, and 3 (behind 6) is new, not a replay.
+  decoder.reset();
+  const auto after = decode_all(decoder, frame_of(m, 3));
+  ASSERT_EQ(after.size(), 1u);
+  EXPECT_FALSE(after[0].replay);
+  EXPECT_EQ(decoder.stats().bad_cobs + decoder.stats().bad_crc + decoder.stats().bad_body, 0u);
+}
+
 TEST(Protocol, OverlongAndUnknownFramesAreCounted) {
   FrameDecoder decoder;
   Bytes stream(5000, 0x42);
@@ -252,10 +315,12 @@ TEST(Protocol, FlagsAreTheLastFieldOfHealthAndFrame) {
   Health health;
   health.flags = 0xA501;
   const Bytes h = payload_of(health);
-  ASSERT_EQ(h.size(), kHeaderSize + 70 + kCrcSize);
-  EXPECT_EQ(h[0], 2) << "version";
-  EXPECT_EQ(h[kHeaderSize + 68], 0x01);
-  EXPECT_EQ(h[kHeaderSize + 69], 0xA5);
+  // 3 x u32, u16, 2 x u32, 8 x u32 stage times, 4 x u32 dropped by cause, 8 x u32 counters,
+  // u16 flags.
+  ASSERT_EQ(h.size(), kHeaderSize + 104 + kCrcSize);
+  EXPECT_EQ(h[0], 3) << "version";
+  EXPECT_EQ(h[kHeaderSize + 102], 0x01);
+  EXPECT_EQ(h[kHeaderSize + 103], 0xA5);
   FrameSummary frame;
   frame.flags = kFrameTriggerFromCapture;
   const Bytes f = payload_of(frame);
@@ -269,8 +334,11 @@ TEST(Protocol, BodiesWithWrongLengthsOrCountsAreRejected) {
   Bytes too_many(4, 0);
   too_many.push_back(kMaxDetections + 1);
   EXPECT_FALSE(decode_body(MessageType::detections, too_many));
-  EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 9}));  // unknown status
-  EXPECT_TRUE(decode_body(MessageType::command_ack, Bytes{1, 0, 2}));
+  EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 9, 0}));  // unknown status
+  EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 1, 7}));  // unknown reason
+  EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 2}));     // version 2's ack
+  EXPECT_TRUE(decode_body(MessageType::command_ack, Bytes{1, 0, 3, 0}));
+  EXPECT_TRUE(decode_body(MessageType::command_ack, Bytes{1, 0, 1, 6}));
 }
 
 TEST(Protocol, EncodingRejectsImpossibleMessages) {

@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <optional>
 #include <string>
+#include <variant>
 
+#include "trigger_accounting.hpp"
 #include "virtual_board.hpp"
 
 namespace epipole::test {
@@ -26,8 +29,14 @@ const std::string kArch = EPIPOLE_VBOARD_ARCH;
 const std::string kInitramfs = EPIPOLE_VBOARD_INITRAMFS;
 
 std::string context(const BoardRun& run) {
-  return "QEMU exit " + std::to_string(run.exit_code) + " after " + std::to_string(run.seconds) +
-         " s, " + std::to_string(run.link.size()) + " link bytes; console:\n" + run.console;
+  // The guest's shell reports a firmware killed by signal N as exit 128 + N.
+  const std::string firmware =
+      run.firmware_exit > 128
+          ? "epipole-fw KILLED by signal " + std::to_string(run.firmware_exit - 128)
+          : "epipole-fw exit " + std::to_string(run.firmware_exit);
+  return "QEMU exit " + std::to_string(run.exit_code) + ", " + firmware + ", after " +
+         std::to_string(run.seconds) + " s, " + std::to_string(run.link.size()) +
+         " link bytes; console:\n" + run.console;
 }
 
 // The link as the robot sees it: every byte a valid frame, no frame lost, sequence numbers one
@@ -44,6 +53,15 @@ void expect_clean_link(const BoardRun& run) {
               static_cast<std::uint16_t>(run.messages[i - 1].sequence + 1))
         << "message " << i;
   }
+}
+
+// Every trigger accounted for at each health message the link carried.
+void expect_triggers_accounted(const BoardRun& run) {
+  EXPECT_GT(
+      test::expect_triggers_accounted(
+          run.messages, [](const protocol::DecodedMessage& m) -> const auto& { return m.message; }),
+      0)
+      << "no health message after a frame summary";
 }
 
 // Each frame summary: numbers increasing (stale pairs are skipped, so not one by one), and the
@@ -87,6 +105,7 @@ TEST(EPIPOLE_VBOARD_SUITE, FirmwareRunsOnVividCamerasAndGpioSimTrigger) {
   ASSERT_GE(run.edges.size(), frames.size()) << context(run);
   expect_triggered_frames(run, 0, frames.size());
 
+  expect_triggers_accounted(run);
   const std::vector<Health> health = run.all<Health>();
   ASSERT_FALSE(health.empty()) << context(run);
   const Health& last = health.back();
@@ -193,8 +212,9 @@ TEST(EPIPOLE_VBOARD_SUITE, CameraModuleUnloadedAndReloaded) {
   ASSERT_NE(run.console.find("fault: vivid loaded again"), std::string::npos) << context(run);
   expect_clean_link(run);
 
+  expect_triggers_accounted(run);
   std::size_t back = 0;  // the first message after the health that counts both reopens
-  std::uint16_t reopens = 0;
+  std::uint32_t reopens = 0;
   for (std::size_t i = 0; i < run.messages.size(); ++i) {
     const auto* h = std::get_if<Health>(&run.messages[i].message);
     if (h == nullptr) continue;

@@ -104,6 +104,8 @@ struct BoardConfig {
   std::optional<std::size_t> memory_budget_bytes;  // start-up fails above it
 
   std::filesystem::path snapshot_directory;  // where the snapshot command writes; empty: refused
+  int snapshot_limit = 200;                  // snapshots the folder may hold (those there count)
+  double snapshot_min_free_mb = 64;          // left free on its file system
 
   // The simulated board (backend "sim"): what its cameras replay.
   struct SimScene {
@@ -137,9 +139,22 @@ BoardConfig load_board_config(const std::filesystem::path& path);
 BoardConfig parse_board_config(const std::string& yaml, const std::filesystem::path& file);
 
 // Cross-checks a configuration (also done by the loaders): stage limits against the image size,
-// the pairing tolerance against the trigger period, the scene of the simulated board. Throws
-// Error naming the file and the key.
+// the pairing tolerance against the trigger period, the trigger period and the exposure against
+// the cameras' timeout (frame_timing_problem), the scene of the simulated board. Throws Error
+// naming the file and the key.
 void validate(const BoardConfig& config, const std::string& file);
+
+// Why the cameras could not follow a frame `period` (the trigger's; free running, the cameras')
+// with an `exposure` (0: automatic) within `camera_timeout`, or empty when they can: each frame
+// must come within the timeout of the one before (period + exposure below it), or the cameras
+// time out and are reopened again and again; and a camera cannot expose longer than the period.
+std::string frame_timing_problem(hal::Nanoseconds period, hal::Nanoseconds exposure,
+                                 hal::Nanoseconds camera_timeout);
+
+// Why the service manager's watchdog (interval; 0: none) would fire while the frame loop waits
+// for a late pair, or empty: the loop pings it after every pair and every wait of up to the
+// cameras' timeout, and a ping is sent at most every half interval.
+std::string watchdog_problem(const BoardConfig& config, hal::Nanoseconds watchdog_interval);
 
 // The data cache folder of scripts/fetch-data.sh: $EPIPOLE_DATA_DIR, else
 // ${XDG_CACHE_HOME:-$HOME/.cache}/epipole/data.

@@ -69,9 +69,18 @@ class FrameLoop {
  private:
   void start();
   void finish();
+  // What a command's ack says.
+  struct Verdict {
+    protocol::AckStatus status;
+    protocol::AckReason reason;
+  };
   void apply_commands();
-  protocol::AckStatus set_trigger_rate(const protocol::SetTriggerRate& command);
-  protocol::AckStatus set_exposure(const protocol::SetExposure& command);
+  void answer(std::uint16_t sequence, Verdict verdict);
+  Verdict set_trigger_rate(const protocol::SetTriggerRate& command);
+  Verdict set_exposure(const protocol::SetExposure& command);
+  Verdict request_snapshot(std::uint16_t sequence);
+  void answer_snapshots();
+  hal::Nanoseconds frame_period() const;
   // trigger_from_capture: result.trigger_ns is the left frame's time, not a trigger edge's.
   void publish(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
   void send(const protocol::Message& message);

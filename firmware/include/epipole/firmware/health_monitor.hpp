@@ -7,6 +7,7 @@
 
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/hal/clock.hpp"
+#include "epipole/hal/trigger_ledger.hpp"
 
 namespace epipole::firmware {
 
@@ -14,9 +15,9 @@ namespace epipole::firmware {
 using StageTimes = std::array<hal::Nanoseconds, protocol::kStageCount>;
 
 // The fault counters the health message reports, read from the board each second (totals
-// since start; the message carries them saturated to 16 bits).
+// since start; the message carries them modulo 2^32).
 struct FaultCounts {
-  std::uint64_t dropped_pairs = 0;
+  hal::TriggerAccount triggers;  // what became of every trigger up to the newest pair
   std::uint64_t camera_timeouts = 0;
   std::uint64_t camera_reopens = 0;
   std::uint64_t trigger_losses = 0;
@@ -24,6 +25,7 @@ struct FaultCounts {
   std::uint64_t unpaired_frames = 0;
   std::uint64_t bad_commands = 0;
   std::uint64_t messages_dropped = 0;
+  std::uint64_t snapshot_failures = 0;
 };
 
 // Collects what the health message says: frames per second, the latency from trigger edge to

@@ -33,13 +33,17 @@ struct LinkCounters {
   std::uint64_t messages_dropped = 0;  // over budget, queue full, or lost to a hang-up
   std::uint64_t bytes_written = 0;
   std::uint64_t commands = 0;         // valid commands received
-  std::uint64_t rejected_frames = 0;  // received frames the decoder rejected
+  std::uint64_t rejected_frames = 0;  // received frames the decoder rejected (and overflows
+                                      // that could not even be answered)
+  std::uint64_t stuck_writes = 0;     // frames given up because the port took nothing
 };
 
 // A command from the robot, with the sequence number its ack must carry.
 struct Command {
   std::uint16_t sequence = 0;
   protocol::Message message;
+  bool replay = false;    // its sequence number came before: answer, do not apply again
+  bool overflow = false;  // more came at once than the queue holds: not kept (message empty)
 };
 
 // The serial link: the frame loop publishes messages (encoded at once into a fixed queue), a
@@ -47,6 +51,12 @@ struct Command {
 // sends into a fixed queue of commands. Everything is allocated by the constructor; publish()
 // and next_command() never allocate and never block on the port. A null port (no link) drops
 // nothing and sends nothing.
+//
+// The thread never waits on the port for long: a frame the port takes nothing of for
+// kStuckWrite (a robot that stopped reading a USB or pseudo-terminal link) is given up and
+// counted, and commands are read between every write attempt, so they are answered within a
+// second whatever the robot reads. When the port is closed or hangs up, the decoder starts
+// afresh (the robot at the other end may have restarted).
 class Link {
  public:
   Link(hal::SerialPort* port, hal::Clock& clock, LinkConfig config);
@@ -66,6 +76,10 @@ class Link {
 
   LinkCounters counters() const;
   LinkProtocol protocol() const { return config_.protocol; }
+  // Whether the link's thread went round its loop within `age` (steady clock; true without a
+  // thread: no port): the service watchdog is pinged only while it does.
+  bool alive(hal::Nanoseconds age) const;
+  static constexpr hal::Nanoseconds kStuckWrite = 500'000'000;
   // Epipole frames carry their own sequence numbers; the number of the next one.
   std::uint16_t next_sequence() const { return sequence_; }
 
@@ -96,12 +110,16 @@ class Link {
   static constexpr std::size_t kMaxCommands = 16;
   std::array<Command, kMaxCommands> commands_{};
   std::size_t commands_head_ = 0, commands_size_ = 0;
+  // The sequence numbers of commands that came while the queue was full, to be rejected (busy).
+  std::array<std::uint16_t, kMaxCommands> overflowed_{};
+  std::size_t overflowed_head_ = 0, overflowed_size_ = 0;
   LinkCounters counters_;
 
   // The link thread's own state.
   std::array<std::uint8_t, protocol::kMaxFrameSize + mavlink::kMaxFrameSize> write_buffer_{};
   std::array<std::byte, 512> read_buffer_{};
-  protocol::FrameDecoder decoder_;
+  protocol::FrameDecoder decoder_{true};         // replays delivered, to be answered
+  std::atomic<hal::Nanoseconds> last_round_{0};  // steady time the thread last went round
   std::atomic<bool> stopping_{false};
   std::atomic<hal::Nanoseconds> drain_deadline_{0};
   std::thread thread_;

@@ -85,7 +85,8 @@ enum class AcquireStatus {
   timeout,      // no frame before the timeout
   device_lost,  // the device is gone (or stalled past recovery): reopen()
   corrupt,      // a frame came but the driver flagged it damaged or it was short: its buffer
-                // went straight back; the device still streams
+                // went straight back (the result's frame has its sequence and time, no
+                // buffer); the device still streams
 };
 
 struct AcquireResult {
@@ -94,6 +95,15 @@ struct AcquireResult {
 };
 
 const char* to_string(AcquireStatus status);
+
+// A damaged frame's result: its number and time, so that its trigger is accounted for.
+inline AcquireResult corrupt_frame(std::uint32_t sequence, Nanoseconds timestamp) {
+  AcquireResult r;
+  r.status = AcquireStatus::corrupt;
+  r.frame.sequence = sequence;
+  r.frame.timestamp = timestamp;
+  return r;
+}
 
 // A camera. acquire() and release() never allocate and never throw once the camera streams;
 // configuration and opening errors throw Error naming the device and the setting.

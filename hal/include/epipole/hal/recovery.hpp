@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 
@@ -97,7 +98,10 @@ class RecoveringSerialPort final : public SerialPort {
   bool is_open() const override { return port_.is_open(); }
   void reopen() override { port_.reopen(); }
   void close() override { port_.close(); }
+  // Only for the thread that reads and writes the port.
   const RecoveryCounters& counters() const { return counters_; }
+  // The successful reopens so far, for any thread.
+  std::uint64_t reopens() const { return reopens_.load(std::memory_order_relaxed); }
 
  private:
   bool ensure_open();
@@ -107,6 +111,7 @@ class RecoveringSerialPort final : public SerialPort {
   Clock& clock_;
   Backoff backoff_;
   RecoveryCounters counters_;
+  std::atomic<std::uint64_t> reopens_{0};  // counters_.reopens, published to other threads
 };
 
 }  // namespace epipole::hal

@@ -6,11 +6,11 @@
 
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/clock.hpp"
+#include "epipole/hal/side.hpp"
 #include "epipole/hal/trigger.hpp"
+#include "epipole/hal/trigger_ledger.hpp"
 
 namespace epipole::hal {
-
-enum class Side { left, right };
 
 struct StereoPair {
   Frame left;
@@ -90,8 +90,9 @@ class StereoPairer {
   // Drops what waits on one side (its camera was reopened); counted as unpaired. Pairing by
   // sequence, that side's frames are numbered anew from their next match.
   void reset(Side side);
-  // Counts a damaged frame a camera reported (it never reaches the pairer).
-  void count_corrupt(Side side);
+  // Counts a damaged frame a camera reported (it never reaches the pairer); `camera_sequence`
+  // is the number the camera gave it, for the trigger ledger.
+  void count_corrupt(Side side, std::uint32_t camera_sequence);
   // The trigger's rate changed: the tolerances are checked against the new period as the
   // constructor checks them. Throws Error (and keeps the old period) when they do not fit.
   void set_trigger_period(Nanoseconds period);
@@ -102,6 +103,10 @@ class StereoPairer {
   bool numbers_are_the_triggers() const { return numbers_are_the_triggers_; }
   const PairingCounters& counters() const { return counters_; }
   const PairingConfig& config() const { return config_; }
+  // What became of each trigger: the pairer tells it which frames came and which failed; the
+  // caller tells it which of the pairs it took were published and which it skipped.
+  TriggerLedger& ledger() { return ledger_; }
+  const TriggerLedger& ledger() const { return ledger_; }
 
  private:
   static constexpr std::size_t kCapacity = 4;
@@ -120,6 +125,9 @@ class StereoPairer {
   const Queue& queue(Side side) const { return side == Side::left ? left_q_ : right_q_; }
   CameraSource& camera(Side side) { return side == Side::left ? left_ : right_; }
   void drop_front(Side side, std::uint64_t& counter);
+  // The ledger hears of a side's frames once they carry the trigger's number (pairing by time,
+  // the left camera's numbers are the triggers').
+  void note_seen(Side side, std::uint32_t number);
   bool on_trigger(const Frame& left, const Frame& right) const;
   void match();
   bool fronts_match_by_time();
@@ -140,6 +148,7 @@ class StereoPairer {
   bool has_pair_number_ = false;
   std::uint32_t last_pair_number_ = 0;
   PairingCounters counters_{};
+  TriggerLedger ledger_;
 };
 
 enum class PairStatus { ok, timeout, device_lost };
@@ -160,6 +169,7 @@ class StereoGrabber {
   PairResult next(Nanoseconds timeout);
   void release(const StereoPair& pair) { pairer_.release(pair); }
   StereoPairer& pairer() { return pairer_; }
+  const StereoPairer& pairer() const { return pairer_; }
 
  private:
   AcquireStatus acquire(Side side, Nanoseconds timeout);

@@ -27,6 +27,7 @@ std::size_t encode_frame(const Message& message, std::uint16_t sequence,
 struct DecodedMessage {
   std::uint16_t sequence = 0;
   Message message;
+  bool replay = false;  // a sequence number already delivered (only when replays are delivered)
 };
 
 // What the decoder has seen: every byte it was fed lands in exactly one bucket.
@@ -38,25 +39,36 @@ struct DecoderStats {
   std::uint64_t bad_version = 0;
   std::uint64_t unknown_type = 0;
   std::uint64_t bad_body = 0;  // wrong length or counts for its type
-  std::uint64_t replays = 0;   // a sequence number already delivered: dropped
+  std::uint64_t replays = 0;   // a sequence number already delivered: dropped (or flagged)
   std::uint64_t lost = 0;      // sequence numbers skipped (frames lost on the way)
-  std::uint64_t resyncs = 0;   // the sender restarted its sequence
+  std::uint64_t resyncs = 0;   // the sender restarted its sequence (at 0, or far behind)
   std::uint64_t empty = 0;     // 0x00 with nothing before it (line idle, resync)
 };
 
 // Turns an untrusted byte stream into messages. Fixed memory, never throws, never allocates:
 // garbage, truncated frames and bit errors are counted and skipped, and decoding resumes at
 // the next 0x00.
+//
+// Sequence numbers (docs/protocol.md): a sender starts at 0 and counts up, wrapping. A frame
+// numbered 0 that does not follow 65535 is a sender that restarted (a resync, delivered); one
+// 1..63 behind the last is a replay (dropped, or with `deliver_replays` delivered flagged, so
+// that a command sent again is answered without being applied again); further behind, the
+// sender restarted too.
 class FrameDecoder {
  public:
+  explicit FrameDecoder(bool deliver_replays = false) : deliver_replays_(deliver_replays) {}
   // Feeds one byte; returns a message when the byte completes a valid frame.
   std::optional<DecodedMessage> push(std::uint8_t byte);
+  // Forgets the frame in progress and the last sequence number: the link was closed and
+  // opened again, so whatever comes next starts afresh.
+  void reset();
   const DecoderStats& stats() const { return stats_; }
 
  private:
   // A sequence number up to this far behind the last one is a replay; further behind, the
   // sender restarted.
   static constexpr int kReplayWindow = 64;
+  bool deliver_replays_;
 
   std::optional<DecodedMessage> finish_frame();
 

@@ -24,6 +24,10 @@ void fields(Io& io, M& m) {
       "capture_us", "rectify_us", "corners_us", "disparity_us",
       "sparse_us",  "detect_us",  "publish_us", "total_us"};
   for (int i = 0; i < kStageCount; ++i) io(kStageNames[i], m.stage_us[i]);
+  io("dropped_stale", m.dropped_stale);
+  io("dropped_one_side", m.dropped_one_side);
+  io("dropped_both_sides", m.dropped_both_sides);
+  io("dropped_corrupt", m.dropped_corrupt);
   io("camera_timeouts", m.camera_timeouts);
   io("camera_reopens", m.camera_reopens);
   io("trigger_losses", m.trigger_losses);
@@ -31,6 +35,7 @@ void fields(Io& io, M& m) {
   io("unpaired_frames", m.unpaired_frames);
   io("bad_commands", m.bad_commands);
   io("messages_dropped", m.messages_dropped);
+  io("snapshot_failures", m.snapshot_failures);
   io("flags", m.flags);
 }
 
@@ -97,6 +102,7 @@ requires std::is_same_v<std::remove_const_t<M>, CommandAck>
 void fields(Io& io, M& m) {
   io("command_sequence", m.command_sequence);
   io("status", m.status);
+  io("reason", m.reason);
 }
 
 template <class Io, class M>

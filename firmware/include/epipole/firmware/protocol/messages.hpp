@@ -9,7 +9,7 @@ namespace epipole::protocol {
 // Epipole serial protocol, version 2 (docs/protocol.md). Every number is little-endian on the
 // wire; sizes here are the wire sizes. Version 2 added the flags of health and frame.
 
-inline constexpr std::uint8_t kVersion = 2;
+inline constexpr std::uint8_t kVersion = 3;
 
 enum class MessageType : std::uint8_t {
   // firmware -> robot
@@ -46,22 +46,30 @@ inline constexpr std::uint16_t kHealthNotCalibrated = 1u << 0;
 inline constexpr std::uint16_t kHealthNoCascade = 1u << 1;
 
 // Once a second: rates, latencies, faults.
+// Counts are totals since start, modulo 2^32 (they wrap, never stop): a reader takes
+// differences modulo 2^32. frames + dropped = the triggers fired up to and with the newest
+// frame summary sent before this message.
 struct Health {
   std::uint32_t uptime_ms = 0;
-  std::uint32_t frames = 0;          // pairs processed since start
-  std::uint32_t dropped = 0;         // pairs dropped (unpaired, late, overrun)
+  std::uint32_t frames = 0;          // pairs published
+  std::uint32_t dropped = 0;         // triggers not published: the sum of the four dropped_*
   std::uint16_t fps_centi = 0;       // frames per second x 100, over the last second
   std::uint32_t latency_p50_us = 0;  // trigger to publish
   std::uint32_t latency_p99_us = 0;
   std::array<std::uint32_t, kStageCount> stage_us{};  // mean per stage over the last second
-  std::uint16_t camera_timeouts = 0;
-  std::uint16_t camera_reopens = 0;
-  std::uint16_t trigger_losses = 0;
-  std::uint16_t link_reopens = 0;
-  std::uint16_t unpaired_frames = 0;
-  std::uint16_t bad_commands = 0;
-  std::uint16_t messages_dropped = 0;  // not sent: the link's byte budget or queue was full
-  std::uint16_t flags = 0;             // kHealth* bits: the firmware's state
+  std::uint32_t dropped_stale = 0;                    // paired, but a newer pair was there first
+  std::uint32_t dropped_one_side = 0;    // one camera's frame came, the other's never did
+  std::uint32_t dropped_both_sides = 0;  // neither camera's frame came (overrun, lost)
+  std::uint32_t dropped_corrupt = 0;     // a frame damaged, or the two failed the pair's checks
+  std::uint32_t camera_timeouts = 0;
+  std::uint32_t camera_reopens = 0;
+  std::uint32_t trigger_losses = 0;
+  std::uint32_t link_reopens = 0;
+  std::uint32_t unpaired_frames = 0;
+  std::uint32_t bad_commands = 0;
+  std::uint32_t messages_dropped = 0;   // not sent: the link's byte budget or queue was full
+  std::uint32_t snapshot_failures = 0;  // snapshots that could not be written
+  std::uint16_t flags = 0;              // kHealth* bits: the firmware's state
   friend bool operator==(const Health&, const Health&) = default;
 };
 
@@ -130,10 +138,24 @@ struct CalibrationHealth {
   friend bool operator==(const CalibrationHealth&, const CalibrationHealth&) = default;
 };
 
-enum class AckStatus : std::uint8_t { ok = 0, rejected = 1, unsupported = 2 };
+// ok: applied. rejected: not applied, for `reason`. unsupported: this board cannot do it (no
+// trigger line to set the rate of). duplicate: the sequence number of a command already
+// received (the robot sent it again): not applied again.
+enum class AckStatus : std::uint8_t { ok = 0, rejected = 1, unsupported = 2, duplicate = 3 };
+// Why a command was rejected (none otherwise).
+enum class AckReason : std::uint8_t {
+  none = 0,
+  out_of_range = 1,   // a value the protocol, the hardware or the board file does not allow
+  timing = 2,         // the board's timing could not follow it (camera timeout, watchdog, pairing)
+  busy = 3,           // one is already pending (snapshot), or too many commands came at once
+  storage = 4,        // the snapshot limit or the free-space reserve is reached
+  failed = 5,         // tried and failed (a snapshot that could not be written)
+  not_a_command = 6,  // a message the firmware sends, not one it takes
+};
 struct CommandAck {
   std::uint16_t command_sequence = 0;
   AckStatus status = AckStatus::ok;
+  AckReason reason = AckReason::none;
   friend bool operator==(const CommandAck&, const CommandAck&) = default;
 };
 
