@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Every test: installs what is missing, fetches the data sets, builds the host, host-asan,
+# Every test: installs what is missing, fetches the data sets, builds the host, host-asan, host-tsan,
 # aarch64 and armhf presets and runs all their tests (the cross-built ones under qemu-user),
 # then builds the libFuzzer targets (fuzz preset) and runs each from its seed corpus. The cross
-# presets also build the board's .deb and check its contents (scripts/check-package.sh). Then the
+# presets also build the board's .deb and check its contents (scripts/check-package.sh). The soak
+# (5 minutes of the simulated board with faults) runs beside the presets after host. Then the
 # virtual board's tests, and the deployment test installs the arm64 package on Debian booted with
 # systemd (as root: debootstrap makes its root filesystem once). Last, it
 # runs the main job (scripts/run-demo.sh) in a fresh copy of the tree with a fresh copy of the
@@ -37,13 +38,39 @@ for preset in $presets; do
   phase=$SECONDS
   # The virtual board (label vboard) boots the aarch64 build's firmware too, and the deployment
   # test (label deploy) installs its package: they run last.
-  ctest --preset "$preset" --output-junit "junit-$preset.xml" -LE 'vboard|deploy'
+  ctest --preset "$preset" --output-junit "junit-$preset.xml" -LE 'vboard|deploy|soak'
   case $preset in
     aarch64) ./scripts/check-package.sh build/aarch64 arm64 ;;
     armhf) ./scripts/check-package.sh build/armhf armhf ;;
   esac
   timings+="  $preset: built in $built s, tested in $((SECONDS - phase)) s"$'\n'
+  if [[ $preset == host ]]; then
+    # The soak (label soak, docs/testing.md): 5 minutes of the simulated board with faults, on
+    # one core beside the next presets' builds; its result is waited for before the virtual board.
+    echo "=== soak: 5 minutes of the simulated board with faults, in the background"
+    soak_log=$(mktemp)
+    EPIPOLE_SOAK_SECONDS=300 ctest --preset host -L soak --output-junit junit-soak.xml \
+      --output-on-failure -V >"$soak_log" 2>&1 &
+    soak_pid=$!
+    trap 'kill "$soak_pid" 2>/dev/null || true' EXIT  # a failure below stops it too
+  fi
 done
+
+if [[ -n ${soak_pid:-} ]]; then
+  echo "=== soak: its result"
+  soak_status=0
+  wait "$soak_pid" || soak_status=$?
+  grep -E '^[0-9]+: soak:|tests passed|tests failed|Failure' "$soak_log" || true
+  if [[ $soak_status -ne 0 ]]; then
+    cat "$soak_log"
+    rm -f "$soak_log"
+    echo "run-tests: the soak failed" >&2
+    exit 1
+  fi
+  rm -f "$soak_log"
+  trap - EXIT
+  timings+="  soak: 300 s, beside the presets after host"$'\n'
+fi
 
 if [[ " $presets " == *" host "* && " $presets " == *" aarch64 "* ]]; then
   echo "=== vboard: the firmware on the virtual board (amd64 and arm64, docs/vboard.md)"
