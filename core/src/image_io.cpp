@@ -33,6 +33,13 @@ FilePtr open_file(const path& file, const char* mode) {
 
 enum class Format { png, jpeg, pgm, unknown };
 
+// What a header claims is checked before the image is allocated: a few bytes must not ask for
+// gigabytes.
+void check_size(const path& file, const char* format, long long width, long long height) {
+  require(width * height <= kMaxImagePixels, file.string(), ": ", format, " size ", width, "x",
+          height, " is more than the ", kMaxImagePixels, " pixels an image may have");
+}
+
 Format sniff(std::FILE* f) {
   unsigned char magic[8] = {};
   const std::size_t n = std::fread(magic, 1, sizeof magic, f);
@@ -100,6 +107,7 @@ Image<T> read_png(std::FILE* f, const path& file) {
   if (!png_read_header(r, f, 8 * static_cast<int>(sizeof(T)))) {
     throw Error(cat(file.string(), ": bad PNG: ", r.message));
   }
+  check_size(file, "PNG", r.width, r.height);
   Image<T> image(r.width, r.height);
   std::vector<png_bytep> rows(static_cast<std::size_t>(r.height));
   for (int y = 0; y < r.height; ++y) rows[y] = reinterpret_cast<png_bytep>(image.view().row(y));
@@ -202,6 +210,7 @@ GrayImage read_jpeg(std::FILE* f, const path& file) {
   if (!jpeg_read_header_gray(r, f)) {
     throw Error(cat(file.string(), ": bad JPEG: ", r.errors.message));
   }
+  check_size(file, "JPEG", r.info.output_width, r.info.output_height);
   GrayImage image(static_cast<int>(r.info.output_width), static_cast<int>(r.info.output_height));
   if (!jpeg_read_rows(r, image.view())) {
     throw Error(cat(file.string(), ": bad JPEG: ", r.errors.message));
@@ -243,6 +252,17 @@ Image<T> read_pgm(std::FILE* f, const path& file) {
   require(maxval > 0 && maxval < 65536, file.string(), ": PGM maximum value ", maxval,
           " is out of range");
   const std::size_t sample_bytes = maxval < 256 ? 1 : 2;
+  check_size(file, "PGM", width, height);
+  // The header's last whitespace byte is read with the maximum value: the samples follow, and
+  // the file must hold them all.
+  const long data_start = std::ftell(f);
+  std::fseek(f, 0, SEEK_END);
+  const long file_end = std::ftell(f);
+  const auto needed = static_cast<long long>(sample_bytes) * width * height;
+  require(data_start > 0 && file_end - data_start >= needed, file.string(),
+          ": PGM data ends early: ", width, "x", height, " samples need ", needed,
+          " bytes, the file has ", std::max(0L, file_end - data_start), " after its header");
+  std::fseek(f, data_start, SEEK_SET);
   Image<T> image(width, height);
   std::vector<unsigned char> line(sample_bytes * static_cast<std::size_t>(width));
   for (int y = 0; y < height; ++y) {

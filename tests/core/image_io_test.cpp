@@ -5,6 +5,7 @@
 #include <fstream>
 #include <random>
 
+#include "epipole/core/crc32.hpp"
 #include "epipole/core/error.hpp"
 
 namespace epipole {
@@ -94,6 +95,49 @@ TEST_F(ImageFiles, BadFilesGiveErrorsNamingTheFile) {
       EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
     }
   }
+}
+
+// A PNG whose header claims width x height, and no pixels.
+std::string png_header(std::uint32_t width, std::uint32_t height) {
+  std::string chunk = "IHDR";
+  for (const std::uint32_t v : {width, height}) {
+    for (int shift = 24; shift >= 0; shift -= 8) chunk += static_cast<char>((v >> shift) & 0xFF);
+  }
+  chunk += std::string("\x08\x00\x00\x00\x00", 5);  // 8-bit gray, no interlace
+  const std::uint32_t crc =
+      crc32(std::span(reinterpret_cast<const std::uint8_t*>(chunk.data()), chunk.size()));
+  std::string png = std::string("\x89PNG\r\n\x1a\n\0\0\0\x0d", 12) + chunk;
+  for (int shift = 24; shift >= 0; shift -= 8) png += static_cast<char>((crc >> shift) & 0xFF);
+  // An empty IDAT (libpng reads the header up to the first one): length 0, type, CRC.
+  return png + std::string("\0\0\0\0IDAT\x35\xaf\x06\x1e", 12);
+}
+
+TEST_F(ImageFiles, AHeaderClaimingAHugeImageIsAnErrorBeforeAnyAllocation) {
+  // Found by image_fuzz: a few bytes of PGM header asked for gigabytes.
+  write_bytes(file("vast.pgm"), "P5\n900000 900000\n255\nxyz");
+  write_bytes(file("claims.pgm"), "P5\n4000 4000\n65535\n0123456789");
+  write_bytes(file("vast.png"), png_header(100'000, 100'000));
+  const auto error_of = [&](const char* name) {
+    try {
+      (void)load_gray16(file(name));
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("loaded");
+  };
+  EXPECT_NE(error_of("vast.pgm")
+                .find("vast.pgm: PGM size 900000x900000 is more than the 67108864 "
+                      "pixels an image may have"),
+            std::string::npos)
+      << error_of("vast.pgm");
+  EXPECT_NE(error_of("claims.pgm")
+                .find("claims.pgm: PGM data ends early: 4000x4000 samples need "
+                      "32000000 bytes, the file has 10 after its header"),
+            std::string::npos)
+      << error_of("claims.pgm");
+  EXPECT_NE(error_of("vast.png").find("vast.png: PNG size 100000x100000 is more than"),
+            std::string::npos)
+      << error_of("vast.png");
 }
 
 TEST_F(ImageFiles, WritingRejectsUnknownExtensionsAndMissingFolders) {

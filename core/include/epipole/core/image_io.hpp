@@ -13,7 +13,9 @@ namespace epipole {
 // load_gray decodes to 8-bit gray the way OpenCV's imread(IMREAD_GRAYSCALE) does, so results
 // can be compared pixel for pixel: JPEG through libjpeg's own gray output, PNG through libpng
 // (16-bit samples keep their high byte; colour converted with weights 0.299/0.587/0.114),
-// binary PGM (P5, 8 or 16 bit).
+// binary PGM (P5, 8 or 16 bit). An image of more than kMaxImagePixels, or a PGM whose data the
+// file does not hold, is an Error before anything is allocated for it.
+inline constexpr long long kMaxImagePixels = 64ll * 1024 * 1024;
 GrayImage load_gray(const std::filesystem::path& file);
 
 // 16-bit gray (e.g. a disparity PNG holding disparity*16); 8-bit files are widened.
