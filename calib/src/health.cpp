@@ -16,10 +16,10 @@ double quantile(float* values, int n, double p) {
   const int below = static_cast<int>(std::floor(position));
   const double t = position - below;
   std::nth_element(values, values + below, values + n);
-  const double low = values[below];
+  const double low = static_cast<double>(values[below]);
   if (t == 0 || below + 1 >= n) return low;
   // The next order statistic is the smallest value above position `below`.
-  const double high = *std::min_element(values + below + 1, values + n);
+  const double high = static_cast<double>(*std::min_element(values + below + 1, values + n));
   return low + t * (high - low);
 }
 

@@ -192,9 +192,13 @@ void Link::read_commands(hal::Nanoseconds timeout) {
     return;
   }
   if (config_.protocol != LinkProtocol::epipole) return;  // MAVLink input is not read
-  for (std::size_t i = 0; i < r.bytes; ++i) {
+  take_bytes(std::span(read_buffer_.data(), r.bytes));
+}
+
+void Link::take_bytes(std::span<const std::byte> bytes) {
+  for (const std::byte byte : bytes) {
     const std::uint64_t rejected_before = rejected(decoder_.stats());
-    const auto decoded = decoder_.push(static_cast<std::uint8_t>(read_buffer_[i]));
+    const auto decoded = decoder_.push(static_cast<std::uint8_t>(byte));
     const std::lock_guard lock(mutex_);
     counters_.rejected_frames += rejected(decoder_.stats()) - rejected_before;
     if (!decoded) continue;

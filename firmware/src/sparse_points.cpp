@@ -8,7 +8,8 @@ std::size_t triangulate_matches(const calib::Triangulator& triangulator,
   std::size_t n = 0;
   if (truncated != nullptr) *truncated = false;
   for (const vision::SparseMatch& m : matches) {
-    const Eigen::Vector3d p = triangulator.point(m.xl, m.yl, m.disparity);
+    const Eigen::Vector3d p = triangulator.point(
+        static_cast<double>(m.xl), static_cast<double>(m.yl), static_cast<double>(m.disparity));
     if (!p.allFinite()) continue;
     if (n == out.size()) {
       if (truncated != nullptr) *truncated = true;

@@ -130,13 +130,13 @@ LibcameraControlRange range_of(const lc::ControlInfoMap& info, const lc::Control
   if (type == lc::ControlTypeInteger32) {
     std::int32_t lo = 0, hi = 0;
     r.bounded = control_range(it->second, type, lo, hi);
-    r.min = lo;
-    r.max = hi;
+    r.min = static_cast<double>(lo);
+    r.max = static_cast<double>(hi);
   } else {
     float lo = 0.0f, hi = 0.0f;
     r.bounded = control_range(it->second, type, lo, hi);
-    r.min = lo;
-    r.max = hi;
+    r.min = static_cast<double>(lo);
+    r.max = static_cast<double>(hi);
   }
   return r;
 }

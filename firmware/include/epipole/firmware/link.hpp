@@ -73,6 +73,9 @@ class Link {
   bool publish_heartbeat(std::uint8_t system_status = mavlink::kMavStateActive);
   bool publish_obstacle_distance(const mavlink::ObstacleDistance& message);
   bool next_command(Command& out);
+  // The robot's bytes, decoded into the command queue as the link's thread does with what it
+  // reads. Only while that thread does not run (a link without a port; the fuzz target).
+  void take_bytes(std::span<const std::byte> bytes);
 
   LinkCounters counters() const;
   LinkProtocol protocol() const { return config_.protocol; }
