@@ -190,6 +190,14 @@ bool jpeg_read_header_gray(JpegReader& r, std::FILE* f) {
   r.created = true;
   jpeg_stdio_src(&r.info, f);
   jpeg_read_header(&r.info, TRUE);
+  // Before jpeg_start_decompress sets up its buffers (whole-image ones for progressive files).
+  if (static_cast<long long>(r.info.image_width) * r.info.image_height > kMaxImagePixels) {
+    std::snprintf(r.errors.message, sizeof r.errors.message,
+                  "size %ux%u is more than the %lld pixels an image may have",
+                  static_cast<unsigned>(r.info.image_width),
+                  static_cast<unsigned>(r.info.image_height), kMaxImagePixels);
+    return false;
+  }
   r.info.out_color_space = JCS_GRAYSCALE;  // libjpeg converts, as OpenCV's decoder asks it to
   jpeg_start_decompress(&r.info);
   return r.info.output_components == 1;

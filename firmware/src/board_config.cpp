@@ -480,11 +480,12 @@ std::string frame_timing_problem(hal::Nanoseconds period, hal::Nanoseconds expos
 }
 
 std::string watchdog_problem(const BoardConfig& c, hal::Nanoseconds watchdog_interval) {
-  if (watchdog_interval <= 0 || 2 * c.cameras.timeout < watchdog_interval) return {};
+  if (watchdog_interval <= 0 || 4 * c.cameras.timeout <= watchdog_interval) return {};
   return cat("cameras.timeout_ms ", c.cameras.timeout / 1'000'000,
-             " is not below half the service's watchdog interval of ",
+             " is more than a quarter of the service's watchdog interval of ",
              watchdog_interval / 1'000'000,
-             " ms (WatchdogSec): a wait for a late pair would let the watchdog fire");
+             " ms (WatchdogSec): pings go at most every half interval, and a wait for a late pair "
+             "with the processing after it could let the watchdog fire");
 }
 
 void validate(const BoardConfig& c, const std::string& file) {

@@ -242,25 +242,37 @@ std::optional<DecodedMessage> FrameDecoder::finish_frame() {
     ++stats_.bad_body;
     return std::nullopt;
   }
-  // Sequence numbers: 0 out of turn, or a large step back, is a sender that restarted; a small
-  // step back is a replay; a step forward of more than one means frames were lost on the way.
+  // Sequence numbers: 0 out of turn (not the last one sent again), or a large step back, is a
+  // sender that restarted; a small step back is a replay when that number was delivered, and a
+  // frame late past a newer one when it was not; a step forward of more than one means frames
+  // were lost on the way (until they come late).
   if (have_sequence_) {
     const auto step =
         static_cast<std::int16_t>(static_cast<std::uint16_t>(sequence - last_sequence_));
-    const bool restarted = (sequence == 0 && step != 1) || step <= -kReplayWindow;
+    const bool restarted = (sequence == 0 && step != 1 && step != 0) || step <= -kReplayWindow;
     if (restarted) {
       ++stats_.resyncs;
+      delivered_ = 0;
     } else if (step <= 0) {
+      const std::uint64_t bit = std::uint64_t{1} << -step;
+      if ((delivered_ & bit) == 0) {  // late, not repeated: counted lost when it was skipped
+        delivered_ |= bit;
+        if (stats_.lost > 0) --stats_.lost;
+        ++stats_.frames;
+        return DecodedMessage{sequence, std::move(*message)};
+      }
       ++stats_.replays;
       if (!deliver_replays_) return std::nullopt;
       ++stats_.frames;
       return DecodedMessage{sequence, std::move(*message), true};
     } else {
       stats_.lost += static_cast<std::uint64_t>(step - 1);
+      delivered_ = step >= 64 ? 0 : delivered_ << step;
     }
   }
   have_sequence_ = true;
   last_sequence_ = sequence;
+  delivered_ |= 1;
   ++stats_.frames;
   return DecodedMessage{sequence, std::move(*message)};
 }
@@ -269,6 +281,7 @@ void FrameDecoder::reset() {
   size_ = 0;
   overflowed_ = false;
   have_sequence_ = false;
+  delivered_ = 0;
 }
 
 }  // namespace epipole::protocol

@@ -139,6 +139,11 @@ bool Link::write_front() {
       write_buffer_[i] = ring_[(ring_head_ + i) % config_.queue_bytes];
     }
   }
+  // A frame given up half written would run into this one at the robot's decoder: end it first.
+  if (broken_frame_) {
+    const std::byte end{0};
+    broken_frame_ = port_->write(std::span(&end, 1), kWriteTimeout).bytes != 1;
+  }
   std::size_t written = 0;
   bool ok = true;
   hal::Nanoseconds progress = steady_now();  // when the port last took a byte
@@ -165,6 +170,7 @@ bool Link::write_front() {
       break;
     }
   }
+  if (!ok && written > 0) broken_frame_ = true;
   const std::lock_guard lock(mutex_);
   ring_head_ = (ring_head_ + length) % config_.queue_bytes;
   ring_size_ -= length;

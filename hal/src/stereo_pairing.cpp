@@ -110,7 +110,8 @@ bool StereoPairer::fronts_match_by_time() {
     const Frame& l = left_q_.front();
     const Frame& r = right_q_.front();
     if (l.clock != r.clock) {
-      ledger_.damaged(l.sequence);
+      // Renumbering a reopened side, the left number may still be its camera's own.
+      if (!config_.match_sequences || left_q_.numbered) ledger_.damaged(l.sequence);
       drop_front(Side::left, counters_.mismatched_left);
       drop_front(Side::right, counters_.mismatched_right);
       continue;

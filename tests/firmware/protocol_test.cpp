@@ -213,9 +213,10 @@ TEST(Protocol, ReplaysAreDroppedAndLossesCounted) {
   const auto decoded = decode_all(decoder, stream);
   std::vector<std::uint16_t> sequences;
   for (const auto& d : decoded) sequences.push_back(d.sequence);
-  // 11 again and 9 are replays; 12, 13 lost; 2000 is far ahead: 1984 lost.
-  EXPECT_EQ(sequences, (std::vector<std::uint16_t>{10, 11, 14, 15, 2000, 2001}));
-  EXPECT_EQ(decoder.stats().replays, 2u);
+  // 11 again is a replay; 9 was never delivered: late, delivered; 12, 13 lost; 2000 is far
+  // ahead: 1984 lost.
+  EXPECT_EQ(sequences, (std::vector<std::uint16_t>{10, 11, 9, 14, 15, 2000, 2001}));
+  EXPECT_EQ(decoder.stats().replays, 1u);
   EXPECT_EQ(decoder.stats().lost, 2u + 1984u);
 
   // A sender that restarts from 0 after 2001 is resynchronised, not taken for a replay.
@@ -252,11 +253,39 @@ TEST(Protocol, ASenderThatRestartsFromZeroIsHeardAtOnce) {
   EXPECT_EQ(wrapping.stats().resyncs + wrapping.stats().replays + wrapping.stats().lost, 0u);
 }
 
+TEST(Protocol, AFrameLostAndSentAgainIsDeliveredNotTakenForAReplay) {
+  // The robot's command 11 was damaged on the way; 12 came; the robot sends 11 again (no ack):
+  // it is new to the firmware, and applied. Sent once more, it is a replay.
+  const Message m = SetStages{1};
+  FrameDecoder decoder(true);
+  Bytes stream;
+  for (const int seq : {10, 12, 11, 11}) {
+    const Bytes f = frame_of(m, static_cast<std::uint16_t>(seq));
+    stream.insert(stream.end(), f.begin(), f.end());
+  }
+  const auto decoded = decode_all(decoder, stream);
+  ASSERT_EQ(decoded.size(), 4u);
+  EXPECT_EQ(decoded[2].sequence, 11);
+  EXPECT_FALSE(decoded[2].replay);
+  EXPECT_TRUE(decoded[3].replay);
+  EXPECT_EQ(decoder.stats().lost, 0u) << "11 was counted lost, then came";
+  EXPECT_EQ(decoder.stats().replays, 1u);
+  // A robot that sends its first command, 0, twice (the ack was lost): the second is a replay.
+  FrameDecoder zero(true);
+  Bytes twice = frame_of(m, 0);
+  const Bytes again = frame_of(m, 0);
+  twice.insert(twice.end(), again.begin(), again.end());
+  const auto zeros = decode_all(zero, twice);
+  ASSERT_EQ(zeros.size(), 2u);
+  EXPECT_TRUE(zeros[1].replay);
+  EXPECT_EQ(zero.stats().resyncs, 0u);
+}
+
 TEST(Protocol, ReplaysCanBeDeliveredFlaggedAndADecoderReset) {
   const Message m = SetStages{1};
   FrameDecoder decoder(true);  // as the link reads commands: a command sent again is answered
   Bytes stream;
-  for (const int seq : {5, 6, 6, 4}) {
+  for (const int seq : {5, 6, 6, 5}) {
     const Bytes f = frame_of(m, static_cast<std::uint16_t>(seq));
     stream.insert(stream.end(), f.begin(), f.end());
   }

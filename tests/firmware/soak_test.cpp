@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <optional>
 #include <span>
 #include <thread>
@@ -53,10 +54,19 @@ std::size_t resident_bytes() {
   return resident * static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
 }
 
-// Open file descriptors, probed one by one (listing /proc/self/fd would allocate).
+// Open file descriptors, probed one by one (listing /proc/self/fd would allocate), but for the
+// snapshot files the writer thread may have open at that moment.
 int open_descriptors() {
   int open = 0;
-  for (int fd = 0; fd < 4096; ++fd) open += ::fcntl(fd, F_GETFD) != -1 ? 1 : 0;
+  for (int fd = 0; fd < 4096; ++fd) {
+    if (::fcntl(fd, F_GETFD) == -1) continue;
+    char link[64];
+    char target[4096];
+    std::snprintf(link, sizeof link, "/proc/self/fd/%d", fd);
+    const ssize_t n = ::readlink(link, target, sizeof target - 1);
+    target[n > 0 ? n : 0] = '\0';
+    if (std::strstr(target, "/snapshots/") == nullptr) ++open;
+  }
   return open;
 }
 
@@ -65,6 +75,7 @@ int open_descriptors() {
 // summaries before it.
 struct Watch final : FrameObserver {
   Steady::time_point warm_after;
+  std::atomic<bool>* warmed = nullptr;  // told when the warm-up ends
   bool warm = false;
   std::size_t allocations_warm = 0, allocations_last = 0;
   std::size_t resident_warm = 0, resident_last = 0, resident_peak = 0;
@@ -82,6 +93,7 @@ struct Watch final : FrameObserver {
       allocations_warm = test::allocations_in_all_threads();
       resident_warm = resident_bytes();
       descriptors_warm = open_descriptors();
+      if (warmed != nullptr) *warmed = true;
     }
     if (!warm) return;
     allocations_last = test::allocations_in_all_threads();
@@ -105,12 +117,14 @@ struct Watch final : FrameObserver {
 };
 
 // The robot: reads and decodes everything, and sends a command every 100 ms from a fixed round
-// (exposure up and back, stages off and on, a snapshot, and one command sent twice).
+// (exposure up and back, stages off and on, a snapshot once the warm-up is over, so that the
+// snapshots and their limit fall in the measured part, and one command sent twice).
 struct Robot {
   hal::TermiosSerialPort port;
   protocol::FrameDecoder decoder;
   std::atomic<bool> running{true};
   std::atomic<std::uint64_t> acks_ok{0}, acks_rejected{0}, acks_duplicate{0};
+  std::atomic<bool> warm{false};
   std::uint16_t sequence = 0;
 
   explicit Robot(const std::string& peer) : port({peer, 115200}) {}
@@ -151,7 +165,11 @@ struct Robot {
           send(protocol::SetStages{all}, sequence++);
           break;
         case 4:
-          send(protocol::Snapshot{}, sequence++);
+          if (warm) {
+            send(protocol::Snapshot{}, sequence++);
+          } else {
+            send(protocol::SetStages{all}, sequence++);
+          }
           break;
         default:
           send(protocol::SetStages{all}, static_cast<std::uint16_t>(sequence - 1));
@@ -192,6 +210,7 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
   }
   Robot robot(fw.board().serial_peer());
   Watch watch;
+  watch.warmed = &robot.warm;
   watch.warm_after = Steady::now() + std::chrono::seconds(std::max(5, seconds / 10));
   fw.frame_loop().set_observer(&watch);
   std::atomic<bool> stop{false};

@@ -151,9 +151,10 @@ void validate(const BoardConfig& config, const std::string& file);
 std::string frame_timing_problem(hal::Nanoseconds period, hal::Nanoseconds exposure,
                                  hal::Nanoseconds camera_timeout);
 
-// Why the service manager's watchdog (interval; 0: none) would fire while the frame loop waits
+// Why the service manager's watchdog (interval; 0: none) could fire while the frame loop waits
 // for a late pair, or empty: the loop pings it after every pair and every wait of up to the
-// cameras' timeout, and a ping is sent at most every half interval.
+// cameras' timeout, a ping is sent at most every half interval, so the timeout may be at most a
+// quarter of it (the other quarter for the processing after the wait).
 std::string watchdog_problem(const BoardConfig& config, hal::Nanoseconds watchdog_interval);
 
 // The data cache folder of scripts/fetch-data.sh: $EPIPOLE_DATA_DIR, else

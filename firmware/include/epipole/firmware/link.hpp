@@ -122,6 +122,7 @@ class Link {
   std::array<std::uint8_t, protocol::kMaxFrameSize + mavlink::kMaxFrameSize> write_buffer_{};
   std::array<std::byte, 512> read_buffer_{};
   protocol::FrameDecoder decoder_{true};         // replays delivered, to be answered
+  bool broken_frame_ = false;                    // the last frame was given up half written
   std::atomic<hal::Nanoseconds> last_round_{0};  // steady time the thread last went round
   std::atomic<bool> stopping_{false};
   std::atomic<hal::Nanoseconds> drain_deadline_{0};

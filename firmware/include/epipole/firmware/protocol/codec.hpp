@@ -50,10 +50,11 @@ struct DecoderStats {
 // the next 0x00.
 //
 // Sequence numbers (docs/protocol.md): a sender starts at 0 and counts up, wrapping. A frame
-// numbered 0 that does not follow 65535 is a sender that restarted (a resync, delivered); one
-// 1..63 behind the last is a replay (dropped, or with `deliver_replays` delivered flagged, so
-// that a command sent again is answered without being applied again); further behind, the
-// sender restarted too.
+// numbered 0 that neither follows 65535 nor repeats the last frame is a sender that restarted
+// (a resync, delivered); one up to 63 behind the last (or the last itself) is a replay when that
+// number was delivered (dropped, or with `deliver_replays` delivered flagged, so that a command
+// sent again is answered without being applied again), and a late frame, delivered, when it
+// was not; further behind, the sender restarted too.
 class FrameDecoder {
  public:
   explicit FrameDecoder(bool deliver_replays = false) : deliver_replays_(deliver_replays) {}
@@ -78,6 +79,7 @@ class FrameDecoder {
   bool overflowed_ = false;
   bool have_sequence_ = false;
   std::uint16_t last_sequence_ = 0;
+  std::uint64_t delivered_ = 0;  // bit k: last_sequence_ - k was delivered
   DecoderStats stats_;
 };
 

@@ -6,7 +6,7 @@
 
 namespace epipole::protocol {
 
-// Epipole serial protocol, version 2 (docs/protocol.md). Every number is little-endian on the
+// Epipole serial protocol, version 3 (docs/protocol.md). Every number is little-endian on the
 // wire; sizes here are the wire sizes. Version 2 added the flags of health and frame.
 
 inline constexpr std::uint8_t kVersion = 3;
