@@ -81,6 +81,10 @@ for lib in $(LC_ALL=C readelf -d "$fw" | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p')
   [[ -n $package ]] || fail "$deb: no package of $arch holds $lib (NEEDED by epipole-fw)"
   grep -qxF "$package" <<<"$depends_names" || fail "$deb: needs $lib of $package, not in Depends: $depends"
 done
+# The Raspberry Pi 5 board file the package installs selects libcamera: a firmware built
+# without it could not start on that board.
+LC_ALL=C readelf -d "$fw" | grep -q 'NEEDED.*\[libcamera\.so' ||
+  fail "$deb: epipole-fw is built without libcamera (the Raspberry Pi 5 board file needs it)"
 changelog=$(zcat "$control/root/usr/share/doc/epipole/changelog.gz" | head -1)
 [[ $changelog == "epipole ($(dpkg-deb -f "$deb" Version))"* ]] ||
   fail "$deb: the changelog's last entry is not this version: $changelog"

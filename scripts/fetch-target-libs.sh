@@ -25,6 +25,17 @@ refresh_lists() {
   $sudo apt-get update -qq || echo "fetch-target-libs: apt-get update failed; trying the lists as they are" >&2
 }
 
+# Whether the database says which package each library in the folder comes from, as
+# dpkg-shlibdeps will ask it (a folder moved, copied or made by an older version of this script
+# names other paths).
+database_answers() {
+  local lib
+  for lib in "$root/usr/lib/$triple"/libcamera.so.[0-9]* "$root/usr/lib/$triple"/libyaml-cpp.so.[0-9]*; do
+    [[ -f $lib ]] || return 1
+    dpkg-query --admindir="$root/dpkg" -S "$lib" >/dev/null 2>&1 || return 1
+  done
+}
+
 for arch in "$@"; do
   case $arch in
     arm64 | armhf) ;;
@@ -35,11 +46,14 @@ for arch in "$@"; do
   esac
   root="$parent/target-libs-$arch"
   stamp="$root/.complete-v3"
-  if [[ -f $stamp ]]; then
-    echo "fetch-target-libs: $root is complete"
-    continue
-  fi
   triple=$(dpkg-architecture -a"$arch" -qDEB_HOST_MULTIARCH 2>/dev/null)
+  if [[ -f $stamp ]]; then
+    if database_answers; then
+      echo "fetch-target-libs: $root is complete"
+      continue
+    fi
+    echo "fetch-target-libs: $root's package database does not name its libraries: making it again"
+  fi
   # apt-get download of a foreign architecture needs it known to dpkg and its package lists.
   if ! dpkg --print-foreign-architectures | grep -qx "$arch"; then
     $sudo dpkg --add-architecture "$arch"
@@ -94,5 +108,9 @@ for arch in "$@"; do
   )
   rm -rf "$work" "$root"
   mv "$root.partial" "$root"
+  if ! database_answers; then
+    echo "fetch-target-libs: $root/dpkg does not name the libraries unpacked beside it" >&2
+    exit 1
+  fi
   echo "fetch-target-libs: $root ready"
 done

@@ -102,9 +102,12 @@ void FrameLoop::start() {
   board_.left().start();
   board_.right().start();
   if (trigger_) trigger_->start();
-  if (hal::SerialPort* serial = board_.serial(); serial != nullptr && !serial->is_open()) {
-    std::fprintf(stderr, "epipole-fw: serial port %s is not there yet: waiting for it\n",
-                 config_.serial.port.device.c_str());
+  if (const hal::RecoveringSerialPort* serial = board_.serial_recovery()) {
+    serial_connected_ = serial->connected();
+    if (!serial_connected_) {
+      std::fprintf(stderr, "epipole-fw: serial port %s is not there yet: waiting for it\n",
+                   config_.serial.port.device.c_str());
+    }
   }
   link_.start();
   if (link_.protocol() == LinkProtocol::mavlink) link_.publish_heartbeat(heartbeat_status());
@@ -214,10 +217,7 @@ void FrameLoop::answer(std::uint16_t sequence, Verdict verdict) {
   ack.command_sequence = sequence;
   ack.status = verdict.status;
   ack.reason = verdict.reason;
-  if (verdict.status == protocol::AckStatus::rejected ||
-      verdict.status == protocol::AckStatus::duplicate) {
-    ++rejected_commands_;
-  }
+  if (verdict.status != protocol::AckStatus::ok) ++rejected_commands_;  // health's bad_commands
   send(ack);
 }
 
@@ -362,14 +362,42 @@ void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool tri
   if (r.calibration_health) last_calibration_health_ = r.calibration_health;
 }
 
+// One journal line when a camera, the trigger line or the serial port goes, and one when it is
+// back (health counts them).
+void FrameLoop::say_device_changes() {
+  for (auto [camera, lost] : {std::pair{&board_.left_recovery(), &left_lost_},
+                              std::pair{&board_.right_recovery(), &right_lost_}}) {
+    if (camera->recovering() != *lost) {
+      *lost = camera->recovering();
+      std::fprintf(stderr, "epipole-fw: camera %s %s%s%s\n", camera->name().c_str(),
+                   *lost ? "lost, reopening" : "recovered", *lost ? ": " : "",
+                   *lost ? camera->last_error().c_str() : "");
+    }
+  }
+  // The firmware goes on without the trigger's edges while its line is not there.
+  if (trigger_ && trigger_->line().available() == trigger_missing_) {
+    trigger_missing_ = !trigger_missing_;
+    const std::string& line = config_.trigger.line.line;
+    if (trigger_missing_) {
+      std::fprintf(stderr, "epipole-fw: trigger %s not there, waiting for it: %s\n", line.c_str(),
+                   trigger_->line().unavailable_reason().c_str());
+    } else {
+      std::fprintf(stderr, "epipole-fw: trigger %s found\n", line.c_str());
+    }
+  }
+  const hal::RecoveringSerialPort* serial = board_.serial_recovery();
+  if (serial != nullptr && serial->connected() != serial_connected_) {
+    serial_connected_ = !serial_connected_;
+    std::fprintf(stderr, "epipole-fw: serial port %s %s\n", config_.serial.port.device.c_str(),
+                 serial_connected_ ? "open" : "gone (hung up), waiting for it");
+  }
+}
+
 RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& stop) {
   start();
   hal::Clock& clock = board_.clock();
   hal::VirtualClock* charge =
       board_.sim() != nullptr && config_.sim.charge_compute ? &board_.sim()->clock : nullptr;
-  bool left_lost = false;
-  bool right_lost = false;
-  bool trigger_missing = false;
   const auto note_health = [&] {
     if (auto h = health_.due(clock.now(), faults())) {
       ++summary_.health_messages;
@@ -392,27 +420,7 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
         }
       }
     }
-    // Say when a camera goes and comes back (the counters are in the health message).
-    for (auto [camera, lost] : {std::pair{&board_.left_recovery(), &left_lost},
-                                std::pair{&board_.right_recovery(), &right_lost}}) {
-      if (camera->recovering() != *lost) {
-        *lost = camera->recovering();
-        std::fprintf(stderr, "epipole-fw: camera %s %s%s%s\n", camera->name().c_str(),
-                     *lost ? "lost, reopening" : "recovered", *lost ? ": " : "",
-                     *lost ? camera->last_error().c_str() : "");
-      }
-    }
-    // And when the trigger line is not there (the firmware goes on without its edges).
-    if (trigger_ && trigger_->line().available() == trigger_missing) {
-      trigger_missing = !trigger_missing;
-      const std::string& line = config_.trigger.line.line;
-      if (trigger_missing) {
-        std::fprintf(stderr, "epipole-fw: trigger %s not there, waiting for it: %s\n", line.c_str(),
-                     trigger_->line().unavailable_reason().c_str());
-      } else {
-        std::fprintf(stderr, "epipole-fw: trigger %s found\n", line.c_str());
-      }
-    }
+    say_device_changes();
     // The service watchdog hears from the firmware only while the link's thread goes round too.
     if (heartbeat_ && link_.alive(kLinkAlive)) heartbeat_();
   };

@@ -115,7 +115,17 @@ AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {
 // ----------------------------------------------------------------------------------------------
 
 RecoveringSerialPort::RecoveringSerialPort(SerialPort& port, Clock& clock, BackoffConfig config)
-    : port_(port), clock_(clock), backoff_(config) {}
+    : port_(port), clock_(clock), backoff_(config), connected_(port.is_open()) {}
+
+void RecoveringSerialPort::reopen() {
+  port_.reopen();
+  connected_.store(true, std::memory_order_relaxed);
+}
+
+void RecoveringSerialPort::close() {
+  port_.close();
+  connected_.store(false, std::memory_order_relaxed);
+}
 
 bool RecoveringSerialPort::ensure_open() {
   if (port_.is_open()) return true;
@@ -130,6 +140,7 @@ bool RecoveringSerialPort::ensure_open() {
   }
   ++counters_.reopens;
   reopens_.store(counters_.reopens, std::memory_order_relaxed);
+  connected_.store(true, std::memory_order_relaxed);
   backoff_.succeeded();
   return true;
 }
@@ -138,7 +149,7 @@ void RecoveringSerialPort::note(IoStatus status) {
   if (status == IoStatus::timeout) ++counters_.timeouts;
   if (status == IoStatus::hung_up) {
     ++counters_.losses;
-    port_.close();
+    close();
     backoff_.succeeded();
   }
 }

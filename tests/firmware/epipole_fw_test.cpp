@@ -17,6 +17,7 @@
 
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/protocol/codec.hpp"
+#include "epipole/hal/pty_serial.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "sim_rig.hpp"
 #include "test_paths.hpp"
@@ -117,15 +118,22 @@ TEST(EpipoleFw, DevicesNotThereAtStartAreWaitedFor) {
          "cameras: {backend: v4l2, left: /dev/video-epipole-late-0, right: "
          "/dev/video-epipole-late-1, width: 160, height: 96, trigger: free_running}\n"
          "trigger: {backend: none}\n"
-         "serial: {backend: termios, device: /dev/tty-epipole-late, baud: 115200}\n";
+         "serial: {backend: termios, device: "
+      << (dir.path() / "tty-late").string() << ", baud: 115200}\n";
   const Process p = start({"--board", (dir.path() / "board.yaml").string()});
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  // The serial device appears half a second later (a USB adapter enumerated after the service
+  // started): a pseudo-terminal, whose terminal end the board file's path comes to name.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  hal::PtySerialPort robot({});
+  std::filesystem::create_symlink(robot.peer_path(), dir.path() / "tty-late");
+  std::this_thread::sleep_for(std::chrono::milliseconds(3000));  // back-off 0.1 s doubling
   ::kill(p.pid, SIGTERM);
   const auto [code, out] = finish(p);
   EXPECT_EQ(code, 0) << out;
-  EXPECT_NE(out.find("serial port /dev/tty-epipole-late is not there yet: waiting for it"),
-            std::string::npos)
-      << out;
+  const std::string serial = "serial port " + (dir.path() / "tty-late").string();
+  const std::size_t waiting = out.find(serial + " is not there yet: waiting for it");
+  EXPECT_NE(waiting, std::string::npos) << out;
+  EXPECT_NE(out.find(serial + " open", waiting), std::string::npos) << out;
   for (const char* camera : {"/dev/video-epipole-late-0", "/dev/video-epipole-late-1"}) {
     EXPECT_NE(out.find(std::string("camera ") + camera + ": not there (yet)"), std::string::npos)
         << out;

@@ -686,6 +686,27 @@ TEST(FrameLoop, ASnapshotThatCannotBeWrittenIsRejectedAndCountedInHealth) {
   EXPECT_EQ(health.back().snapshot_failures, 1u);
 }
 
+TEST(FrameLoop, ASnapshotThatWouldLeaveTooLittleFreeSpaceIsRefused) {
+  using protocol::AckStatus;
+  // 10 TB to be kept free: no disk here has that, so the reserve refuses every snapshot.
+  LinkedRig linked("snapshot_directory: snapshots\nsnapshot_min_free_mb: 10000000\n");
+  Recorder recorder;
+  send_at(recorder, linked, 5, {protocol::Snapshot{}}, 9);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = linked.fw->run(30, stop);
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  ASSERT_EQ(acks.size(), 1u);
+  EXPECT_EQ(acks[0].command_sequence, 9);
+  EXPECT_EQ(acks[0].status, AckStatus::rejected);
+  EXPECT_EQ(acks[0].reason, protocol::AckReason::storage);
+  EXPECT_EQ(s.faults.bad_commands, 1u);
+  EXPECT_EQ(s.faults.snapshot_failures, 0u) << "refused before anything was written";
+  const std::filesystem::path folder = linked.rig.dir.path() / "snapshots";
+  ASSERT_TRUE(std::filesystem::is_directory(folder));
+  EXPECT_TRUE(std::filesystem::is_empty(folder));
+}
+
 TEST(FrameLoop, SetExposureReachesBothCameras) {
   using protocol::AckStatus;
   // The cameras start at 2 ms and unity gain; the simulated ones scale what they replay by the
@@ -779,6 +800,7 @@ TEST(FrameLoop, FreeRunningCamerasWithoutATriggerPairByTime) {
   EXPECT_EQ(statuses(linked.acks()),
             (std::vector<AckStatus>{AckStatus::unsupported, AckStatus::ok}))
       << "no trigger line to set; the cameras' exposure still is";
+  EXPECT_EQ(s.faults.bad_commands, 1u) << "the unsupported command is counted";
   ASSERT_EQ(s.frames, 240u);
   std::uint32_t longest_gap = 0;
   for (std::size_t i = 0; i < recorder.frames.size(); ++i) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -206,6 +207,64 @@ TEST(Link, ARobotThatStopsReadingDoesNotWedgeTheLink) {
   EXPECT_LT(std::chrono::steady_clock::now() - before_stop, std::chrono::seconds(2))
       << "stop() is not held up by the stuck port";
   EXPECT_GT(port.writes(), 2);
+}
+
+// A driver that holds the thread in write() whatever the timeout (a kernel bug, a wedged USB
+// adapter): the link's thread cannot go round, and alive() says so, so the service watchdog is
+// no longer pinged and systemd restarts the firmware.
+class HangingPort final : public hal::SerialPort {
+ public:
+  hal::IoResult read(std::span<std::byte>, hal::Nanoseconds timeout) override {
+    std::this_thread::sleep_for(
+        std::chrono::nanoseconds(std::min<hal::Nanoseconds>(timeout, 1'000'000)));
+    return {hal::IoStatus::timeout, 0};
+  }
+  hal::IoResult write(std::span<const std::byte> data, hal::Nanoseconds) override {
+    std::unique_lock lock(mutex_);
+    ++writes_;
+    wake_.notify_all();
+    wake_.wait(lock, [this] { return released_; });
+    return {hal::IoStatus::ok, data.size()};
+  }
+  bool is_open() const override { return true; }
+  void reopen() override {}
+  void close() override {}
+
+  void wait_for_a_write() {
+    std::unique_lock lock(mutex_);
+    wake_.wait(lock, [this] { return writes_ > 0; });
+  }
+  void release() {
+    const std::lock_guard lock(mutex_);
+    released_ = true;
+    wake_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  int writes_ = 0;
+  bool released_ = false;
+};
+
+TEST(Link, AThreadHeldInThePortIsNotAlive) {
+  HangingPort port;
+  hal::VirtualClock clock;
+  Link link(&port, clock, {});
+  EXPECT_TRUE(link.alive(1'000'000)) << "no thread yet: nothing to wait for";
+  link.start();
+  EXPECT_TRUE(link.publish(obstacles(1)));
+  port.wait_for_a_write();
+  EXPECT_TRUE(link.alive(1'000'000'000)) << "just went into the write";
+  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+  EXPECT_FALSE(link.alive(1'000'000'000)) << "held for 1.2 s";
+  port.release();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  while (!link.alive(100'000'000) && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_TRUE(link.alive(100'000'000)) << "going round again once the port lets go";
+  link.stop(0);
 }
 
 TEST(Link, CommandsBeyondTheQueueAreKeptToBeAnsweredBusy) {

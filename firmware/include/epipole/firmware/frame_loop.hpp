@@ -84,6 +84,7 @@ class FrameLoop {
   // trigger_from_capture: result.trigger_ns is the left frame's time, not a trigger edge's.
   void publish(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
   void send(const protocol::Message& message);
+  void say_device_changes();
   FaultCounts faults();
   // MAVLink's system status: calibrating (not ready) until the rig has its calibration.
   std::uint8_t heartbeat_status() const {
@@ -108,6 +109,11 @@ class FrameLoop {
   bool snapshot_pending_ = false;
   std::uint16_t snapshot_sequence_ = 0;
   std::uint64_t rejected_commands_ = 0;
+  // What the journal was last told of the devices.
+  bool left_lost_ = false;
+  bool right_lost_ = false;
+  bool trigger_missing_ = false;
+  bool serial_connected_ = true;
   std::optional<calib::HealthFigure> last_calibration_health_;  // of the latest matches
 };
 

@@ -96,12 +96,14 @@ class RecoveringSerialPort final : public SerialPort {
   IoResult read(std::span<std::byte> buffer, Nanoseconds timeout) override;
   IoResult write(std::span<const std::byte> data, Nanoseconds timeout) override;
   bool is_open() const override { return port_.is_open(); }
-  void reopen() override { port_.reopen(); }
-  void close() override { port_.close(); }
+  void reopen() override;
+  void close() override;
   // Only for the thread that reads and writes the port.
   const RecoveryCounters& counters() const { return counters_; }
   // The successful reopens so far, for any thread.
   std::uint64_t reopens() const { return reopens_.load(std::memory_order_relaxed); }
+  // Whether the port is open, for any thread (is_open() is for the one that uses the port).
+  bool connected() const { return connected_.load(std::memory_order_relaxed); }
 
  private:
   bool ensure_open();
@@ -112,6 +114,7 @@ class RecoveringSerialPort final : public SerialPort {
   Backoff backoff_;
   RecoveryCounters counters_;
   std::atomic<std::uint64_t> reopens_{0};  // counters_.reopens, published to other threads
+  std::atomic<bool> connected_;            // port_.is_open(), published to other threads
 };
 
 }  // namespace epipole::hal
