@@ -11,6 +11,8 @@ set(EPIPOLE_QEMU qemu-arm)
 
 set(EPIPOLE_CPU "cortex-a7" CACHE STRING "Target core for -mcpu")
 set_property(CACHE EPIPOLE_CPU PROPERTY STRINGS cortex-a72 cortex-a53 cortex-a15 cortex-a9 cortex-a7)
-set(EPIPOLE_ARCH_FLAGS "-mcpu=${EPIPOLE_CPU} -mfpu=neon-vfpv4 -mfloat-abi=hard")
+# -Wno-psabi: GCC notes, for every std::vector of a small struct, that its parameter passing
+# changed in GCC 7.1; that matters only when linking objects built by an older GCC (none here).
+set(EPIPOLE_ARCH_FLAGS "-mcpu=${EPIPOLE_CPU} -mfpu=neon-vfpv4 -mfloat-abi=hard -Wno-psabi")
 
 include(${CMAKE_CURRENT_LIST_DIR}/linux-gnu-common.cmake)
