@@ -1,5 +1,6 @@
 #include "epipole/core/yaml_fields.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -102,12 +103,16 @@ YAML::Node Fields::child(const YAML::Node& map, const std::string& path, const c
 
 void Fields::only_keys(const YAML::Node& map, const std::string& path,
                        std::initializer_list<const char*> known) const {
+  std::vector<std::string_view> names(known.begin(), known.end());
+  only_keys(map, path, names);
+}
+
+void Fields::only_keys(const YAML::Node& map, const std::string& path,
+                       std::span<const std::string_view> known) const {
   require_map(map, path);
   for (const auto& entry : map) {
     const std::string name = entry.first.IsScalar() ? entry.first.Scalar() : std::string("?");
-    bool found = false;
-    for (const char* k : known) found = found || name == k;
-    if (!found) {
+    if (std::find(known.begin(), known.end(), name) == known.end()) {
       throw Error(cat(file_, ": unknown key '", join(path, name), "'"));
     }
   }

@@ -1,7 +1,6 @@
 #include "epipole/firmware/board.hpp"
 
 #include "epipole/core/error.hpp"
-#include "epipole/hal/pty_serial.hpp"
 #include "epipole/hal/registry.hpp"
 
 namespace epipole::firmware {
@@ -17,15 +16,16 @@ hal::SimCameraTiming sim_timing(const BoardConfig& c) {
 }  // namespace
 
 Board::Board(const BoardConfig& config)
-    : Board(config, config.cameras.backend == "sim" ? load_scene_images(config) : SceneImages{}) {}
+    : Board(config, config.simulated() ? load_scene_images(config) : SceneImages{}) {}
 
 Board::Board(const BoardConfig& config, SceneImages sim_images) {
   hal::BackendContext context;
-  if (config.cameras.backend == "sim") {
+  if (config.simulated()) {
     require(!sim_images.left.empty(), "board ", config.name,
             ": the simulated cameras have no images");
     sim_ = std::make_unique<hal::SimBoard>(config.trigger.line, std::move(sim_images.left),
                                            std::move(sim_images.right), sim_timing(config));
+    sim_->clock.charge_compute(config.sim.charge_compute);
     clock_ = &sim_->clock;
     context.sim = sim_.get();
   } else {
@@ -47,10 +47,10 @@ Board::Board(const BoardConfig& config, SceneImages sim_images) {
     rates.seed = config.sim.seed * 2654435761u + 1;  // independent faults per side
     sim_camera(hal::Side::right)->set_fault_rates(rates);
   }
-  if (config.trigger.backend != "none") {
+  if (config.has_trigger()) {
     trigger_ = registry.create_trigger(config.trigger.backend, config.trigger.line, context);
   }
-  if (config.serial.backend != "none") {
+  if (config.has_link()) {
     port_ = registry.create_serial(config.serial.backend, config.serial.port, context);
     serial_ = std::make_unique<hal::RecoveringSerialPort>(*port_, *clock_);
   }
@@ -59,13 +59,11 @@ Board::Board(const BoardConfig& config, SceneImages sim_images) {
 Board::~Board() = default;
 
 std::string Board::serial_peer() const {
-  const auto* pty = dynamic_cast<const hal::PtySerialPort*>(port_.get());
-  return pty != nullptr ? pty->peer_path() : std::string();
+  return port_ ? port_->peer_path() : std::string();
 }
 
 hal::SimCamera* Board::sim_camera(hal::Side side) {
-  return dynamic_cast<hal::SimCamera*>(side == hal::Side::left ? left_camera_.get()
-                                                               : right_camera_.get());
+  return sim_ ? sim_->camera(side) : nullptr;
 }
 
 }  // namespace epipole::firmware

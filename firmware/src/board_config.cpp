@@ -9,6 +9,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
+#include "epipole/hal/registry.hpp"
 
 namespace epipole::firmware {
 
@@ -19,6 +20,16 @@ const BoardConfig::SimScene* BoardConfig::sim_scene() const {
     if (s.name == sim.scene) return &s;
   }
   return nullptr;
+}
+
+bool BoardConfig::simulated() const {
+  return hal::BackendRegistry::builtin().camera_traits(cameras.backend).simulated;
+}
+bool BoardConfig::has_trigger() const {
+  return trigger.backend != hal::kNoBackend;
+}
+bool BoardConfig::has_link() const {
+  return serial.backend != hal::kNoBackend;
 }
 
 fs::path default_data_directory() {
@@ -249,7 +260,7 @@ class BoardReader {
     double width_us = 1000;
     number(n, "trigger", "pulse_width_us", width_us, 1, 1e6);
     t.pulse_width = static_cast<hal::Nanoseconds>(width_us * 1000);
-    if (c.trigger.backend != "none") {
+    if (c.has_trigger()) {
       try {
         hal::validate(t);
       } catch (const Error& e) {
@@ -296,22 +307,30 @@ class BoardReader {
         c.serial.mavlink_component_id = static_cast<std::uint8_t>(component);
       }
     }
-    if (c.serial.backend == "termios" && c.serial.port.device.empty()) {
-      f_.fail("serial.device", "a termios serial port needs a device");
+    const bool device =
+        hal::BackendRegistry::builtin().serial_traits(c.serial.backend).needs_device;
+    if (device && c.serial.port.device.empty()) {
+      f_.fail("serial.device", cat("a ", c.serial.backend, " serial port needs a device"));
     }
-    if (c.serial.backend == "termios" && !hal::is_supported_baud(c.serial.port.baud)) {
+    if (device && !hal::is_supported_baud(c.serial.port.baud)) {
       f_.fail("serial.baud", cat(c.serial.port.baud, " is not a baud rate termios supports"));
     }
   }
 
   void read_stages(const YAML::Node& root, BoardConfig& c) {
-    const YAML::Node n =
-        section(root, "stages", {"rectify", "corners", "disparity", "sparse", "detect"});
-    boolean(n, "stages", "rectify", c.stages.rectify);
-    boolean(n, "stages", "corners", c.stages.corners);
-    boolean(n, "stages", "disparity", c.stages.disparity);
-    boolean(n, "stages", "sparse", c.stages.sparse);
-    boolean(n, "stages", "detect", c.stages.detect);
+    std::vector<std::string_view> keys;
+    for (const protocol::StageInfo& s : protocol::kStages) {
+      if (s.kind == protocol::StageKind::switchable) keys.push_back(s.name);
+    }
+    const YAML::Node n = f_.optional_child(root, "", "stages");
+    if (n.IsDefined()) f_.only_keys(n, "stages", keys);
+    for (const protocol::StageInfo& s : protocol::kStages) {
+      if (s.kind != protocol::StageKind::switchable) continue;
+      bool on = protocol::has_stage(c.stages, s.id);
+      boolean(n, "stages", std::string(s.name).c_str(), on);
+      c.stages = static_cast<protocol::StageMask>(on ? c.stages | protocol::stage_bit(s.id)
+                                                     : c.stages & ~protocol::stage_bit(s.id));
+    }
   }
 
   void read_corners(const YAML::Node& root, BoardConfig& c) {
@@ -496,23 +515,31 @@ void validate(const BoardConfig& c, const std::string& file) {
       c.cameras.left.height != c.cameras.right.height) {
     fail("cameras", "left and right cameras differ in size");
   }
-  const std::string backends[] = {"sim", "v4l2", "libcamera"};
-  if (std::find(std::begin(backends), std::end(backends), c.cameras.backend) ==
-      std::end(backends)) {
-    fail("cameras.backend", cat("'", c.cameras.backend, "' is not one of sim, v4l2, libcamera"));
-  }
-  if (c.trigger.backend != "none" && c.pairing.trigger_period > 0 &&
+  const hal::BackendRegistry& registry = hal::BackendRegistry::builtin();
+  const auto known = [&](const char* key, const std::string& backend,
+                         std::vector<std::string> names, bool none_allowed) {
+    if (none_allowed) names.emplace_back(hal::kNoBackend);
+    if (std::find(names.begin(), names.end(), backend) == names.end()) {
+      std::string list;
+      for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+      fail(key, cat("'", backend, "' is not one of ", list));
+    }
+  };
+  known("cameras.backend", c.cameras.backend, registry.camera_backends(), false);
+  known("trigger.backend", c.trigger.backend, registry.trigger_backends(), true);
+  known("serial.backend", c.serial.backend, registry.serial_backends(), true);
+  if (c.has_trigger() && c.pairing.trigger_period > 0 &&
       2 * c.pairing.tolerance >= c.pairing.trigger_period) {
     fail("pairing.tolerance_us",
          cat(c.pairing.tolerance / 1000, " us is not below half the trigger period (",
              c.pairing.trigger_period / 1000, " us): frames of neighbouring triggers could pair"));
   }
-  if (c.trigger.backend != "none" && c.pairing.trigger_period > 0 &&
+  if (c.has_trigger() && c.pairing.trigger_period > 0 &&
       2 * c.pairing.edge_tolerance >= c.pairing.trigger_period) {
     fail("pairing.edge_tolerance_us",
          cat(c.pairing.edge_tolerance / 1000, " us is not below half the trigger period"));
   }
-  if (c.trigger.backend == "none") {  // free running: pairs are matched by time
+  if (!c.has_trigger()) {  // free running: pairs are matched by time
     const double fps = std::max(c.cameras.left.fps, c.cameras.right.fps);
     if (2 * static_cast<double>(c.pairing.tolerance) >= 1e9 / fps) {
       fail("pairing.tolerance_us",
@@ -522,26 +549,27 @@ void validate(const BoardConfig& c, const std::string& file) {
     }
   }
   for (const hal::CameraConfig* camera : {&c.cameras.left, &c.cameras.right}) {
-    const hal::Nanoseconds period = c.trigger.backend != "none"
-                                        ? c.pairing.trigger_period
-                                        : hal::period_of(std::max(camera->fps, 1e-3));
+    const hal::Nanoseconds period =
+        c.has_trigger() ? c.pairing.trigger_period : hal::period_of(std::max(camera->fps, 1e-3));
     if (const std::string problem =
             frame_timing_problem(period, camera->exposure, c.cameras.timeout);
         !problem.empty()) {
-      fail(c.trigger.backend != "none" ? "trigger.rate_hz" : "cameras.fps", problem);
+      fail(c.has_trigger() ? "trigger.rate_hz" : "cameras.fps", problem);
     }
   }
-  if (c.stages.disparity && c.stereo.max_disparity >= c.width()) {
+  if (protocol::has_stage(c.stages, protocol::Stage::disparity) &&
+      c.stereo.max_disparity >= c.width()) {
     fail("stereo.max_disparity",
          cat(c.stereo.max_disparity, " is not smaller than the width ", c.width()));
   }
-  if (c.stages.detect && c.detector.max_size != 0 && c.detector.max_size < c.detector.min_size) {
+  if (protocol::has_stage(c.stages, protocol::Stage::detect) && c.detector.max_size != 0 &&
+      c.detector.max_size < c.detector.min_size) {
     fail("detector.max_size", "is smaller than min_size");
   }
   if (c.threads.realtime_priority > 0 && c.threads.realtime_priority > 99) {
     fail("threads.realtime_priority", "must be in 1..99");
   }
-  if (c.cameras.backend == "sim") {
+  if (c.simulated()) {
     if (c.sim.scenes.empty()) fail("sim.scenes", "the simulated cameras need at least one scene");
     if (c.sim_scene() == nullptr) {
       std::string names;

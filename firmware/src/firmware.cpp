@@ -13,9 +13,7 @@ namespace {
 
 const BoardConfig::SimScene* scene_with_calibration(const BoardConfig& config) {
   const BoardConfig::SimScene* scene = config.sim_scene();
-  return scene != nullptr && config.cameras.backend == "sim" && !scene->calibration.empty()
-             ? scene
-             : nullptr;
+  return scene != nullptr && config.simulated() && !scene->calibration.empty() ? scene : nullptr;
 }
 
 // Not there, rather than there but unreadable (that one is an error when it is loaded).

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "epipole/core/error.hpp"
+#include "epipole/firmware/pair_messages.hpp"
 #include "epipole/firmware/protocol/mavlink.hpp"
 #include "steady_time.hpp"
 
@@ -17,38 +18,28 @@ using protocol::Stage;
 
 namespace {
 
-template <typename T>
-T saturate(std::uint64_t v) {
-  return static_cast<T>(std::min<std::uint64_t>(v, std::numeric_limits<T>::max()));
-}
-
 // The link's thread goes round every few milliseconds, and gives up a write the port takes
 // nothing of within Link::kStuckWrite: longer than this, it is stuck.
 constexpr hal::Nanoseconds kLinkAlive = 2 * Link::kStuckWrite;
 
-constexpr StageMask kAlwaysOn = stage_bit(Stage::capture) | stage_bit(Stage::publish);
-constexpr StageMask kKnownStages = kAlwaysOn | stage_bit(Stage::rectify) |
-                                   stage_bit(Stage::corners) | stage_bit(Stage::disparity) |
-                                   stage_bit(Stage::sparse) | stage_bit(Stage::detect);
-
 std::unique_ptr<TriggerWatch> make_trigger_watch(const BoardConfig& config, Board& board) {
   if (board.trigger() == nullptr) return nullptr;
   const hal::Nanoseconds period = hal::period_of(config.trigger.line.rate_hz);
-  return std::make_unique<TriggerWatch>(
-      *board.trigger(), board.sim() != nullptr ? &board.sim()->trigger : nullptr, period);
+  return std::make_unique<TriggerWatch>(*board.trigger(), period);
 }
 
 // Pairs are checked against the trigger's own edges when the delay from edge to frame
-// timestamp is known: the board file gives it, the simulated board knows its cameras'.
-bool check_trigger(const BoardConfig& config, Board& board) {
-  return config.pairing_edge_delay.has_value() || board.sim() != nullptr;
+// timestamp is known: the board file gives it, or the cameras know their own.
+bool edge_delay_known(const BoardConfig& config, Board& board) {
+  return config.pairing_edge_delay.has_value() || board.left().edge_delay().has_value();
 }
 
 }  // namespace
 
-hal::PairingConfig pairing_config(const BoardConfig& config, const hal::SimBoard* sim) {
+hal::PairingConfig pairing_config(const BoardConfig& config,
+                                  std::optional<hal::Nanoseconds> camera_edge_delay) {
   hal::PairingConfig p = config.pairing;
-  if (config.trigger.backend == "none") {
+  if (!config.has_trigger()) {
     // Free-running cameras count their frames each on its own: pairs are matched by time, and
     // the tolerance must be below half the frame period of the faster camera.
     p.match_sequences = false;
@@ -56,8 +47,8 @@ hal::PairingConfig pairing_config(const BoardConfig& config, const hal::SimBoard
   }
   if (config.pairing_edge_delay) {
     p.edge_delay = *config.pairing_edge_delay;
-  } else if (sim != nullptr) {
-    p.edge_delay = sim->timing.exposure_delay;
+  } else if (camera_edge_delay) {
+    p.edge_delay = *camera_edge_delay;
   }
   return p;
 }
@@ -81,13 +72,14 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
       pipeline_(pipeline),
       link_(link),
       trigger_(make_trigger_watch(config, board)),
-      grabber_(board.left(), board.right(), board.clock(), pairing_config(config, board.sim()),
-               trigger_ && check_trigger(config, board) ? &trigger_->record() : nullptr),
+      grabber_(board.left(), board.right(), board.clock(),
+               pairing_config(config, board.left().edge_delay()),
+               trigger_ && edge_delay_known(config, board) ? &trigger_->record() : nullptr),
       health_(board.clock().now()),
       snapshots_(config.snapshot_directory, config.width(), config.height(),
                  {config.snapshot_limit,
                   static_cast<std::uint64_t>(config.snapshot_min_free_mb * 1024 * 1024)}),
-      stages_(stage_mask(config.stages)),
+      stages_(config.stages | protocol::kAlwaysOnStages),
       // The board names its calibration file, and none was loaded: it does not exist yet (a
       // file that does not read, or a simulated scene's, stops the firmware at start-up).
       not_calibrated_(!config.calibration.empty() && !pipeline.has_calibration()),
@@ -163,7 +155,7 @@ FaultCounts FrameLoop::faults() {
   const hal::PairingCounters& p = grabber_.pairer().counters();
   const auto& l = board_.left_recovery().counters();
   const auto& r = board_.right_recovery().counters();
-  f.unpaired_frames = p.unpaired_left + p.unpaired_right;
+  f.unpaired_frames = p.left().unpaired + p.right().unpaired;
   f.triggers = grabber_.pairer().ledger().at_newest_published();
   f.camera_timeouts = l.timeouts + r.timeouts;
   f.camera_reopens = l.reopens + r.reopens;
@@ -196,8 +188,8 @@ void FrameLoop::apply_commands() {
       v = {AckStatus::duplicate, AckReason::none};  // answered again, not applied again
     } else if (const auto* s = std::get_if<protocol::SetStages>(&c.message)) {
       v = {AckStatus::rejected, AckReason::out_of_range};
-      if ((s->enabled_mask & ~kKnownStages) == 0) {
-        stages_ = static_cast<StageMask>(s->enabled_mask | kAlwaysOn);
+      if ((s->enabled_mask & ~protocol::kAllStages) == 0) {
+        stages_ = static_cast<StageMask>(s->enabled_mask | protocol::kAlwaysOnStages);
         v = {AckStatus::ok, AckReason::none};
       }
     } else if (std::holds_alternative<protocol::Snapshot>(c.message)) {
@@ -302,64 +294,19 @@ FrameLoop::Verdict FrameLoop::set_exposure(const protocol::SetExposure& command)
 }
 
 void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool trigger_from_capture) {
+  if (r.calibration_health) last_calibration_health_ = r.calibration_health;
   if (link_.protocol() == LinkProtocol::mavlink) {
     if (r.obstacles != nullptr) {
-      const auto cm = [](double m) { return static_cast<std::uint16_t>(m * 100 + 0.5); };
-      link_.publish_obstacle_distance(mavlink::to_obstacle_distance(
-          *r.obstacles, static_cast<std::uint64_t>(r.trigger_ns / 1000),
-          cm(config_.obstacles.min_depth_m), cm(config_.obstacles.max_depth_m)));
+      link_.publish_obstacle_distance(
+          obstacle_distance_message(*r.obstacles, r.trigger_ns, config_.obstacles));
     }
     return;
   }
-  protocol::FrameSummary s;
-  s.frame = r.frame;
-  s.trigger_ns = static_cast<std::uint64_t>(std::max<hal::Nanoseconds>(r.trigger_ns, 0));
-  s.latency_us = saturate<std::uint32_t>(
-      static_cast<std::uint64_t>(std::max<hal::Nanoseconds>(latency, 0)) / 1000);
-  s.corners_left = saturate<std::uint16_t>(r.corners_left.size());
-  s.corners_right = saturate<std::uint16_t>(r.corners_right.size());
-  s.valid_disparity_permille = static_cast<std::uint16_t>(r.valid_disparity_permille);
-  s.points = static_cast<std::uint16_t>(r.best_points.size());
-  s.detections = static_cast<std::uint8_t>(r.detections.size());
-  if (trigger_from_capture) s.flags |= protocol::kFrameTriggerFromCapture;
-  send(s);
-  if ((r.stages & stage_bit(Stage::detect)) != 0) {
-    protocol::Detections d;
-    d.frame = r.frame;
-    d.count = static_cast<std::uint8_t>(r.detections.size());
-    for (std::size_t i = 0; i < r.detections.size(); ++i) {
-      const vision::Detection& box = r.detections[i];
-      const DetectionDepth& depth = r.detection_depths[i];
-      protocol::Detection& out = d.items[i];
-      out.x = static_cast<std::uint16_t>(box.x);
-      out.y = static_cast<std::uint16_t>(box.y);
-      out.width = static_cast<std::uint16_t>(box.width);
-      out.height = static_cast<std::uint16_t>(box.height);
-      out.neighbors = saturate<std::uint8_t>(static_cast<std::uint64_t>(box.neighbors));
-      out.depth_mm = depth.valid && depth.depth > 0 && depth.depth < 65.5
-                         ? static_cast<std::uint16_t>(std::lround(depth.depth * 1000))
-                         : protocol::kUnknownDepth;
-    }
-    send(d);
-  }
-  if (r.obstacles != nullptr) send(*r.obstacles);
-  if (!r.best_points.empty()) {
-    protocol::Points points;
-    points.frame = r.frame;
-    points.count = static_cast<std::uint8_t>(r.best_points.size());
-    const auto mm = [](float metres) {
-      return static_cast<std::int32_t>(std::clamp(std::lround(static_cast<double>(metres) * 1000.0),
-                                                  -2'000'000'000L, 2'000'000'000L));
-    };
-    for (std::size_t i = 0; i < r.best_points.size(); ++i) {
-      const SparsePoint& p = r.points[r.best_points[i]];
-      points.items[i] = {static_cast<std::uint16_t>(std::lround(p.xl * 16.0f)),
-                         static_cast<std::uint16_t>(std::lround(p.yl * 16.0f)), mm(p.x), mm(p.y),
-                         mm(p.z)};
-    }
-    send(points);
-  }
-  if (r.calibration_health) last_calibration_health_ = r.calibration_health;
+  const PairMessages m = pair_messages(r, latency, trigger_from_capture);
+  send(m.summary);
+  if (m.detections) send(*m.detections);
+  if (m.obstacles) send(*m.obstacles);
+  if (m.points) send(*m.points);
 }
 
 // One journal line when a camera, the trigger line or the serial port goes, and one when it is
@@ -393,108 +340,111 @@ void FrameLoop::say_device_changes() {
   }
 }
 
+// Health once a second (a heartbeat on a MAVLink board), with the calibration's health after it.
+void FrameLoop::publish_health() {
+  std::optional<protocol::Health> h = health_.due(board_.clock().now(), faults());
+  if (!h) return;
+  ++summary_.health_messages;
+  if (link_.protocol() == LinkProtocol::mavlink) {
+    link_.publish_heartbeat(heartbeat_status());
+    return;
+  }
+  if (not_calibrated_) h->flags |= protocol::kHealthNotCalibrated;
+  if (no_cascade_) h->flags |= protocol::kHealthNoCascade;
+  send(*h);
+  if (last_calibration_health_ && last_calibration_health_->matches > 0) {
+    send(calibration_health_message(*last_calibration_health_));
+  }
+}
+
+// Between pairs: health, the journal's device lines, the service watchdog (pinged only while
+// the link's thread goes round too).
+void FrameLoop::tick() {
+  publish_health();
+  say_device_changes();
+  if (heartbeat_ && link_.alive(kLinkAlive)) heartbeat_();
+}
+
+// The freshest pair from what the grabber gave: older ones that waited behind it are skipped (and
+// counted stale). False when there is none to process: a timeout, a camera lost (its reopen
+// unmapped the buffers a held pair's frames are in: that pair goes too).
+bool FrameLoop::take_freshest(hal::PairResult& got) {
+  if (got.status == hal::PairStatus::timeout) {
+    ++summary_.timeouts;
+    return false;
+  }
+  if (got.status == hal::PairStatus::device_lost) {
+    grabber_.pairer().reset(got.lost_side);
+    return false;
+  }
+  const auto skip = [&] {
+    grabber_.pairer().ledger().stale(got.pair.left.sequence);
+    grabber_.release(got.pair);
+    ++summary_.stale;
+  };
+  for (;;) {
+    hal::PairResult newer = grabber_.next(0);
+    if (newer.status == hal::PairStatus::device_lost) {
+      skip();
+      return false;
+    }
+    if (newer.status != hal::PairStatus::ok) return true;
+    skip();
+    got = newer;
+  }
+}
+
+// The pair's trigger edge while the pairs' numbers are the trigger's (after both cameras were
+// reopened without a trigger record to number them by, they go on from the last pair instead:
+// hal/stereo_pairing.hpp); the left frame's time otherwise.
+FrameLoop::TriggerTime FrameLoop::trigger_time(const hal::StereoPair& pair) const {
+  if (trigger_ && grabber_.pairer().numbers_are_the_triggers()) {
+    if (const auto edge = trigger_->record().find(pair.left.sequence)) {
+      return {edge->timestamp, false};
+    }
+  }
+  return {pair.left.timestamp, true};
+}
+
+void FrameLoop::process_pair(const hal::StereoPair& pair) {
+  hal::Clock& clock = board_.clock();
+  const TriggerTime trigger = trigger_time(pair);
+  const hal::Nanoseconds captured = clock.now() - trigger.ns;
+  const hal::Nanoseconds t0 = steady_now();
+  const FrameResult& r =
+      pipeline_.process(pair.left.gray, pair.right.gray, pair.left.sequence, trigger.ns, stages_);
+  clock.spend(steady_now() - t0);
+  const hal::Nanoseconds t1 = steady_now();
+  publish(r, clock.now() - trigger.ns, trigger.from_capture);
+  const hal::Nanoseconds t2 = steady_now();
+  clock.spend(t2 - t1);
+  StageTimes times = r.times;
+  times[static_cast<std::size_t>(Stage::capture)] = captured;
+  times[static_cast<std::size_t>(Stage::publish)] = t2 - t1;
+  times[static_cast<std::size_t>(Stage::total)] = t2 - t0;
+  health_.record(clock.now() - trigger.ns, times);
+  grabber_.pairer().ledger().published(pair.left.sequence);
+  if (snapshot_pending_) {
+    snapshot_pending_ = false;
+    if (!snapshots_.take(r, snapshot_sequence_)) {  // the disk filled meanwhile
+      answer(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::storage});
+    }
+  }
+  if (observer_ != nullptr) observer_->on_frame(r);
+  ++summary_.frames;
+}
+
 RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& stop) {
   start();
-  hal::Clock& clock = board_.clock();
-  hal::VirtualClock* charge =
-      board_.sim() != nullptr && config_.sim.charge_compute ? &board_.sim()->clock : nullptr;
-  const auto note_health = [&] {
-    if (auto h = health_.due(clock.now(), faults())) {
-      ++summary_.health_messages;
-      if (link_.protocol() == LinkProtocol::mavlink) {
-        link_.publish_heartbeat(heartbeat_status());
-      } else {
-        if (not_calibrated_) h->flags |= protocol::kHealthNotCalibrated;
-        if (no_cascade_) h->flags |= protocol::kHealthNoCascade;
-        send(*h);
-        if (last_calibration_health_ && last_calibration_health_->matches > 0) {
-          const auto centipx = [](double px) {
-            return static_cast<std::uint16_t>(std::clamp(std::lround(px * 100), 0L, 65535L));
-          };
-          protocol::CalibrationHealth c;
-          c.matches = saturate<std::uint16_t>(
-              static_cast<std::uint64_t>(last_calibration_health_->matches));
-          c.median_offset_centipx = centipx(last_calibration_health_->median_px);
-          c.p90_offset_centipx = centipx(last_calibration_health_->p90_px);
-          send(c);
-        }
-      }
-    }
-    say_device_changes();
-    // The service watchdog hears from the firmware only while the link's thread goes round too.
-    if (heartbeat_ && link_.alive(kLinkAlive)) heartbeat_();
-  };
-
   while (!stop.load(std::memory_order_relaxed) &&
          (max_frames == 0 || summary_.frames < max_frames)) {
     apply_commands();
     answer_snapshots();
     hal::PairResult got = grabber_.next(config_.cameras.timeout);
-    // Health before the new pair is recorded: the window that ended holds the pairs before it.
-    note_health();
-    if (got.status == hal::PairStatus::timeout) {
-      ++summary_.timeouts;
-      continue;
-    }
-    if (got.status == hal::PairStatus::device_lost) {
-      grabber_.pairer().reset(got.lost_side);
-      continue;
-    }
-    // The freshest pair: older ones that waited behind it are skipped. A camera lost meanwhile
-    // has been reopened, and its buffers unmapped with the pair's frames in them: the pair goes.
-    bool camera_lost = false;
-    for (;;) {
-      hal::PairResult newer = grabber_.next(0);
-      camera_lost = newer.status == hal::PairStatus::device_lost;
-      if (newer.status != hal::PairStatus::ok) break;
-      grabber_.pairer().ledger().stale(got.pair.left.sequence);
-      grabber_.release(got.pair);
-      got = newer;
-      ++summary_.stale;
-    }
-    if (camera_lost) {
-      grabber_.pairer().ledger().stale(got.pair.left.sequence);
-      grabber_.release(got.pair);
-      ++summary_.stale;
-      continue;
-    }
-    const hal::StereoPair& pair = got.pair;
-    hal::Nanoseconds trigger_ns = pair.left.timestamp;
-    bool trigger_from_capture = true;
-    // The edge of the pair's number, while the numbers are the trigger's: after both cameras
-    // were reopened without a trigger record to number them by, they go on from the last pair
-    // instead (hal/stereo_pairing.hpp).
-    if (trigger_ && grabber_.pairer().numbers_are_the_triggers()) {
-      if (const auto edge = trigger_->record().find(pair.left.sequence)) {
-        trigger_ns = edge->timestamp;
-        trigger_from_capture = false;
-      }
-    }
-    const hal::Nanoseconds captured = clock.now() - trigger_ns;
-    const hal::Nanoseconds t0 = steady_now();
-    const FrameResult& r =
-        pipeline_.process(pair.left.gray, pair.right.gray, pair.left.sequence, trigger_ns, stages_);
-    if (charge != nullptr) charge->advance(steady_now() - t0);
-    const hal::Nanoseconds t1 = steady_now();
-    publish(r, clock.now() - trigger_ns, trigger_from_capture);
-    const hal::Nanoseconds t2 = steady_now();
-    if (charge != nullptr) charge->advance(t2 - t1);
-    const hal::Nanoseconds latency = clock.now() - trigger_ns;
-    StageTimes times = r.times;
-    times[static_cast<std::size_t>(Stage::capture)] = captured;
-    times[static_cast<std::size_t>(Stage::publish)] = t2 - t1;
-    times[static_cast<std::size_t>(Stage::total)] = t2 - t0;
-    health_.record(latency, times);
-    grabber_.pairer().ledger().published(pair.left.sequence);
-    if (snapshot_pending_) {
-      snapshot_pending_ = false;
-      if (!snapshots_.take(r, snapshot_sequence_)) {  // the disk filled meanwhile
-        answer(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::storage});
-      }
-    }
-    if (observer_ != nullptr) observer_->on_frame(r);
-    grabber_.release(pair);
-    ++summary_.frames;
+    tick();  // before the new pair is recorded: the health window that ended holds those before
+    if (!take_freshest(got)) continue;
+    process_pair(got.pair);
+    grabber_.release(got.pair);
   }
   finish();
   summary_.pairing = grabber_.pairer().counters();

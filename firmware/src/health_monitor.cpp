@@ -4,21 +4,17 @@
 #include <limits>
 
 #include "epipole/core/error.hpp"
+#include "wire_units.hpp"
 
 namespace epipole::firmware {
 
+using detail::saturate;
+using detail::to_us;
+
 namespace {
-template <typename T>
-T saturate(std::uint64_t value) {
-  return static_cast<T>(std::min<std::uint64_t>(value, std::numeric_limits<T>::max()));
-}
 // A total since start as the message carries it: modulo 2^32.
 std::uint32_t wrapped(std::uint64_t total) {
   return static_cast<std::uint32_t>(total);
-}
-std::uint32_t to_us(hal::Nanoseconds ns) {
-  return saturate<std::uint32_t>(static_cast<std::uint64_t>(std::max<hal::Nanoseconds>(ns, 0)) /
-                                 1000);
 }
 }  // namespace
 

@@ -18,16 +18,6 @@ using detail::steady_now;
 
 using protocol::Stage;
 
-StageMask stage_mask(const BoardConfig::Stages& s) {
-  StageMask m = stage_bit(Stage::capture) | stage_bit(Stage::publish);
-  if (s.rectify) m |= stage_bit(Stage::rectify);
-  if (s.corners) m |= stage_bit(Stage::corners);
-  if (s.disparity) m |= stage_bit(Stage::disparity);
-  if (s.sparse) m |= stage_bit(Stage::sparse);
-  if (s.detect) m |= stage_bit(Stage::detect);
-  return m;
-}
-
 namespace {
 
 // One corner detector per image, FAST or Harris as the board says.
@@ -182,7 +172,8 @@ Pipeline::Pipeline(const BoardConfig& board,
   }
   // The detector, when the board has a cascade (or one is given) and detection is on; a
   // compiled cascade that was not made yet leaves detection off until it is.
-  const bool board_cascade_named = board.stages.detect && !board.detector.cascade.empty();
+  const bool board_cascade_named =
+      protocol::has_stage(board.stages, Stage::detect) && !board.detector.cascade.empty();
   std::error_code ec;
   if (cascade == nullptr && board_cascade_named && board.detector.cascade.extension() != ".xml" &&
       !std::filesystem::exists(board.detector.cascade, ec)) {
@@ -220,92 +211,97 @@ std::size_t Pipeline::working_set_bytes() const {
 const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_t frame,
                                      hal::Nanoseconds trigger_ns, StageMask enabled) {
   FrameResult& r = result_;
-  const StageMask run = enabled & available_;
-  const auto on = [&](Stage s) { return (run & stage_bit(s)) != 0; };
+  r = FrameResult{};
   r.frame = frame;
   r.trigger_ns = trigger_ns;
   r.stages = stage_bit(Stage::capture);
-  r.times.fill(0);
   r.left_raw = r.left = left;
   r.right_raw = r.right = right;
-  r.corners_left = r.corners_right = {};
-  r.disparity = {};
-  r.valid_disparity_permille = 0;
-  r.obstacles = nullptr;
-  r.matches = {};
-  r.points = {};
-  r.best_points = {};
-  r.calibration_health.reset();
-  r.detections = {};
-  r.detection_depths = {};
-
+  // The stages in the order of protocol::kStages, each timed, each only when what it reads ran.
+  const StageMask run = enabled & available_;
   hal::Nanoseconds t = steady_now();
-  const auto lap = [&](Stage s) {
+  for (const protocol::StageInfo& s : protocol::kStages) {
+    if (s.kind != protocol::StageKind::switchable || !protocol::has_stage(run, s.id)) continue;
+    if ((r.stages & s.needs) != s.needs) continue;
+    run_stage(s.id, r);
     const hal::Nanoseconds now = steady_now();
-    r.times[static_cast<std::size_t>(s)] = now - t;
-    r.stages |= stage_bit(s);
+    r.times[static_cast<std::size_t>(s.id)] = now - t;
+    r.stages |= stage_bit(s.id);
     t = now;
-  };
-  if (on(Stage::rectify)) {
-    r.left = stages_->rectifiers->left.rectify(left);
-    r.right = stages_->rectifiers->right.rectify(right);
-    lap(Stage::rectify);
-  }
-  if (on(Stage::corners)) {
-    r.corners_left = stages_->corners_left.detect(r.left);
-    r.corners_right = stages_->corners_right.detect(r.right);
-    lap(Stage::corners);
-  }
-  if (on(Stage::disparity)) {
-    r.disparity = stages_->matcher->compute(r.left, r.right);
-    std::uint64_t valid = 0;
-    for (int y = 0; y < r.disparity.height(); ++y) {
-      const std::int16_t* row = r.disparity.row(y);
-      for (int x = 0; x < r.disparity.width(); ++x) valid += row[x] >= 0 ? 1 : 0;
-    }
-    r.valid_disparity_permille = static_cast<int>(
-        valid * 1000 / (static_cast<std::uint64_t>(r.disparity.width()) * r.disparity.height()));
-    if (obstacles_) r.obstacles = &obstacles_->measure(r.disparity, frame);
-    lap(Stage::disparity);
-  }
-  if (on(Stage::sparse) && (r.stages & stage_bit(Stage::corners)) != 0) {
-    r.matches = stages_->sparse.match(r.left, r.corners_left, r.right, r.corners_right);
-    if (triangulator_) {
-      const std::size_t n = triangulate_matches(*triangulator_, r.matches, points_);
-      r.points = {points_.data(), n};
-      // The most distinctive matches (smallest descriptor distance) become the points sent.
-      for (std::size_t i = 0; i < n; ++i) point_order_[i] = static_cast<std::uint32_t>(i);
-      const std::size_t keep = std::min(n, static_cast<std::size_t>(max_points_));
-      const auto distance = [&](std::uint32_t i) { return points_[i].distance; };
-      std::partial_sort(point_order_.begin(),
-                        point_order_.begin() + static_cast<std::ptrdiff_t>(keep),
-                        point_order_.begin() + static_cast<std::ptrdiff_t>(n),
-                        [&](std::uint32_t a, std::uint32_t b) {
-                          return distance(a) != distance(b) ? distance(a) < distance(b) : a < b;
-                        });
-      r.best_points = {point_order_.data(), keep};
-    }
-    if ((r.stages & stage_bit(Stage::rectify)) != 0) {
-      for (std::size_t i = 0; i < r.matches.size(); ++i) {
-        const vision::SparseMatch& m = r.matches[i];
-        rectified_matches_[i] = {m.xl, m.yl, m.xr, m.yr};
-      }
-      r.calibration_health =
-          calibration_health_.measure({rectified_matches_.data(), r.matches.size()});
-    }
-    lap(Stage::sparse);
-  }
-  if (on(Stage::detect)) {
-    r.detections = detector_->detect(r.left);
-    for (std::size_t i = 0; i < r.detections.size(); ++i) {
-      depths_[i] = depth_estimator_ && !r.disparity.empty()
-                       ? depth_estimator_->estimate(r.detections[i], r.disparity)
-                       : DetectionDepth{};
-    }
-    r.detection_depths = {depths_.data(), r.detections.size()};
-    lap(Stage::detect);
   }
   return r;
+}
+
+void Pipeline::run_stage(Stage stage, FrameResult& r) {
+  switch (stage) {
+    case Stage::rectify:
+      r.left = stages_->rectifiers->left.rectify(r.left_raw);
+      r.right = stages_->rectifiers->right.rectify(r.right_raw);
+      return;
+    case Stage::corners:
+      r.corners_left = stages_->corners_left.detect(r.left);
+      r.corners_right = stages_->corners_right.detect(r.right);
+      return;
+    case Stage::disparity:
+      return match_dense(r);
+    case Stage::sparse:
+      return match_sparse(r);
+    case Stage::detect:
+      return detect(r);
+    case Stage::capture:
+    case Stage::publish:
+    case Stage::total:
+      return;  // the frame loop's
+  }
+}
+
+void Pipeline::match_dense(FrameResult& r) {
+  r.disparity = stages_->matcher->compute(r.left, r.right);
+  std::uint64_t valid = 0;
+  for (int y = 0; y < r.disparity.height(); ++y) {
+    const std::int16_t* row = r.disparity.row(y);
+    for (int x = 0; x < r.disparity.width(); ++x) valid += row[x] >= 0 ? 1 : 0;
+  }
+  r.valid_disparity_permille = static_cast<int>(
+      valid * 1000 / (static_cast<std::uint64_t>(r.disparity.width()) * r.disparity.height()));
+  if (obstacles_) r.obstacles = &obstacles_->measure(r.disparity, r.frame);
+}
+
+void Pipeline::match_sparse(FrameResult& r) {
+  r.matches = stages_->sparse.match(r.left, r.corners_left, r.right, r.corners_right);
+  if (triangulator_) {
+    const std::size_t n = triangulate_matches(*triangulator_, r.matches, points_);
+    r.points = {points_.data(), n};
+    // The most distinctive matches (smallest descriptor distance) become the points sent.
+    for (std::size_t i = 0; i < n; ++i) point_order_[i] = static_cast<std::uint32_t>(i);
+    const std::size_t keep = std::min(n, static_cast<std::size_t>(max_points_));
+    const auto distance = [&](std::uint32_t i) { return points_[i].distance; };
+    std::partial_sort(point_order_.begin(),
+                      point_order_.begin() + static_cast<std::ptrdiff_t>(keep),
+                      point_order_.begin() + static_cast<std::ptrdiff_t>(n),
+                      [&](std::uint32_t a, std::uint32_t b) {
+                        return distance(a) != distance(b) ? distance(a) < distance(b) : a < b;
+                      });
+    r.best_points = {point_order_.data(), keep};
+  }
+  if (protocol::has_stage(r.stages, Stage::rectify)) {
+    for (std::size_t i = 0; i < r.matches.size(); ++i) {
+      const vision::SparseMatch& m = r.matches[i];
+      rectified_matches_[i] = {m.xl, m.yl, m.xr, m.yr};
+    }
+    r.calibration_health =
+        calibration_health_.measure({rectified_matches_.data(), r.matches.size()});
+  }
+}
+
+void Pipeline::detect(FrameResult& r) {
+  r.detections = detector_->detect(r.left);
+  for (std::size_t i = 0; i < r.detections.size(); ++i) {
+    depths_[i] = depth_estimator_ && !r.disparity.empty()
+                     ? depth_estimator_->estimate(r.detections[i], r.disparity)
+                     : DetectionDepth{};
+  }
+  r.detection_depths = {depths_.data(), r.detections.size()};
 }
 
 }  // namespace epipole::firmware

@@ -9,19 +9,17 @@ namespace epipole::firmware {
 
 using detail::steady_now;
 
-TriggerWatch::TriggerWatch(hal::TriggerLine& line, hal::SimTrigger* sim, hal::Nanoseconds period)
-    : line_(line), sim_(sim), period_(period) {
-  if (sim_ != nullptr) sim_->record_to(&record_);
-}
+TriggerWatch::TriggerWatch(hal::TriggerLine& line, hal::Nanoseconds period)
+    : line_(line), line_records_itself_(line.record_edges_to(&record_)), period_(period) {}
 
 TriggerWatch::~TriggerWatch() {
   stop();
-  if (sim_ != nullptr) sim_->record_to(nullptr);
+  if (line_records_itself_) line_.record_edges_to(nullptr);
 }
 
 void TriggerWatch::start() {
   line_.start();
-  if (sim_ == nullptr && !thread_.joinable()) {
+  if (!line_records_itself_ && !thread_.joinable()) {
     stopping_ = false;
     thread_ = std::thread([this] { run(); });
   }

@@ -33,6 +33,10 @@ void VirtualClock::sleep_until(Nanoseconds deadline) {
   }
 }
 
+void VirtualClock::spend(Nanoseconds elapsed) {
+  if (charge_compute_ && elapsed > 0) advance(elapsed);
+}
+
 void VirtualClock::advance(Nanoseconds delta) {
   require(delta >= 0, "a virtual clock cannot go back (advance by ", delta, " ns)");
   now_.fetch_add(delta, std::memory_order_acq_rel);

@@ -8,6 +8,7 @@
 #include <ctime>
 #include <filesystem>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "epipole/core/error.hpp"
@@ -54,18 +55,18 @@ bool GpiodTrigger::find_on_any_chip() {
   int closed = 0;
   std::string why;
   for (const std::filesystem::path& path : chips) {
-    gpiod_chip* chip = gpiod_chip_open(path.c_str());
-    if (chip == nullptr) {
+    Chip chip(gpiod_chip_open(path.c_str()));
+    if (!chip) {
       ++closed;
       why = std::strerror(errno);
       continue;
     }
-    if (gpiod_line* line = gpiod_chip_find_line(chip, config_.line.c_str()); line != nullptr) {
-      chip_ = chip;
+    if (gpiod_line* line = gpiod_chip_find_line(chip.get(), config_.line.c_str());
+        line != nullptr) {
+      chip_ = std::move(chip);
       line_ = line;
       return true;
     }
-    gpiod_chip_close(chip);
   }
   set_reason(cat("no GPIO line of that name on any chip",
                  closed > 0 ? cat(" (", closed, " of ", chips.size(), " chips do not open: ", why,
@@ -74,15 +75,19 @@ bool GpiodTrigger::find_on_any_chip() {
   return false;
 }
 
+void GpiodTrigger::CloseChip::operator()(gpiod_chip* chip) const {
+  gpiod_chip_close(chip);
+}
+
 bool GpiodTrigger::acquire() {
   errno = 0;
   if (config_.chip.empty()) {
     find_on_any_chip();
   } else {
-    chip_ = gpiod_chip_open_lookup(config_.chip.c_str());
-    if (chip_ == nullptr) {
+    chip_.reset(gpiod_chip_open_lookup(config_.chip.c_str()));
+    if (!chip_) {
       set_reason(cat("cannot open GPIO chip ", config_.chip, ": ", std::strerror(errno)));
-    } else if (line_ = gpiod_chip_find_line(chip_, config_.line.c_str()); line_ == nullptr) {
+    } else if (line_ = gpiod_chip_find_line(chip_.get(), config_.line.c_str()); line_ == nullptr) {
       set_reason(cat("no GPIO line of that name on ", config_.chip));
     }
   }
@@ -111,9 +116,8 @@ bool GpiodTrigger::acquire() {
 void GpiodTrigger::release(const char* reason) {
   if (reason != nullptr) set_reason(cat("the line went away: ", reason));
   if (requested_.exchange(false, std::memory_order_acq_rel)) gpiod_line_release(line_);
-  if (chip_ != nullptr) gpiod_chip_close(chip_);  // the line is the chip's
-  chip_ = nullptr;
-  line_ = nullptr;
+  line_ = nullptr;  // the chip's
+  chip_.reset();
 }
 
 EdgeResult GpiodTrigger::line_went_away() {

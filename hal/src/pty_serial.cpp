@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <system_error>
+#include <utility>
 
 #include "epipole/core/error.hpp"
 #include "fd_io.hpp"
@@ -29,21 +30,22 @@ PtySerialPort::~PtySerialPort() {
 }
 
 void PtySerialPort::open_pair() {
-  int master = -1;
-  int peer = -1;
+  int master_fd = -1;
+  int peer_fd = -1;
   termios raw{};
   cfmakeraw(&raw);
   raw.c_cflag |= CLOCAL | CREAD;
-  require(::openpty(&master, &peer, nullptr, &raw, nullptr) == 0,
+  require(::openpty(&master_fd, &peer_fd, nullptr, &raw, nullptr) == 0,
           "serial port (pseudo-terminal): cannot create one: ", std::strerror(errno));
-  const int flags = ::fcntl(master, F_GETFL);
+  UniqueFd master(master_fd);
+  UniqueFd peer(peer_fd);
+  const int flags = ::fcntl(master.get(), F_GETFL);
   char name[256] = {};
-  if (flags < 0 || ::fcntl(master, F_SETFL, flags | O_NONBLOCK) != 0 ||
-      ::fcntl(master, F_SETFD, FD_CLOEXEC) != 0 || ::fcntl(peer, F_SETFD, FD_CLOEXEC) != 0 ||
-      ::ttyname_r(peer, name, sizeof name) != 0) {
+  if (flags < 0 || ::fcntl(master.get(), F_SETFL, flags | O_NONBLOCK) != 0 ||
+      ::fcntl(master.get(), F_SETFD, FD_CLOEXEC) != 0 ||
+      ::fcntl(peer.get(), F_SETFD, FD_CLOEXEC) != 0 ||
+      ::ttyname_r(peer.get(), name, sizeof name) != 0) {
     const int error = errno;
-    ::close(master);
-    ::close(peer);
     throw Error(cat("serial port (pseudo-terminal): cannot set it up: ", std::strerror(error)));
   }
   if (!config_.device.empty()) {
@@ -53,21 +55,18 @@ void PtySerialPort::open_pair() {
     if (fs::is_symlink(link, ec)) fs::remove(link, ec);
     fs::create_symlink(name, link, ec);
     if (ec) {
-      ::close(master);
-      ::close(peer);
       throw Error(cat("serial port ", config_.device, ": cannot link it to the pseudo-terminal ",
                       name, ": ", ec.message()));
     }
   }
-  master_ = master;
-  peer_ = peer;
+  master_ = std::move(master);
+  peer_ = std::move(peer);
   peer_path_ = name;
 }
 
 void PtySerialPort::close() {
-  if (master_ >= 0) ::close(master_);
-  if (peer_ >= 0) ::close(peer_);
-  master_ = peer_ = -1;
+  master_.reset();
+  peer_.reset();
 }
 
 void PtySerialPort::reopen() {
@@ -76,13 +75,13 @@ void PtySerialPort::reopen() {
 }
 
 IoResult PtySerialPort::read(std::span<std::byte> buffer, Nanoseconds timeout) {
-  if (master_ < 0) return {IoStatus::closed, 0};
-  return detail::read_fd(master_, buffer, timeout);
+  if (!master_) return {IoStatus::closed, 0};
+  return detail::read_fd(master_.get(), buffer, timeout);
 }
 
 IoResult PtySerialPort::write(std::span<const std::byte> data, Nanoseconds timeout) {
-  if (master_ < 0) return {IoStatus::closed, 0};
-  return detail::write_fd(master_, data, timeout);
+  if (!master_) return {IoStatus::closed, 0};
+  return detail::write_fd(master_.get(), data, timeout);
 }
 
 }  // namespace epipole::hal

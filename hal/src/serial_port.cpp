@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstring>
 #include <iterator>
+#include <utility>
 
 #include "device_node.hpp"
 #include "epipole/core/error.hpp"
@@ -64,12 +65,11 @@ TermiosSerialPort::~TermiosSerialPort() {
 }
 
 void TermiosSerialPort::open_device() {
-  const int fd = detail::open_device_node(
-      config_.device, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC, "serial port");
+  UniqueFd fd(detail::open_device_node(config_.device, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC,
+                                       "serial port"));
   termios tty{};
-  if (tcgetattr(fd, &tty) != 0) {
+  if (tcgetattr(fd.get(), &tty) != 0) {
     const int error = errno;
-    ::close(fd);
     throw Error(cat("serial port ", config_.device, ": not a terminal: ", std::strerror(error)));
   }
   cfmakeraw(&tty);
@@ -79,18 +79,16 @@ void TermiosSerialPort::open_device() {
   tty.c_cc[VTIME] = 0;
   const speed_t speed = find_baud(config_.baud)->code;
   if (cfsetispeed(&tty, speed) != 0 || cfsetospeed(&tty, speed) != 0 ||
-      tcsetattr(fd, TCSANOW, &tty) != 0) {
+      tcsetattr(fd.get(), TCSANOW, &tty) != 0) {
     const int error = errno;
-    ::close(fd);
     throw Error(cat("serial port ", config_.device, ": cannot set ", config_.baud,
                     " baud 8N1 raw: ", std::strerror(error)));
   }
-  fd_ = fd;
+  fd_ = std::move(fd);
 }
 
 void TermiosSerialPort::close() {
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = -1;
+  fd_.reset();
 }
 
 void TermiosSerialPort::reopen() {
@@ -99,13 +97,13 @@ void TermiosSerialPort::reopen() {
 }
 
 IoResult TermiosSerialPort::read(std::span<std::byte> buffer, Nanoseconds timeout) {
-  if (fd_ < 0) return {IoStatus::closed, 0};
-  return detail::read_fd(fd_, buffer, timeout);
+  if (!fd_) return {IoStatus::closed, 0};
+  return detail::read_fd(fd_.get(), buffer, timeout);
 }
 
 IoResult TermiosSerialPort::write(std::span<const std::byte> data, Nanoseconds timeout) {
-  if (fd_ < 0) return {IoStatus::closed, 0};
-  return detail::write_fd(fd_, data, timeout);
+  if (!fd_) return {IoStatus::closed, 0};
+  return detail::write_fd(fd_.get(), data, timeout);
 }
 
 namespace detail {

@@ -65,22 +65,20 @@ bool StereoPairer::push(Side side, const Frame& camera_frame) {
   Queue& q = queue(side);
   Frame frame = camera_frame;
   if (config_.match_sequences && q.numbered) frame.sequence += q.offset;
-  const bool left = side == Side::left;
-  ++(left ? counters_.pushed_left : counters_.pushed_right);
+  ++counters_.of(side).pushed;
   // A sequence that does not increase is a duplicate or garbled: refuse it. Pairing by time,
   // so is a timestamp that does not increase.
   if (q.has_last && (static_cast<std::int32_t>(frame.sequence - q.last) <= 0 ||
                      (!config_.match_sequences && frame.timestamp <= q.last_time))) {
     camera(side).release(frame);
-    ++(left ? counters_.out_of_order_left : counters_.out_of_order_right);
+    ++counters_.of(side).out_of_order;
     return ready_;
   }
   q.has_last = true;
   q.last = frame.sequence;
   q.last_time = frame.timestamp;
   if (!config_.match_sequences || q.numbered) note_seen(side, frame.sequence);
-  if (q.size == kCapacity)
-    drop_front(side, left ? counters_.unpaired_left : counters_.unpaired_right);
+  if (q.size == kCapacity) drop_front(side, counters_.of(side).unpaired);
   q.frames[(q.head + q.size) % kCapacity] = frame;
   ++q.size;
   match();
@@ -112,13 +110,12 @@ bool StereoPairer::fronts_match_by_time() {
     if (l.clock != r.clock) {
       // Renumbering a reopened side, the left number may still be its camera's own.
       if (!config_.match_sequences || left_q_.numbered) ledger_.damaged(l.sequence);
-      drop_front(Side::left, counters_.mismatched_left);
-      drop_front(Side::right, counters_.mismatched_right);
+      drop_front(Side::left, counters_.left().mismatched);
+      drop_front(Side::right, counters_.right().mismatched);
       continue;
     }
     const Side early = l.timestamp <= r.timestamp ? Side::left : Side::right;
-    std::uint64_t& unpaired =
-        early == Side::left ? counters_.unpaired_left : counters_.unpaired_right;
+    std::uint64_t& unpaired = counters_.of(early).unpaired;
     const Queue& q = queue(early);
     const Nanoseconds late_time = early == Side::left ? r.timestamp : l.timestamp;
     const Nanoseconds dt = late_time - q.front().timestamp;
@@ -148,7 +145,7 @@ void StereoPairer::number(Side side, std::uint32_t offset) {
     note_seen(side, f.sequence);
   }
   q.last += offset;
-  ++(side == Side::left ? counters_.renumbered_left : counters_.renumbered_right);
+  ++counters_.of(side).renumbered;
 }
 
 // Numbers the frames of a reopened side (or both) again; false while they must wait for a
@@ -167,8 +164,7 @@ bool StereoPairer::renumber() {
           number(side, edge->sequence - f.sequence);
           numbers_are_the_triggers_ = true;
         } else {
-          drop_front(side,
-                     side == Side::left ? counters_.off_trigger_left : counters_.off_trigger_right);
+          drop_front(side, counters_.of(side).off_trigger);
         }
       }
     }
@@ -203,22 +199,22 @@ void StereoPairer::match() {
     const Frame& r = right_q_.front();
     const auto d = static_cast<std::int32_t>(l.sequence - r.sequence);
     if (d < 0) {
-      drop_front(Side::left, counters_.unpaired_left);  // right is past it: it cannot pair
+      drop_front(Side::left, counters_.left().unpaired);  // right is past it: it cannot pair
     } else if (d > 0) {
-      drop_front(Side::right, counters_.unpaired_right);
+      drop_front(Side::right, counters_.right().unpaired);
     } else {
       const Nanoseconds dt =
           l.timestamp > r.timestamp ? l.timestamp - r.timestamp : r.timestamp - l.timestamp;
       if (dt > config_.tolerance || l.clock != r.clock) {
         ledger_.damaged(l.sequence);
-        drop_front(Side::left, counters_.mismatched_left);
-        drop_front(Side::right, counters_.mismatched_right);
+        drop_front(Side::left, counters_.left().mismatched);
+        drop_front(Side::right, counters_.right().mismatched);
         continue;
       }
       if (!on_trigger(l, r)) {
         ledger_.damaged(l.sequence);
-        drop_front(Side::left, counters_.off_trigger_left);
-        drop_front(Side::right, counters_.off_trigger_right);
+        drop_front(Side::left, counters_.left().off_trigger);
+        drop_front(Side::right, counters_.right().off_trigger);
         continue;
       }
       take_fronts();
@@ -242,14 +238,14 @@ void StereoPairer::release(const StereoPair& pair) {
 void StereoPairer::reset(Side side) {
   Queue& q = queue(side);
   while (q.size > 0) {
-    drop_front(side, side == Side::left ? counters_.unpaired_left : counters_.unpaired_right);
+    drop_front(side, counters_.of(side).unpaired);
   }
   q.has_last = false;
   if (config_.match_sequences) q.numbered = false;
 }
 
 void StereoPairer::count_corrupt(Side side, std::uint32_t camera_sequence) {
-  ++(side == Side::left ? counters_.corrupt_left : counters_.corrupt_right);
+  ++counters_.of(side).corrupt;
   const Queue& q = queue(side);
   if (!config_.match_sequences) {
     if (side == Side::left) ledger_.damaged(camera_sequence);

@@ -193,9 +193,9 @@ void V4l2Camera::fail(const char* what, int error) const {
 }
 
 void V4l2Camera::open_device() {
-  fd_ = detail::open_device_node(config_.device, O_RDWR | O_NONBLOCK | O_CLOEXEC, "camera");
+  fd_.reset(detail::open_device_node(config_.device, O_RDWR | O_NONBLOCK | O_CLOEXEC, "camera"));
   v4l2_capability cap{};
-  if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) {
+  if (xioctl(fd_.get(), VIDIOC_QUERYCAP, &cap) != 0) {
     const int error = errno;
     close_device();
     throw Error(cat("camera ", config_.device,
@@ -225,7 +225,7 @@ void V4l2Camera::negotiate() {
     v4l2_fmtdesc desc{};
     desc.index = i;
     desc.type = type;
-    if (xioctl(fd_, VIDIOC_ENUM_FMT, &desc) != 0) break;
+    if (xioctl(fd_.get(), VIDIOC_ENUM_FMT, &desc) != 0) break;
     offered.push_back(desc.pixelformat);
   }
   const std::optional<PixelFormat> chosen = choose_format(config_.format, offered);
@@ -252,7 +252,7 @@ void V4l2Camera::negotiate() {
     fmt.fmt.pix.pixelformat = fourcc_of(format_);
     fmt.fmt.pix.field = V4L2_FIELD_NONE;
   }
-  if (xioctl(fd_, VIDIOC_S_FMT, &fmt) != 0) fail("VIDIOC_S_FMT", errno);
+  if (xioctl(fd_.get(), VIDIOC_S_FMT, &fmt) != 0) fail("VIDIOC_S_FMT", errno);
   const std::uint32_t got_w = multiplanar_ ? fmt.fmt.pix_mp.width : fmt.fmt.pix.width;
   const std::uint32_t got_h = multiplanar_ ? fmt.fmt.pix_mp.height : fmt.fmt.pix.height;
   const std::uint32_t got_f = multiplanar_ ? fmt.fmt.pix_mp.pixelformat : fmt.fmt.pix.pixelformat;
@@ -269,7 +269,7 @@ void V4l2Camera::negotiate() {
   parm.type = type;
   parm.parm.capture.timeperframe.numerator = 1000;
   parm.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(config_.fps * 1000.0);
-  (void)xioctl(fd_, VIDIOC_S_PARM, &parm);  // not every driver has a frame-rate control
+  (void)xioctl(fd_.get(), VIDIOC_S_PARM, &parm);  // not every driver has a frame-rate control
 
   apply_exposure(config_.exposure, config_.gain, true);
 }
@@ -278,7 +278,7 @@ V4l2ControlInfo V4l2Camera::query_control(std::uint32_t id) const {
   v4l2_queryctrl q{};
   q.id = id;
   V4l2ControlInfo info;
-  if (xioctl(fd_, VIDIOC_QUERYCTRL, &q) != 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED) != 0) {
+  if (xioctl(fd_.get(), VIDIOC_QUERYCTRL, &q) != 0 || (q.flags & V4L2_CTRL_FLAG_DISABLED) != 0) {
     return info;
   }
   info.present = true;
@@ -289,7 +289,7 @@ V4l2ControlInfo V4l2Camera::query_control(std::uint32_t id) const {
       v4l2_querymenu m{};
       m.id = id;
       m.index = static_cast<std::uint32_t>(i);
-      if (xioctl(fd_, VIDIOC_QUERYMENU, &m) == 0) info.menu |= std::uint64_t{1} << i;
+      if (xioctl(fd_.get(), VIDIOC_QUERYMENU, &m) == 0) info.menu |= std::uint64_t{1} << i;
     }
   }
   return info;
@@ -304,7 +304,7 @@ void V4l2Camera::apply_exposure(Nanoseconds exposure, double gain, bool starting
   for (int i = 0; i < plan.count; ++i) {
     v4l2_control c{plan.controls[static_cast<std::size_t>(i)].id,
                    plan.controls[static_cast<std::size_t>(i)].value};
-    if (xioctl(fd_, VIDIOC_S_CTRL, &c) != 0) {
+    if (xioctl(fd_.get(), VIDIOC_S_CTRL, &c) != 0) {
       fail(cat("cannot set ", v4l2_control_name(c.id), " to ", c.value).c_str(), errno);
     }
   }
@@ -312,7 +312,8 @@ void V4l2Camera::apply_exposure(Nanoseconds exposure, double gain, bool starting
 
 void V4l2Camera::set_exposure(Nanoseconds exposure, double gain) {
   validate_exposure(config_.device, exposure, gain);
-  require(fd_ >= 0, "camera ", config_.device, ": exposure and gain: the device is not open");
+  require(static_cast<bool>(fd_), "camera ", config_.device,
+          ": exposure and gain: the device is not open");
   apply_exposure(exposure, gain, false);
   config_.exposure = exposure;
   config_.gain = gain;
@@ -320,14 +321,14 @@ void V4l2Camera::set_exposure(Nanoseconds exposure, double gain) {
 
 void V4l2Camera::start() {
   if (streaming_) return;
-  if (fd_ < 0) open_and_negotiate();  // it was not there when the camera was made
+  if (!fd_) open_and_negotiate();  // it was not there when the camera was made
   const auto type = static_cast<std::uint32_t>(multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE
                                                             : V4L2_BUF_TYPE_VIDEO_CAPTURE);
   v4l2_requestbuffers req{};
   req.count = static_cast<std::uint32_t>(config_.buffer_count);
   req.type = type;
   req.memory = V4L2_MEMORY_MMAP;
-  if (xioctl(fd_, VIDIOC_REQBUFS, &req) != 0) fail("VIDIOC_REQBUFS (mmap)", errno);
+  if (xioctl(fd_.get(), VIDIOC_REQBUFS, &req) != 0) fail("VIDIOC_REQBUFS (mmap)", errno);
   require(req.count >= 2, "camera ", config_.device, ": buffer count: the driver gave ", req.count,
           " buffers");
   buffers_.assign(req.count, Buffer{});
@@ -341,13 +342,13 @@ void V4l2Camera::start() {
       buf.m.planes = planes;
       buf.length = VIDEO_MAX_PLANES;
     }
-    if (xioctl(fd_, VIDIOC_QUERYBUF, &buf) != 0) fail("VIDIOC_QUERYBUF", errno);
+    if (xioctl(fd_.get(), VIDIOC_QUERYBUF, &buf) != 0) fail("VIDIOC_QUERYBUF", errno);
     const std::size_t length = multiplanar_ ? planes[0].length : buf.length;
     const auto offset = static_cast<off_t>(multiplanar_ ? planes[0].m.mem_offset : buf.m.offset);
-    void* p = ::mmap(nullptr, length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, offset);
+    void* p = ::mmap(nullptr, length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(), offset);
     if (p == MAP_FAILED) fail("mmap", errno);
     buffers_[i] = {p, length};
-    if (xioctl(fd_, VIDIOC_QBUF, &buf) != 0) fail("VIDIOC_QBUF", errno);
+    if (xioctl(fd_.get(), VIDIOC_QBUF, &buf) != 0) fail("VIDIOC_QBUF", errno);
   }
   scratch_.clear();
   if (!is_zero_copy(format_)) {
@@ -355,24 +356,24 @@ void V4l2Camera::start() {
       scratch_.emplace_back(config_.width, config_.height);
   }
   int t = static_cast<int>(type);
-  if (xioctl(fd_, VIDIOC_STREAMON, &t) != 0) fail("VIDIOC_STREAMON", errno);
+  if (xioctl(fd_.get(), VIDIOC_STREAMON, &t) != 0) fail("VIDIOC_STREAMON", errno);
   streaming_ = true;
 }
 
 void V4l2Camera::stop() {
-  if (fd_ >= 0 && streaming_) {
+  if (fd_ && streaming_) {
     int t = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    (void)xioctl(fd_, VIDIOC_STREAMOFF, &t);
+    (void)xioctl(fd_.get(), VIDIOC_STREAMOFF, &t);
   }
   for (const Buffer& b : buffers_) {
     if (b.data != nullptr) ::munmap(b.data, b.length);
   }
   buffers_.clear();
-  if (fd_ >= 0 && streaming_) {
+  if (fd_ && streaming_) {
     v4l2_requestbuffers req{};
     req.type = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
     req.memory = V4L2_MEMORY_MMAP;
-    (void)xioctl(fd_, VIDIOC_REQBUFS, &req);
+    (void)xioctl(fd_.get(), VIDIOC_REQBUFS, &req);
   }
   streaming_ = false;
   ++generation_;
@@ -380,8 +381,7 @@ void V4l2Camera::stop() {
 
 void V4l2Camera::close_device() {
   stop();
-  if (fd_ >= 0) ::close(fd_);
-  fd_ = -1;
+  fd_.reset();
 }
 
 void V4l2Camera::reopen() {
@@ -392,8 +392,8 @@ void V4l2Camera::reopen() {
 }
 
 AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
-  if (fd_ < 0 || !streaming_) return {AcquireStatus::device_lost, {}};
-  pollfd p{fd_, POLLIN, 0};
+  if (!fd_ || !streaming_) return {AcquireStatus::device_lost, {}};
+  pollfd p{fd_.get(), POLLIN, 0};
   const int ms =
       timeout <= 0
           ? 0
@@ -414,7 +414,7 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
     buf.m.planes = planes;
     buf.length = VIDEO_MAX_PLANES;
   }
-  if (xioctl(fd_, VIDIOC_DQBUF, &buf) != 0) {
+  if (xioctl(fd_.get(), VIDIOC_DQBUF, &buf) != 0) {
     return {errno == EAGAIN ? AcquireStatus::timeout : AcquireStatus::device_lost, {}};
   }
   const std::size_t used = multiplanar_ ? planes[0].bytesused : buf.bytesused;
@@ -424,7 +424,7 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
   const Nanoseconds timestamp = static_cast<Nanoseconds>(buf.timestamp.tv_sec) * 1'000'000'000 +
                                 static_cast<Nanoseconds>(buf.timestamp.tv_usec) * 1'000;
   if (buffer_status(buf.flags, used, mapped.length, need) == AcquireStatus::corrupt) {
-    (void)xioctl(fd_, VIDIOC_QBUF, &buf);  // a damaged frame: give it back at once
+    (void)xioctl(fd_.get(), VIDIOC_QBUF, &buf);  // a damaged frame: give it back at once
     return corrupt_frame(buf.sequence, timestamp);
   }
   MutableGrayView scratch;
@@ -441,7 +441,7 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
 }
 
 void V4l2Camera::release(const Frame& frame) {
-  if (!frame.valid() || frame.generation != generation_ || fd_ < 0) return;
+  if (!frame.valid() || frame.generation != generation_ || !fd_) return;
   v4l2_buffer buf{};
   v4l2_plane planes[VIDEO_MAX_PLANES]{};
   buf.type = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -451,7 +451,7 @@ void V4l2Camera::release(const Frame& frame) {
     buf.m.planes = planes;
     buf.length = VIDEO_MAX_PLANES;
   }
-  (void)xioctl(fd_, VIDIOC_QBUF, &buf);
+  (void)xioctl(fd_.get(), VIDIOC_QBUF, &buf);
 }
 
 }  // namespace epipole::hal

@@ -21,6 +21,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/firmware.hpp"
+#include "epipole/hal/registry.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "epipole/tools/cascade_xml.hpp"
 #include "message_json.hpp"
@@ -189,11 +190,13 @@ nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& 
   const fs::path directory = fs::path(options.out) / scene;
   fs::create_directories(directory);
   // The pty's robot end: a link in the output folder, so the firmware's link is easy to find.
-  if (config.serial.backend == "pty" && config.serial.port.device.empty()) {
+  if (hal::BackendRegistry::builtin().serial_traits(config.serial.backend).simulated &&
+      config.serial.port.device.empty()) {
     config.serial.port.device = (directory / "link").string();
   }
   // The firmware reads compiled cascades: an XML cascade of the board is compiled here first.
-  if (config.stages.detect && config.detector.cascade.extension() == ".xml") {
+  if (protocol::has_stage(config.stages, protocol::Stage::detect) &&
+      config.detector.cascade.extension() == ".xml") {
     const std::vector<std::uint8_t> binary = load_cascade(config.detector.cascade).to_binary();
     const fs::path compiled = directory / "cascade.bin";
     std::ofstream(compiled, std::ios::binary)
@@ -256,7 +259,7 @@ void print_scene(const nlohmann::json& s) {
 
 void run_sim(const SimOptions& options) {
   const firmware::BoardConfig board = firmware::load_board_config(options.board);
-  require(board.cameras.backend == "sim", options.board,
+  require(board.simulated(), options.board,
           ": not a simulated board (cameras.backend "
           "is '",
           board.cameras.backend, "')");

@@ -55,8 +55,8 @@ TEST(BoardConfig, ReadsEveryKey) {
   EXPECT_EQ(c.serial.backend, "none");
   EXPECT_EQ(c.calibration, rig.dir.path() / "rig.yaml");
   EXPECT_EQ(c.stereo.max_disparity, 32);
-  EXPECT_FALSE(c.stages.sparse);
-  EXPECT_TRUE(c.stages.disparity);
+  EXPECT_FALSE(protocol::has_stage(c.stages, protocol::Stage::sparse));
+  EXPECT_TRUE(protocol::has_stage(c.stages, protocol::Stage::disparity));
   EXPECT_EQ(c.obstacles.sectors, 36);
   EXPECT_EQ(c.obstacles.band_top, 0.1);
   EXPECT_EQ(c.obstacles.max_depth_m, 12.0);
@@ -104,6 +104,10 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
        "cameras.trigger: 'sometimes' is not one of free_running, external"},
       {"unknown backend", "backend: sim, left", "backend: gige, left",
        "cameras.backend: 'gige' is not one of sim, v4l2, libcamera"},
+      {"unknown trigger backend", "trigger: {backend: sim", "trigger: {backend: gpio",
+       "trigger.backend: 'gpio' is not one of sim, gpiod, none"},
+      {"unknown serial backend", "serial: {backend: none}", "serial: {backend: uart}",
+       "serial.backend: 'uart' is not one of termios, pty, none"},
       {"impossible rate", "rate_hz: 30", "rate_hz: -5", "trigger.rate_hz: -5 is outside"},
       {"disparity not /16", "max_disparity: 32", "max_disparity: 40",
        "stereo.max_disparity: 40 is not a multiple of 16"},
@@ -135,6 +139,8 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
        "obstacles.band: expected [top, bottom] with 0 <= top < bottom <= 1"},
       {"affinity", "", "threads: {affinity: [0.5]}\n", "threads.affinity: 0.5 is not a CPU number"},
       {"boolean", "sparse: false", "sparse: maybe", "stages.sparse: expected true or false"},
+      {"an always-on stage", "sparse: false", "sparse: false, publish: false",
+       "unknown key 'stages.publish'"},
       {"not a map", "", "stereo: 12\n", "stereo: expected a map of keys"},
       {"malformed", "", "cameras: [\n", "malformed YAML"},
   };

@@ -46,7 +46,7 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   test::SimRig rig(128, 64, 6);
   BoardConfig config = rig.parse("threads: {count: 2}\n");
   config.stereo.max_disparity = 16;
-  config.stages.sparse = true;
+  config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);
   config.serial.backend = "pty";
   config.serial.protocol = GetParam();

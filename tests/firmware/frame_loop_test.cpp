@@ -149,7 +149,7 @@ TEST(FrameLoop, RunsUncalibratedUntilTheCalibrationFileIsMade) {
 TEST(FrameLoop, PublishesSparsePointsAtTheRigsDepthAndTheCalibrationHealth) {
   test::SimRig rig;
   BoardConfig config = rig.config;
-  config.stages.sparse = true;
+  config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   config.sparse.max_points = 20;
   Firmware fw(config, rig.images());
   Recorder recorder;
@@ -214,7 +214,7 @@ TEST(FrameLoop, DetectionsCarryTheirDepth) {
 TEST(FrameLoop, AnXmlCascadeIsRefusedWithTheCommandToCompileIt) {
   test::SimRig rig;
   BoardConfig config = rig.config;
-  config.stages.detect = true;
+  config.stages |= protocol::stage_bit(protocol::Stage::detect);
   config.detector.cascade = rig.dir.path() / "faces.xml";
   try {
     Firmware fw(config, rig.images());
@@ -236,7 +236,7 @@ TEST(FrameLoop, RunsWithoutDetectionUntilTheCompiledCascadeIsMade) {
   std::ofstream(xml) << "<opencv_storage/>\n";
   ::setenv("EPIPOLE_DATA_DIR", data.path().c_str(), 1);
   BoardConfig config = rig.config;
-  config.stages.detect = true;
+  config.stages |= protocol::stage_bit(protocol::Stage::detect);
   config.detector.cascade = data.path() / "compiled" / "haarcascade_frontalface_default.bin";
   const std::string command = cascade_compile_command(config.detector.cascade);
   ::unsetenv("EPIPOLE_DATA_DIR");
@@ -304,7 +304,7 @@ TEST(FrameLoop, DroppedFramesAreCountedAndNeverMispaired) {
   const RunSummary s = fw.run(150, stop);
   EXPECT_EQ(s.frames, 150u);
   const hal::PairingCounters& p = s.pairing;
-  EXPECT_GT(p.unpaired_left + p.unpaired_right, 5u) << "10 % of frames dropped on each side";
+  EXPECT_GT(p.left().unpaired + p.right().unpaired, 5u) << "10 % of frames dropped on each side";
   EXPECT_GT(s.faults.triggers.dropped(), 5u);
   for (const auto& f : recorder.frames) {
     EXPECT_NEAR(f.centre_disparity, rig.disparity * 16, 8) << "frame " << f.frame;
@@ -373,7 +373,7 @@ TEST(FrameLoop, EveryTriggerIsAccountedForWithRandomDropsOnBothSides) {
   EXPECT_GE(t.both_sides, 1u);
   EXPECT_EQ(t.corrupt, 0u);
   // One unpaired frame per one-sided loss.
-  EXPECT_EQ(s.pairing.unpaired_left + s.pairing.unpaired_right, t.one_side);
+  EXPECT_EQ(s.pairing.left().unpaired + s.pairing.right().unpaired, t.one_side);
 }
 
 TEST(FrameLoop, EveryTriggerIsAccountedForWhenTheTriggerOutrunsTheLoop) {
@@ -828,16 +828,16 @@ TEST(FrameLoop, FreeRunningCamerasWithoutATriggerPairByTime) {
   const hal::SimCamera& right = *linked.fw->board().sim_camera(hal::Side::right);
   const hal::PairingCounters& p = s.pairing;
   EXPECT_EQ(p.pairs, 240u + s.stale);
-  EXPECT_GT(p.unpaired_left + p.unpaired_right, 20u);
-  EXPECT_EQ(p.mismatched_left + p.mismatched_right + p.off_trigger_left, 0u);
+  EXPECT_GT(p.left().unpaired + p.right().unpaired, 20u);
+  EXPECT_EQ(p.left().mismatched + p.right().mismatched + p.left().off_trigger, 0u);
   const std::uint64_t accounted_left =
-      p.pairs + p.unpaired_left + p.mismatched_left + p.out_of_order_left;
+      p.pairs + p.left().unpaired + p.left().mismatched + p.left().out_of_order;
   const std::uint64_t accounted_right =
-      p.pairs + p.unpaired_right + p.mismatched_right + p.out_of_order_right;
-  EXPECT_LE(accounted_left, p.pushed_left);
-  EXPECT_LE(p.pushed_left - accounted_left, 4u) << "what still waits in the pairer";
-  EXPECT_LE(accounted_right, p.pushed_right);
-  EXPECT_LE(p.pushed_right - accounted_right, 4u);
+      p.pairs + p.right().unpaired + p.right().mismatched + p.right().out_of_order;
+  EXPECT_LE(accounted_left, p.left().pushed);
+  EXPECT_LE(p.left().pushed - accounted_left, 4u) << "what still waits in the pairer";
+  EXPECT_LE(accounted_right, p.right().pushed);
+  EXPECT_LE(p.right().pushed - accounted_right, 4u);
   EXPECT_EQ(left.config().exposure, 3'000'000);
   EXPECT_EQ(right.config().exposure, 3'000'000);
 }

@@ -2,7 +2,9 @@
 // garbage, truncation, bit errors and replays.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "epipole/core/crc32.hpp"
@@ -355,6 +357,25 @@ TEST(Protocol, FlagsAreTheLastFieldOfHealthAndFrame) {
   const Bytes f = payload_of(frame);
   ASSERT_EQ(f.size(), kHeaderSize + 26 + kCrcSize);
   EXPECT_EQ(f[kHeaderSize + 25], kFrameTriggerFromCapture);
+}
+
+TEST(Stages, OneTableGivesTheMasksTheNamesAndTheOrder) {
+  EXPECT_EQ(kAlwaysOnStages, stage_bit(Stage::capture) | stage_bit(Stage::publish));
+  EXPECT_EQ(kSwitchableStages, 0x3E);
+  EXPECT_EQ(kAllStages, 0x7F) << "total is a time slot, not a stage a mask can hold";
+  std::vector<std::string> names;
+  for (const StageInfo& s : kStages) {
+    EXPECT_EQ(std::string(s.time_field), std::string(s.name) + "_us");
+    EXPECT_EQ((s.needs & ~kAllStages), 0) << s.name;
+    // A stage needs only stages that run before it.
+    EXPECT_LT(s.needs, stage_bit(s.id)) << s.name;
+    names.emplace_back(s.name);
+  }
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(std::adjacent_find(names.begin(), names.end()), names.end()) << "names are unique";
+  EXPECT_EQ(stage_info(Stage::sparse).needs, stage_bit(Stage::corners));
+  EXPECT_TRUE(has_stage(kAllStages, Stage::detect));
+  EXPECT_FALSE(has_stage(kAllStages, Stage::total));
 }
 
 TEST(Protocol, BodiesWithWrongLengthsOrCountsAreRejected) {

@@ -100,7 +100,7 @@ struct SimRig {
     std::ofstream(file, std::ios::binary)
         .write(reinterpret_cast<const char*>(binary.data()),
                static_cast<std::streamsize>(binary.size()));
-    c.stages.detect = true;
+    c.stages |= protocol::stage_bit(protocol::Stage::detect);
     c.detector.cascade = file;
     c.detector.min_size = 20;
   }

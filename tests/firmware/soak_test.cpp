@@ -185,7 +185,7 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
   BoardConfig config = rig.parse(
       "threads: {count: 2}\nsnapshot_directory: snapshots\n"
       "snapshot_limit: 40\n");
-  config.stages.sparse = true;
+  config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);
   config.serial.backend = "pty";
   config.serial.port.baud = 4'000'000;

@@ -40,7 +40,7 @@ class TickingLine final : public hal::TriggerLine {
 
 TEST(TriggerWatch, RecordsEdgesOnItsThreadWhileTheLoopReadsThem) {
   TickingLine line;
-  TriggerWatch watch(line, nullptr, 1'000'000);
+  TriggerWatch watch(line, 1'000'000);
   watch.start();
   std::uint64_t seen = 0;
   const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);

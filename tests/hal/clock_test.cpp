@@ -28,5 +28,16 @@ TEST(VirtualClock, MovesOnlyWhenTold) {
   EXPECT_THROW(clock.advance(-1), Error);
 }
 
+TEST(VirtualClock, SpentComputeTimeMovesItOnlyWhenCharged) {
+  VirtualClock clock(1000);
+  clock.spend(500);
+  EXPECT_EQ(clock.now(), 1000) << "not charged unless asked";
+  clock.charge_compute(true);
+  clock.spend(500);
+  EXPECT_EQ(clock.now(), 1500);
+  clock.spend(-5);  // a host clock that stepped back charges nothing
+  EXPECT_EQ(clock.now(), 1500);
+}
+
 }  // namespace
 }  // namespace epipole::hal

@@ -58,7 +58,7 @@ TEST(HalAllocations, AcquireReleaseAndPairingNeverAllocate) {
     camera->inject({.kind = SimFaultKind::wrong_sequence, .sequence = 50, .value = 51});
   }
   TriggerRecord record;
-  board.trigger.record_to(&record);
+  board.trigger.record_edges_to(&record);
   RecoveringCamera rl(l, board.clock);
   StereoGrabber grabber(rl, r, board.clock,
                         {.tolerance = 1'000'000,
@@ -74,8 +74,8 @@ TEST(HalAllocations, AcquireReleaseAndPairingNeverAllocate) {
   EXPECT_EQ(counter.count(), 0u);
   EXPECT_GT(pairs, 100);
   EXPECT_EQ(rl.counters().reopens, 1u);
-  EXPECT_EQ(grabber.pairer().counters().corrupt_right, 1u);
-  EXPECT_EQ(grabber.pairer().counters().off_trigger_left, 1u);
+  EXPECT_EQ(grabber.pairer().counters().right().corrupt, 1u);
+  EXPECT_EQ(grabber.pairer().counters().left().off_trigger, 1u);
 }
 
 TEST(HalAllocations, RunTimeControlsAndPairingByTimeNeverAllocate) {

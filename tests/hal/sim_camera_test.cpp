@@ -114,7 +114,7 @@ TEST(SimTrigger, SetRateWhileCamerasHoldEdgesAheadKeepsEveryEdgeOnce) {
   // record lags behind it: a change must not renumber, repeat or move any of those edges.
   Rig rig;  // 50 Hz, no jitter: a frame's timestamp is its edge + 5 ms
   TriggerRecord record;
-  rig.board.trigger.record_to(&record);
+  rig.board.trigger.record_edges_to(&record);
   std::vector<Nanoseconds> left, right;
   const auto take = [&](SimCamera& camera, std::vector<Nanoseconds>& times, int frames) {
     for (int i = 0; i < frames; ++i) {

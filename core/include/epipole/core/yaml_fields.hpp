@@ -7,7 +7,9 @@
 
 #include <filesystem>
 #include <initializer_list>
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "epipole/core/error.hpp"
@@ -36,6 +38,8 @@ class Fields {
   // Error for the first key of the map that is not in `known`.
   void only_keys(const YAML::Node& map, const std::string& path,
                  std::initializer_list<const char*> known) const;
+  void only_keys(const YAML::Node& map, const std::string& path,
+                 std::span<const std::string_view> known) const;
   void require_map(const YAML::Node& node, const std::string& path) const;
 
   double number(const YAML::Node& node, const std::string& key) const;  // finite

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "epipole/firmware/protocol/stages.hpp"
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "epipole/hal/stereo_pairing.hpp"
@@ -52,13 +53,9 @@ struct BoardConfig {
 
   std::filesystem::path calibration;  // absolute after loading; empty: images are rectified
 
-  struct Stages {
-    bool rectify = true;
-    bool corners = true;
-    bool disparity = true;
-    bool sparse = true;
-    bool detect = true;
-  } stages;
+  // The stages that run (a bit per protocol::Stage): the always-on ones and those the board
+  // file's `stages` leaves on (all of them unless it says otherwise).
+  protocol::StageMask stages = protocol::kAllStages;
 
   enum class CornerDetector { fast, harris };
   struct Corners {
@@ -130,6 +127,10 @@ struct BoardConfig {
   int width() const { return cameras.left.width; }
   int height() const { return cameras.left.height; }
   const SimScene* sim_scene() const;
+  // What the HAL's registry says of the board's backends.
+  bool simulated() const;    // the cameras are the simulated board's
+  bool has_trigger() const;  // trigger.backend is not "none" (else free-running cameras)
+  bool has_link() const;     // serial.backend is not "none"
 };
 
 // Reads and validates a board file; `path` is the file or its folder (then board.yaml in it).

@@ -42,10 +42,11 @@ struct RunSummary {
 
 // How the frame loop pairs the board's frames: by trigger sequence, checked against the
 // trigger's edges when the delay from edge to frame is known (the board file's
-// pairing.edge_delay_us, or the simulated board's `sim`); without a trigger (trigger.backend
-// none: free-running cameras) by time alone, the tolerance checked against the cameras' frame
-// period.
-hal::PairingConfig pairing_config(const BoardConfig& config, const hal::SimBoard* sim = nullptr);
+// pairing.edge_delay_us, or else the cameras' own, hal::CameraSource::edge_delay()); without a
+// trigger (trigger.backend none: free-running cameras) by time alone, the tolerance checked
+// against the cameras' frame period.
+hal::PairingConfig pairing_config(const BoardConfig& config,
+                                  std::optional<hal::Nanoseconds> camera_edge_delay = std::nullopt);
 
 // The firmware's frame loop: trigger -> capture pair -> rectify -> corners -> dense stereo ->
 // obstacles -> publish, with health once a second and the robot's commands applied between
@@ -84,7 +85,17 @@ class FrameLoop {
   // trigger_from_capture: result.trigger_ns is the left frame's time, not a trigger edge's.
   void publish(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
   void send(const protocol::Message& message);
+  // The steps of run().
+  void tick();
+  void publish_health();
   void say_device_changes();
+  bool take_freshest(hal::PairResult& got);
+  struct TriggerTime {
+    hal::Nanoseconds ns;
+    bool from_capture;  // the left frame's time: no trigger edge was recorded for the pair
+  };
+  TriggerTime trigger_time(const hal::StereoPair& pair) const;
+  void process_pair(const hal::StereoPair& pair);
   FaultCounts faults();
   // MAVLink's system status: calibrating (not ready) until the rig has its calibration.
   std::uint8_t heartbeat_status() const {

@@ -26,12 +26,9 @@
 
 namespace epipole::firmware {
 
-// Which stages run, one bit per protocol::Stage (the set_stages command's mask).
-using StageMask = std::uint16_t;
-constexpr StageMask stage_bit(protocol::Stage s) {
-  return static_cast<StageMask>(1u << static_cast<unsigned>(s));
-}
-StageMask stage_mask(const BoardConfig::Stages& stages);
+// Which stages run, one bit per protocol::Stage (protocol/stages.hpp).
+using protocol::stage_bit;
+using protocol::StageMask;
 
 // What the stages made of one frame pair. Views and spans point into the pipeline's own
 // buffers and stay valid until the next process() call.
@@ -93,6 +90,11 @@ class Pipeline {
   std::size_t working_set_bytes() const;
 
  private:
+  void run_stage(protocol::Stage stage, FrameResult& r);
+  void match_dense(FrameResult& r);
+  void match_sparse(FrameResult& r);
+  void detect(FrameResult& r);
+
   struct Stages;
   std::unique_ptr<Stages> stages_;
   std::unique_ptr<calib::Triangulator> triangulator_;

@@ -4,7 +4,6 @@
 #include <cstdint>
 #include <thread>
 
-#include "epipole/hal/sim.hpp"
 #include "epipole/hal/trigger.hpp"
 
 namespace epipole::firmware {
@@ -12,12 +11,11 @@ namespace epipole::firmware {
 // Keeps the record of the board's trigger edges (hal::TriggerRecord) that the stereo pairer
 // checks pairs against and that gives every result its trigger time. On hardware a thread of
 // its own waits on the line — a master fires its pulses as it waits, a slave is told of each
-// edge by the kernel; on the simulated board the trigger writes its edges into the record as the
-// virtual clock passes them. Fixed memory.
+// edge by the kernel; a line that records its own edges (the simulated trigger, as its virtual
+// clock passes them: hal::TriggerLine::record_edges_to) needs no thread. Fixed memory.
 class TriggerWatch {
  public:
-  // `sim`: the simulated board's trigger, or null on hardware.
-  TriggerWatch(hal::TriggerLine& line, hal::SimTrigger* sim, hal::Nanoseconds period);
+  TriggerWatch(hal::TriggerLine& line, hal::Nanoseconds period);
   ~TriggerWatch();
   TriggerWatch(const TriggerWatch&) = delete;
   TriggerWatch& operator=(const TriggerWatch&) = delete;
@@ -37,7 +35,7 @@ class TriggerWatch {
   void run();
 
   hal::TriggerLine& line_;
-  hal::SimTrigger* sim_;
+  bool line_records_itself_;
   std::atomic<hal::Nanoseconds> period_;
   hal::TriggerRecord record_;
   std::atomic<std::uint64_t> losses_{0};

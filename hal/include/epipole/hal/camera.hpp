@@ -128,6 +128,9 @@ class CameraSource {
   // old ones. Called from the thread that calls acquire(); the backend's own code does not
   // allocate (libcamera may, when it queues the request that carries the controls).
   virtual void set_exposure(Nanoseconds exposure, double gain) = 0;
+  // How long after its trigger edge a frame is stamped, when the backend knows it (the
+  // simulated cameras); on hardware the board file says (pairing.edge_delay_us).
+  virtual std::optional<Nanoseconds> edge_delay() const { return std::nullopt; }
 };
 
 }  // namespace epipole::hal

@@ -15,6 +15,10 @@ class Clock {
   virtual Nanoseconds now() const = 0;
   // Blocks until now() >= deadline (returns at once if it already is).
   virtual void sleep_until(Nanoseconds deadline) = 0;
+  // The firmware spent `elapsed` of the host's time computing. A real clock went on meanwhile by
+  // itself; a simulated one that charges compute time moves by it, so that a simulation sees the
+  // host's speed.
+  virtual void spend(Nanoseconds /*elapsed*/) {}
 };
 
 // CLOCK_MONOTONIC: the same clock the kernel stamps V4L2 buffers and GPIO edge events with.
@@ -31,10 +35,14 @@ class VirtualClock final : public Clock {
   explicit VirtualClock(Nanoseconds start = 0) : now_(start) {}
   Nanoseconds now() const override { return now_.load(std::memory_order_acquire); }
   void sleep_until(Nanoseconds deadline) override;
+  void spend(Nanoseconds elapsed) override;
   void advance(Nanoseconds delta);
+  // Whether spend() advances the clock (off unless asked for).
+  void charge_compute(bool on) { charge_compute_ = on; }
 
  private:
   std::atomic<Nanoseconds> now_;
+  bool charge_compute_ = false;
 };
 
 }  // namespace epipole::hal

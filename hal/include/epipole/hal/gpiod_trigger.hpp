@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <memory>
 #include <mutex>
 #include <string>
 
@@ -55,8 +56,12 @@ class GpiodTrigger final : public TriggerLine {
   EdgeResult line_went_away();
 
   TriggerConfig config_;
-  gpiod_chip* chip_ = nullptr;  // the chip of line_, owned
-  gpiod_line* line_ = nullptr;
+  struct CloseChip {
+    void operator()(gpiod_chip* chip) const;
+  };
+  using Chip = std::unique_ptr<gpiod_chip, CloseChip>;
+  Chip chip_;                   // the chip of line_
+  gpiod_line* line_ = nullptr;  // the chip's: gone with it
   bool started_ = false;
   std::atomic<bool> requested_{false};
   Backoff backoff_;

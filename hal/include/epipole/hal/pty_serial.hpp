@@ -22,19 +22,19 @@ class PtySerialPort final : public SerialPort {
 
   IoResult read(std::span<std::byte> buffer, Nanoseconds timeout) override;
   IoResult write(std::span<const std::byte> data, Nanoseconds timeout) override;
-  bool is_open() const override { return master_ >= 0; }
+  bool is_open() const override { return static_cast<bool>(master_); }
   // A new pseudo-terminal (and peer path; the symbolic link follows it).
   void reopen() override;
   void close() override;
 
-  const std::string& peer_path() const { return peer_path_; }
+  std::string peer_path() const override { return peer_path_; }
 
  private:
   void open_pair();
 
   SerialConfig config_;
-  int master_ = -1;
-  int peer_ = -1;
+  UniqueFd master_;
+  UniqueFd peer_;
   std::string peer_path_;
 };
 

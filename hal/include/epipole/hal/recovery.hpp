@@ -65,6 +65,7 @@ class RecoveringCamera final : public CameraSource {
   bool streaming() const override { return camera_.streaming(); }
   AcquireResult acquire(Nanoseconds timeout) override;
   void release(const Frame& frame) override { camera_.release(frame); }
+  std::optional<Nanoseconds> edge_delay() const override { return camera_.edge_delay(); }
   void reopen() override;
   void set_exposure(Nanoseconds exposure, double gain) override;
 

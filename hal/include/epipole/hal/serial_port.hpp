@@ -5,6 +5,7 @@
 #include <string>
 
 #include "epipole/hal/clock.hpp"
+#include "epipole/hal/unique_fd.hpp"
 
 namespace epipole::hal {
 
@@ -33,6 +34,8 @@ class SerialPort {
   // it cannot be opened; the port is then closed and reopen() may be tried again later.
   virtual void reopen() = 0;
   virtual void close() = 0;
+  // Where the robot's end of a simulated link is (a pseudo-terminal); empty for a real port.
+  virtual std::string peer_path() const { return {}; }
 };
 
 struct SerialConfig {
@@ -56,7 +59,7 @@ class TermiosSerialPort final : public SerialPort {
 
   IoResult read(std::span<std::byte> buffer, Nanoseconds timeout) override;
   IoResult write(std::span<const std::byte> data, Nanoseconds timeout) override;
-  bool is_open() const override { return fd_ >= 0; }
+  bool is_open() const override { return static_cast<bool>(fd_); }
   void reopen() override;
   void close() override;
 
@@ -66,7 +69,7 @@ class TermiosSerialPort final : public SerialPort {
   void open_device();
 
   SerialConfig config_;
-  int fd_ = -1;
+  UniqueFd fd_;
 };
 
 }  // namespace epipole::hal

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -8,6 +9,7 @@
 #include "epipole/core/image.hpp"
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/clock.hpp"
+#include "epipole/hal/side.hpp"
 #include "epipole/hal/trigger.hpp"
 
 namespace epipole::hal {
@@ -33,7 +35,10 @@ class SimTrigger final : public TriggerLine {
   void connect(SimCamera& camera);
   // Every edge is also added to `record` (nullptr: none), as the firmware's trigger thread
   // records the edges of a real line.
-  void record_to(TriggerRecord* record) { record_ = record; }
+  bool record_edges_to(TriggerRecord* record) override {
+    record_ = record;
+    return true;
+  }
   // Emits every edge with timestamp <= until to the connected cameras.
   void emit_until(Nanoseconds until);
   Nanoseconds period() const { return period_; }
@@ -113,6 +118,7 @@ class SimCamera final : public CameraSource {
   // Stores them; a frame's brightness is scaled by exposure x gain relative to the configured
   // values (each where both it and the configured one are not automatic), saturating at 255.
   void set_exposure(Nanoseconds exposure, double gain) override;
+  std::optional<Nanoseconds> edge_delay() const override { return timing_.exposure_delay; }
 
   void inject(const SimFault& fault);
   void set_fault_rates(const SimFaultRates& rates) { rates_ = rates; }
@@ -182,6 +188,9 @@ struct SimBoard {
   std::shared_ptr<const std::vector<GrayImage>> left;
   std::shared_ptr<const std::vector<GrayImage>> right;
   SimCameraTiming timing;
+  // The cameras the "sim" backend made on this board (null until it did), for fault injection.
+  SimCamera* camera(Side side) const { return cameras[side == Side::left ? 0 : 1]; }
+  std::array<SimCamera*, 2> cameras{};
 };
 
 // The right view of a scene whose left view is `left`, at a constant disparity (pixels):

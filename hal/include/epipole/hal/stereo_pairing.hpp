@@ -17,25 +17,35 @@ struct StereoPair {
   Frame right;
 };
 
-// Everything the pairer did with the frames given to it. Per side:
+// Everything the pairer did with the frames of one side.
 // pushed = paired + unpaired + mismatched + out_of_order + off_trigger + (frames still waiting).
-struct PairingCounters {
-  std::uint64_t pairs = 0;
-  std::uint64_t pushed_left = 0, pushed_right = 0;
+struct PairingSideCounters {
+  std::uint64_t pushed = 0;
   // The other side never had that trigger (by time: no frame of the other side was nearest
   // within the tolerance).
-  std::uint64_t unpaired_left = 0, unpaired_right = 0;
+  std::uint64_t unpaired = 0;
   // Same sequence, |dt| > tolerance; or the two frames are on different clocks.
-  std::uint64_t mismatched_left = 0, mismatched_right = 0;
+  std::uint64_t mismatched = 0;
   // The sequence (by time: or the timestamp) did not increase on its side.
-  std::uint64_t out_of_order_left = 0, out_of_order_right = 0;
+  std::uint64_t out_of_order = 0;
   // Same sequence and |dt| within the tolerance, but the trigger record has no edge of that
   // sequence at the frames' time (both cameras garbled the sequence the same way).
-  std::uint64_t off_trigger_left = 0, off_trigger_right = 0;
+  std::uint64_t off_trigger = 0;
   // Damaged frames the cameras reported (AcquireStatus::corrupt); never pushed (StereoGrabber).
-  std::uint64_t corrupt_left = 0, corrupt_right = 0;
+  std::uint64_t corrupt = 0;
   // Pairing by sequence: the times a reopened side's frames were given trigger numbers again.
-  std::uint64_t renumbered_left = 0, renumbered_right = 0;
+  std::uint64_t renumbered = 0;
+};
+
+struct PairingCounters {
+  std::uint64_t pairs = 0;
+  std::array<PairingSideCounters, 2> sides{};  // by Side
+  PairingSideCounters& of(Side side) { return sides[side == Side::left ? 0 : 1]; }
+  const PairingSideCounters& of(Side side) const { return sides[side == Side::left ? 0 : 1]; }
+  PairingSideCounters& left() { return sides[0]; }
+  PairingSideCounters& right() { return sides[1]; }
+  const PairingSideCounters& left() const { return sides[0]; }
+  const PairingSideCounters& right() const { return sides[1]; }
 };
 
 struct PairingConfig {
@@ -161,7 +171,7 @@ struct PairResult {
 
 // Acquires from two cameras and pairs their frames: next() returns the next pair, or timeout
 // when none came before the timeout, or device_lost naming the side that is gone. A corrupt
-// frame is counted (corrupt_left/right) and the wait goes on.
+// frame is counted (left().corrupt/right) and the wait goes on.
 class StereoGrabber {
  public:
   StereoGrabber(CameraSource& left, CameraSource& right, Clock& clock, PairingConfig config,

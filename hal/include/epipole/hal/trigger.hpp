@@ -48,6 +48,8 @@ struct EdgeResult {
 
 // A trigger line. A master reports the edges it fires; a slave the edges it sees. wait_edge()
 // never allocates or throws once started.
+class TriggerRecord;
+
 class TriggerLine {
  public:
   virtual ~TriggerLine() = default;
@@ -67,6 +69,10 @@ class TriggerLine {
   // changes.
   virtual bool available() const { return true; }
   virtual std::string unavailable_reason() const { return {}; }
+  // Adds every edge to `record` (null: no more) as it fires, with no thread waiting for them:
+  // the simulated trigger, whose edges come as its virtual clock passes them. False for a line
+  // that cannot: its edges are waited for with wait_edge().
+  virtual bool record_edges_to(TriggerRecord* /*record*/) { return false; }
 };
 
 // The edge times of a master line whose rate may change: edge n comes at the time of the

@@ -9,6 +9,7 @@
 
 #include "epipole/core/image.hpp"
 #include "epipole/hal/camera.hpp"
+#include "epipole/hal/unique_fd.hpp"
 
 namespace epipole::hal {
 
@@ -106,7 +107,7 @@ class V4l2Camera final : public CameraSource {
 
   CameraConfig config_;
   std::string name_;
-  int fd_ = -1;
+  UniqueFd fd_;
   bool multiplanar_ = false;
   bool streaming_ = false;
   PixelFormat format_ = PixelFormat::grey;

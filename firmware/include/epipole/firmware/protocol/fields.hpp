@@ -20,10 +20,7 @@ void fields(Io& io, M& m) {
   io("fps_centi", m.fps_centi);
   io("latency_p50_us", m.latency_p50_us);
   io("latency_p99_us", m.latency_p99_us);
-  static constexpr const char* kStageNames[kStageCount] = {
-      "capture_us", "rectify_us", "corners_us", "disparity_us",
-      "sparse_us",  "detect_us",  "publish_us", "total_us"};
-  for (int i = 0; i < kStageCount; ++i) io(kStageNames[i], m.stage_us[i]);
+  for (const StageInfo& s : kStages) io(s.time_field, m.stage_us[static_cast<std::size_t>(s.id)]);
   io("dropped_stale", m.dropped_stale);
   io("dropped_one_side", m.dropped_one_side);
   io("dropped_both_sides", m.dropped_both_sides);

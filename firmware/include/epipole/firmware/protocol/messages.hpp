@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <variant>
 
+#include "epipole/firmware/protocol/stages.hpp"
+
 namespace epipole::protocol {
 
 // Epipole serial protocol, version 3 (docs/protocol.md). Every number is little-endian on the
@@ -25,18 +27,6 @@ enum class MessageType : std::uint8_t {
   set_exposure = 0x81,
   set_stages = 0x82,
   snapshot = 0x83,
-};
-
-inline constexpr int kStageCount = 8;
-enum class Stage : std::uint8_t {
-  capture = 0,
-  rectify = 1,
-  corners = 2,
-  disparity = 3,
-  sparse = 4,
-  detect = 5,
-  publish = 6,
-  total = 7,
 };
 
 // Health flags.
@@ -169,7 +159,7 @@ struct SetExposure {
   friend bool operator==(const SetExposure&, const SetExposure&) = default;
 };
 struct SetStages {
-  std::uint16_t enabled_mask = 0;  // bit per Stage (capture and publish always run)
+  StageMask enabled_mask = 0;  // bit per Stage (capture and publish always run)
   friend bool operator==(const SetStages&, const SetStages&) = default;
 };
 struct Snapshot {
