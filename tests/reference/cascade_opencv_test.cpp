@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "cascade_kernels.hpp"
 #include "epipole/tools/cascade_xml.hpp"
 #include "epipole/vision/cascade.hpp"
 #include "test_data.hpp"

@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+#include "cascade_kernels.hpp"
 #include "cascade_test_models.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/vision/cascade.hpp"

@@ -7,6 +7,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/vision/fast.hpp"
+#include "fast_kernels.hpp"
 #include "random_image.hpp"
 
 namespace epipole::vision {

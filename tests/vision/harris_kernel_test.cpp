@@ -13,6 +13,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/vision/harris.hpp"
+#include "harris_kernels.hpp"
 #include "random_image.hpp"
 
 namespace epipole::vision {

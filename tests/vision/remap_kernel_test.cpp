@@ -12,6 +12,7 @@
 #include "epipole/core/fixed_point.hpp"
 #include "epipole/vision/remap.hpp"
 #include "random_image.hpp"
+#include "remap_kernels.hpp"
 
 namespace epipole::vision {
 namespace {

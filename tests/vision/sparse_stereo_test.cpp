@@ -13,6 +13,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/vision/fast.hpp"
 #include "random_image.hpp"
+#include "sparse_stereo_kernels.hpp"
 
 namespace epipole::vision {
 namespace {

@@ -10,6 +10,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "random_image.hpp"
+#include "stereo_kernels.hpp"
 
 namespace epipole::vision {
 namespace {

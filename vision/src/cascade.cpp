@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "cascade_kernels.hpp"
 #include "cascade_program.hpp"
 #include "epipole/core/error.hpp"
 #include "kernel_set.hpp"
@@ -70,25 +71,19 @@ void resize_coefficients(int source, int size, std::int32_t* offsets, std::uint1
   }
 }
 
-namespace {
 // These kernels have no AVX2 version: that path runs the NEON one.
-template <typename Function>
-Function* neon_or_reference(SimdPath path, Function* reference, Function* neon) {
-  return KernelSet<Function>{reference, neon, nullptr}.pick(path);
-}
-}  // namespace
-
 IntegralRowKernel* integral_row_kernel(SimdPath path) {
-  return neon_or_reference(path, integral_row_ref, integral_row_neon);
+  return KernelSet<IntegralRowKernel>{integral_row_ref, integral_row_neon, nullptr}.pick(path);
 }
 TiltedRowKernel* tilted_row_kernel(SimdPath path) {
-  return neon_or_reference(path, tilted_row_ref, tilted_row_neon);
+  return KernelSet<TiltedRowKernel>{tilted_row_ref, tilted_row_neon, nullptr}.pick(path);
 }
 ResizeColumnsKernel* resize_columns_kernel(SimdPath path) {
-  return neon_or_reference(path, resize_columns_ref, resize_columns_neon);
+  return KernelSet<ResizeColumnsKernel>{resize_columns_ref, resize_columns_neon, nullptr}.pick(
+      path);
 }
 ResizeRowsKernel* resize_rows_kernel(SimdPath path) {
-  return neon_or_reference(path, resize_rows_ref, resize_rows_neon);
+  return KernelSet<ResizeRowsKernel>{resize_rows_ref, resize_rows_neon, nullptr}.pick(path);
 }
 
 }  // namespace kernels
@@ -145,7 +140,9 @@ struct CascadeDetector::State {
     tilted_row = kernels::tilted_row_kernel(path);
     resize_columns = kernels::resize_columns_kernel(path);
     resize_rows = kernels::resize_rows_kernel(path);
-    split_row = path == SimdPath::reference ? kernels::split_row_ref : kernels::split_row_neon;
+    split_row =
+        KernelSet<kernels::SplitRowKernel>{kernels::split_row_ref, kernels::split_row_neon, nullptr}
+            .pick(path);
 
     const auto w = static_cast<std::size_t>(c.max_width);
     const auto h = static_cast<std::size_t>(c.max_height);
@@ -198,6 +195,8 @@ struct CascadeDetector::State {
   void integrate(GrayView image, bool split);
   void scan(GrayView image);
   void group(int image_width, int image_height);
+  int cluster();
+  void emit(Detection d, int image_width, int image_height);
 
   CascadeConfig config;
   SimdPath path;
@@ -211,7 +210,7 @@ struct CascadeDetector::State {
   kernels::TiltedRowKernel* tilted_row = nullptr;
   kernels::ResizeColumnsKernel* resize_columns = nullptr;
   kernels::ResizeRowsKernel* resize_rows = nullptr;
-  void (*split_row)(const std::uint32_t*, int, std::uint32_t*, std::uint32_t*) = nullptr;
+  kernels::SplitRowKernel* split_row = nullptr;
 
   GrayImage level;
   std::unique_ptr<std::uint32_t[]> planes;
@@ -385,32 +384,33 @@ void CascadeDetector::State::scan(GrayView image) {
   }
 }
 
-// cv::groupRectangles(hits, min_neighbors, 0.2), then clipObjects: classes of similar
-// rectangles (the transitive closure of SimilarRects), numbered in order of first appearance;
-// their averages; small ones inside bigger, stronger ones dropped; clipped to the image.
-void CascadeDetector::State::group(int image_width, int image_height) {
-  output_count = 0;
-  const auto emit = [&](Detection d) {
-    const int x0 = std::max(d.x, 0);
-    const int y0 = std::max(d.y, 0);
-    const int x1 = std::min(d.x + d.width, image_width);
-    const int y1 = std::min(d.y + d.height, image_height);
-    if (x1 <= x0 || y1 <= y0) return;
-    if (output_count == config.max_detections) {
-      truncated = true;
-      return;
-    }
-    output[output_count++] = {x0, y0, x1 - x0, y1 - y0, d.neighbors};
-  };
-  const int n = raw_count;
-  const int threshold = config.min_neighbors;
-  if (threshold <= 0 || n == 0) {
-    for (int i = 0; i < n; ++i) emit(raw[i]);
+namespace {
+constexpr double kGroupEps = 0.2;  // groupRectangles' eps
+}  // namespace
+
+// A grouped detection clipped to the image (clipObjects); dropped when nothing of it is left,
+// or when the output is full (then `truncated`).
+void CascadeDetector::State::emit(Detection d, int image_width, int image_height) {
+  const int x0 = std::max(d.x, 0);
+  const int y0 = std::max(d.y, 0);
+  const int x1 = std::min(d.x + d.width, image_width);
+  const int y1 = std::min(d.y + d.height, image_height);
+  if (x1 <= x0 || y1 <= y0) return;
+  if (output_count == config.max_detections) {
+    truncated = true;
     return;
   }
-  constexpr double kEps = 0.2;
+  output[output_count++] = {x0, y0, x1 - x0, y1 - y0, d.neighbors};
+}
+
+// The classes of similar raw hits (the transitive closure of SimilarRects, by union-find),
+// numbered in order of first appearance, each its hits' average: into `classes`. Returns how
+// many there are.
+int CascadeDetector::State::cluster() {
+  const int n = raw_count;
   const auto similar = [](const Detection& a, const Detection& b) {
-    const double delta = kEps * (std::min(a.width, b.width) + std::min(a.height, b.height)) * 0.5;
+    const double delta =
+        kGroupEps * (std::min(a.width, b.width) + std::min(a.height, b.height)) * 0.5;
     return std::abs(a.x - b.x) <= delta && std::abs(a.y - b.y) <= delta &&
            std::abs(a.x + a.width - b.x - b.width) <= delta &&
            std::abs(a.y + a.height - b.y - b.height) <= delta;
@@ -452,6 +452,20 @@ void CascadeDetector::State::group(int image_width, int image_height) {
          round_even(static_cast<float>(c.width) * s), round_even(static_cast<float>(c.height) * s),
          c.neighbors};
   }
+  return class_count;
+}
+
+// cv::groupRectangles(hits, min_neighbors, 0.2), then clipObjects: the classes of similar
+// rectangles with more than min_neighbors hits; small ones inside bigger, stronger ones
+// dropped; clipped to the image.
+void CascadeDetector::State::group(int image_width, int image_height) {
+  output_count = 0;
+  const int threshold = config.min_neighbors;
+  if (threshold <= 0 || raw_count == 0) {
+    for (int i = 0; i < raw_count; ++i) emit(raw[i], image_width, image_height);
+    return;
+  }
+  const int class_count = cluster();
   for (int i = 0; i < class_count; ++i) {
     const Detection& r1 = classes[i];
     const int n1 = r1.neighbors;
@@ -461,12 +475,12 @@ void CascadeDetector::State::group(int image_width, int image_height) {
       const Detection& r2 = classes[j];
       const int n2 = r2.neighbors;
       if (j == i || n2 <= threshold) continue;
-      const int dx = round_even(r2.width * kEps);
-      const int dy = round_even(r2.height * kEps);
+      const int dx = round_even(r2.width * kGroupEps);
+      const int dy = round_even(r2.height * kGroupEps);
       inside = r1.x >= r2.x - dx && r1.y >= r2.y - dy && r1.x + r1.width <= r2.x + r2.width + dx &&
                r1.y + r1.height <= r2.y + r2.height + dy && (n2 > std::max(3, n1) || n1 < 3);
     }
-    if (!inside) emit(r1);
+    if (!inside) emit(r1, image_width, image_height);
   }
 }
 

@@ -240,8 +240,13 @@ std::vector<std::uint8_t> CascadeModel::to_binary() const {
   return bytes;
 }
 
-CascadeModel CascadeModel::from_binary(std::span<const std::uint8_t> bytes,
-                                       std::string_view source) {
+namespace {
+
+// The header's fields, checked: the magic, a version this reader knows, the counts against the
+// payload's length and the file's size, the CRC. Returns the counts and the flags; `d` gets the
+// feature type and the window size.
+Counts read_header(std::span<const std::uint8_t> bytes, std::string_view source, CascadeData& d,
+                   std::uint8_t& flags) {
   require(bytes.size() >= kHeaderSize, source, ": ", bytes.size(),
           " bytes is too short for a compiled cascade (the header alone is ", kHeaderSize, ")");
   ByteReader header(bytes.first(kHeaderSize));
@@ -250,14 +255,13 @@ CascadeModel CascadeModel::from_binary(std::span<const std::uint8_t> bytes,
   require(std::equal(std::begin(magic), std::end(magic), std::begin(kMagic)), source,
           ": not a compiled cascade (bad magic; expected \"EPCC\")");
   const std::uint16_t version = header.u16();
-  require(version <= kFormatVersion, source, ": format version ", version,
-          " is newer than this reader's (", kFormatVersion, ")");
+  require(version <= CascadeModel::kFormatVersion, source, ": format version ", version,
+          " is newer than this reader's (", CascadeModel::kFormatVersion, ")");
   require(version >= 1, source, ": format version 0 is invalid");
   const std::uint8_t type = header.u8();
   require(type <= 1, source, ": unknown feature type ", static_cast<int>(type));
-  const std::uint8_t flags = header.u8();
+  flags = header.u8();
   require((flags & ~1u) == 0, source, ": unknown flags 0x", std::hex, static_cast<int>(flags));
-  CascadeData d;
   d.feature_type = static_cast<CascadeFeatureType>(type);
   d.window_width = header.u16();
   d.window_height = header.u16();
@@ -276,12 +280,44 @@ CascadeModel CascadeModel::from_binary(std::span<const std::uint8_t> bytes,
           " payload bytes, the header says ", payload_length,
           bytes.size() - kHeaderSize < payload_length ? " (truncated)" : " (trailing bytes)");
   // From here on every count is bounded by the file's size.
-  const std::span<const std::uint8_t> payload_bytes = bytes.subspan(kHeaderSize);
   const std::uint32_t actual_crc = checksum(bytes);
   require(actual_crc == crc, source, ": CRC-32 mismatch (computed 0x", std::hex, actual_crc,
           ", stored 0x", crc, ")");
+  return counts;
+}
 
-  ByteReader payload(payload_bytes);
+void read_features(ByteReader& payload, const Counts& counts, CascadeData& d,
+                   std::string_view source) {
+  if (counts.lbp) {
+    d.lbp_features.resize(static_cast<std::size_t>(counts.features));
+    for (LbpFeature& f : d.lbp_features) {
+      f.x = payload.i16();
+      f.y = payload.i16();
+      f.block_width = payload.i16();
+      f.block_height = payload.i16();
+    }
+    return;
+  }
+  d.haar_features.resize(static_cast<std::size_t>(counts.features));
+  for (HaarFeature& f : d.haar_features) {
+    f.rect_count = payload.u8();
+    const std::uint8_t tilted = payload.u8();
+    require(tilted <= 1 && payload.u16() == 0, source, ": bad feature flags");
+    f.tilted = tilted != 0;
+    for (HaarRect& r : f.rects) {
+      r.x = payload.i16();
+      r.y = payload.i16();
+      r.width = payload.i16();
+      r.height = payload.i16();
+      r.weight = payload.f32();
+    }
+  }
+}
+
+// The payload in the order the format lists it (above), into `d`.
+void read_payload(std::span<const std::uint8_t> bytes, const Counts& counts, CascadeData& d,
+                  std::string_view source) {
+  ByteReader payload(bytes);
   d.stages.resize(static_cast<std::size_t>(counts.stages));
   for (CascadeStage& s : d.stages) {
     s.weak_count = checked_int(payload.u32(), "weak classifier count", source);
@@ -301,31 +337,18 @@ CascadeModel CascadeModel::from_binary(std::span<const std::uint8_t> bytes,
   for (std::uint32_t& word : d.subsets) word = payload.u32();
   d.leaves.resize(static_cast<std::size_t>(counts.leaves));
   for (float& leaf : d.leaves) leaf = payload.f32();
-  if (counts.lbp) {
-    d.lbp_features.resize(static_cast<std::size_t>(counts.features));
-    for (LbpFeature& f : d.lbp_features) {
-      f.x = payload.i16();
-      f.y = payload.i16();
-      f.block_width = payload.i16();
-      f.block_height = payload.i16();
-    }
-  } else {
-    d.haar_features.resize(static_cast<std::size_t>(counts.features));
-    for (HaarFeature& f : d.haar_features) {
-      f.rect_count = payload.u8();
-      const std::uint8_t tilted = payload.u8();
-      require(tilted <= 1 && payload.u16() == 0, source, ": bad feature flags");
-      f.tilted = tilted != 0;
-      for (HaarRect& r : f.rects) {
-        r.x = payload.i16();
-        r.y = payload.i16();
-        r.width = payload.i16();
-        r.height = payload.i16();
-        r.weight = payload.f32();
-      }
-    }
-  }
+  read_features(payload, counts, d, source);
   require(payload.ok() && payload.remaining() == 0, source, ": payload layout mismatch");
+}
+
+}  // namespace
+
+CascadeModel CascadeModel::from_binary(std::span<const std::uint8_t> bytes,
+                                       std::string_view source) {
+  CascadeData d;
+  std::uint8_t flags = 0;
+  const Counts counts = read_header(bytes, source, d, flags);
+  read_payload(bytes.subspan(kHeaderSize), counts, d, source);
   CascadeModel model(std::move(d), source);
   require(model.has_tilted_ == ((flags & 1u) != 0), source,
           ": the tilted-features flag does not match the features");

@@ -5,6 +5,7 @@
 // and ARMv7 are used; every result equals the reference's bit for bit.
 #include <cstring>
 
+#include "cascade_kernels.hpp"
 #include "cascade_program.hpp"
 #include "cascade_simd.hpp"
 #include "epipole/core/neon.hpp"

@@ -125,9 +125,11 @@ CascadeProgram::CascadeProgram(const CascadeModel& model, IntegralLayout layout_
   for (const CascadeNode& n : d.nodes) nodes.push_back({n.feature, n.threshold, n.left, n.right});
   leaves = d.leaves;
   subsets = d.subsets;
+  if (stump_based) build_fixed_point();
+}
 
-  // Fixed point for the SIMD kernels (stumps only).
-  if (!stump_based) return;
+// The stumps in fixed point for the SIMD kernels, when that is exact (fixed_point_exact).
+void CascadeProgram::build_fixed_point() {
   for (const float v : leaves) fixed_shift = std::max(fixed_shift, exact_shift(v));
   fixed_point_exact = true;
   for (ProgramStage& stage : stages) {

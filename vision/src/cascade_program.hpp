@@ -106,6 +106,9 @@ struct CascadeProgram {
   bool fixed_point_exact = false;
   std::vector<HaarStump> haar_stumps;
   std::vector<LbpStump> lbp_stumps;
+
+ private:
+  void build_fixed_point();
 };
 
 // The windows of one row of one pyramid level: window i (of `positions`) at x = i *
@@ -149,6 +152,8 @@ inline void tilted_columns(const std::uint32_t* prefix, int from, int width,
 }
 
 // even[k] = row[2k], odd[k] = row[2k + 1] for the `count` entries of an integral row.
+using SplitRowKernel = void(const std::uint32_t* row, int count, std::uint32_t* even,
+                            std::uint32_t* odd);
 void split_row_ref(const std::uint32_t* row, int count, std::uint32_t* even, std::uint32_t* odd);
 void split_row_neon(const std::uint32_t* row, int count, std::uint32_t* even, std::uint32_t* odd);
 

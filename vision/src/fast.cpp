@@ -5,6 +5,7 @@
 
 #include "epipole/core/error.hpp"
 #include "fast_columns.hpp"
+#include "fast_kernels.hpp"
 #include "kernel_set.hpp"
 
 namespace epipole::vision {

@@ -17,8 +17,8 @@
 #include <cstdint>
 #include <cstring>
 
-#include "epipole/vision/fast.hpp"
 #include "fast_columns.hpp"
+#include "fast_kernels.hpp"
 
 namespace epipole::vision::kernels {
 

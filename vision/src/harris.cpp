@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "epipole/core/error.hpp"
+#include "harris_kernels.hpp"
 #include "harris_rows.hpp"
 #include "kernel_set.hpp"
 

@@ -8,7 +8,7 @@
 // scale2 >= 1e-9, a non-zero a c - b b at least an ulp of a number >= 1e-18, and k is 0 or
 // >= 1e-6 (the detector checks it), so k trace trace is 0 or >= 1e-24.
 #include "epipole/core/neon.hpp"
-#include "epipole/vision/harris.hpp"
+#include "harris_kernels.hpp"
 #include "harris_rows.hpp"
 
 namespace epipole::vision::kernels {

@@ -10,6 +10,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/core/fixed_point.hpp"
 #include "kernel_set.hpp"
+#include "remap_kernels.hpp"
 
 namespace epipole::vision {
 

@@ -9,7 +9,7 @@
 #include <cstring>
 #include <limits>
 
-#include "epipole/vision/remap.hpp"
+#include "remap_kernels.hpp"
 
 namespace epipole::vision::kernels {
 

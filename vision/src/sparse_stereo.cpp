@@ -6,6 +6,7 @@
 
 #include "epipole/core/error.hpp"
 #include "kernel_set.hpp"
+#include "sparse_stereo_kernels.hpp"
 
 namespace epipole::vision {
 

@@ -1,7 +1,7 @@
 // Hamming distances of 256-bit descriptors with NEON: two 16-byte halves, vcnt and pairwise
 // widening adds (ARMv7-safe intrinsics).
 #include "epipole/core/neon.hpp"
-#include "epipole/vision/sparse_stereo.hpp"
+#include "sparse_stereo_kernels.hpp"
 
 namespace epipole::vision::kernels {
 

@@ -7,6 +7,7 @@
 #include "epipole/core/error.hpp"
 #include "kernel_set.hpp"
 #include "stereo_census.hpp"
+#include "stereo_kernels.hpp"
 #include "stereo_winner.hpp"
 
 namespace epipole::vision {
@@ -164,18 +165,16 @@ void bm_row_ref(const BmRow& r) {
   box_wta_ref(r.columns, r.width, r.disparities, r.radius, r.sums, r.wta);
 }
 
-StereoKernels stereo_kernels(SimdPath path) {
-  switch (path) {
-    case SimdPath::reference:
-      break;
-    case SimdPath::neon:
-      return stereo_kernels_neon();
-    case SimdPath::avx2: {
-      StereoKernels (*avx2)() = EPIPOLE_AVX2_KERNEL(stereo_kernels_avx2);
-      return avx2 != nullptr ? avx2() : stereo_kernels_neon();
-    }
-  }
+namespace {
+StereoKernels stereo_kernels_ref() {
   return {census_row_ref, cost_row_ref, sgm_row_ref, box_columns_ref, bm_row_ref};
+}
+}  // namespace
+
+StereoKernels stereo_kernels(SimdPath path) {
+  static constexpr KernelSet<StereoKernels()> kKernels{stereo_kernels_ref, stereo_kernels_neon,
+                                                       EPIPOLE_AVX2_KERNEL(stereo_kernels_avx2)};
+  return kKernels.pick(path)();
 }
 
 }  // namespace kernels
@@ -209,6 +208,7 @@ struct StereoMatcher::Worker {
   std::vector<std::uint16_t> sums;     // the aggregated costs of a row
   std::vector<std::uint16_t> window;   // winner take all: the right image's candidates
   std::vector<std::int16_t> best, right_best;
+  kernels::StereoKernels kernels;  // the path's, picked once
 
   std::size_t bytes() const {
     std::size_t n = bytes_of(left_census) + bytes_of(right_census) + bytes_of(reversed) +
@@ -225,6 +225,7 @@ struct StereoMatcher::Worker {
     return reversed.data() +
            static_cast<std::size_t>(p) * (reversed.size() / kernels::kCensusPlanes);
   }
+  void cost_row(GrayView left, GrayView right, int y, int disparities, std::uint8_t* cost_out);
 };
 
 StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path)
@@ -256,6 +257,7 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path)
   constexpr std::size_t kPlanes = kernels::kCensusPlanes;
   for (int t = 0; t < pool_.threads(); ++t) {
     auto w = std::make_unique<Worker>();
+    w->kernels = kernels::stereo_kernels(path);
     w->left_census.assign(kPlanes * uw, 0);
     w->right_census.assign(kPlanes * uw, 0);
     w->reversed.assign(kPlanes * (uw + ud), 0);
@@ -313,116 +315,132 @@ ImageView<const std::int16_t> StereoMatcher::compute(GrayView left, GrayView rig
   return disparity_;
 }
 
-void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView right) {
-  Worker& w = *workers_[static_cast<std::size_t>(worker)];
-  const kernels::StereoKernels k = kernels::stereo_kernels(path_);
-  const int W = config_.width;
-  const int H = config_.height;
-  const int D = config_.max_disparity;
-  const std::ptrdiff_t wd = static_cast<std::ptrdiff_t>(W) * D;
-  const int stripes = pool_.threads();
-  const int y0 = stripe * H / stripes;
-  const int y1 = (stripe + 1) * H / stripes;
+// The census of row y of both images (the right one reversed), then its cost into `cost`.
+void StereoMatcher::Worker::cost_row(GrayView left, GrayView right, int y, int disparities,
+                                     std::uint8_t* cost_out) {
   constexpr int kPlanes = kernels::kCensusPlanes;
   std::uint8_t* left_planes[kPlanes];
   std::uint8_t* right_planes[kPlanes];
   const std::uint8_t* left_in[kPlanes];
   const std::uint8_t* reversed_in[kPlanes];
   for (int p = 0; p < kPlanes; ++p) {
-    left_planes[p] = w.left_plane(p);
-    right_planes[p] = w.right_plane(p);
+    left_planes[p] = left_plane(p);
+    right_planes[p] = right_plane(p);
     left_in[p] = left_planes[p];
-    reversed_in[p] = w.reversed_plane(p);
+    reversed_in[p] = reversed_plane(p);
   }
-
-  // The census of row y of both images (the right one reversed), then its cost into `cost`.
-  const auto cost_row = [&](int y, std::uint8_t* cost) {
-    const std::uint8_t* rows[7];
-    for (const GrayView* image : {&left, &right}) {
-      for (int i = 0; i < 7; ++i) {
-        rows[i] = image->row(std::clamp(y - kernels::kCensusRadiusY + i, 0, H - 1));
-      }
-      k.census(rows, W, image == &left ? left_planes : right_planes);
+  const int width = left.width();
+  const std::uint8_t* rows[7];
+  for (const GrayView* image : {&left, &right}) {
+    for (int i = 0; i < 7; ++i) {
+      rows[i] = image->row(std::clamp(y - kernels::kCensusRadiusY + i, 0, left.height() - 1));
     }
-    for (int p = 0; p < kPlanes; ++p) reverse_bytes(right_planes[p], W, w.reversed_plane(p));
-    k.cost(left_in, reversed_in, W, D, cost);
-  };
+    kernels.census(rows, width, image == &left ? left_planes : right_planes);
+  }
+  for (int p = 0; p < kPlanes; ++p) reverse_bytes(right_planes[p], width, reversed_plane(p));
+  kernels.cost(left_in, reversed_in, width, disparities, cost_out);
+}
 
-  // The winner take all of row y goes straight into the output; then the left-right check.
-  const auto wta_row = [&](int y) {
-    return kernels::WtaRow{config_.uniqueness, disparity_.row(y), w.best.data(),
-                           w.right_best.data(), w.window.data()};
-  };
-  const auto check_row = [&](int y) {
-    if (config_.lr_max_diff < 0) return;
-    std::int16_t* out = disparity_.row(y);
-    const std::int16_t* best = w.best.data();
-    const std::int16_t* right_best = w.right_best.data();
-    for (int x = 0; x < W; ++x) {
-      const int b = best[x];  // -1: no winner, and out[x] is invalid already
-      const int r = right_best[b >= 0 ? x - b : x];
-      out[x] = b >= 0 && std::abs(r - b) > config_.lr_max_diff ? kInvalidDisparity : out[x];
-    }
-  };
+namespace {
 
+// The winner take all of a row goes straight into the output row `out`.
+kernels::WtaRow wta_row(const StereoConfig& config, StereoMatcher::Worker& w, std::int16_t* out) {
+  return kernels::WtaRow{config.uniqueness, out, w.best.data(), w.right_best.data(),
+                         w.window.data()};
+}
+
+// The left-right check of an output row: a winner whose right image's winner is too far is
+// invalid.
+void check_row(const StereoConfig& config, const StereoMatcher::Worker& w, std::int16_t* out) {
+  if (config.lr_max_diff < 0) return;
+  const std::int16_t* best = w.best.data();
+  const std::int16_t* right_best = w.right_best.data();
+  for (int x = 0; x < config.width; ++x) {
+    const int b = best[x];  // -1: no winner, and out[x] is invalid already
+    const int r = right_best[b >= 0 ? x - b : x];
+    out[x] = b >= 0 && std::abs(r - b) > config.lr_max_diff ? kInvalidDisparity : out[x];
+  }
+}
+
+}  // namespace
+
+void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView right) {
+  Worker& w = *workers_[static_cast<std::size_t>(worker)];
+  const int stripes = pool_.threads();
+  const int y0 = stripe * config_.height / stripes;
+  const int y1 = (stripe + 1) * config_.height / stripes;
   if (config_.method == StereoMethod::sgm) {
-    const std::size_t stride = static_cast<std::size_t>(D) + 32;
-    int prev = 0;
-    for (int dir = 0; dir < 3; ++dir) {
-      auto& p = w.paths[prev][dir];
-      for (int x = 0; x < W; ++x) {
-        std::fill_n(p.begin() + static_cast<std::ptrdiff_t>(
-                                    (static_cast<std::size_t>(x) + 1) * stride + 16),
-                    D, std::uint8_t{0});
-      }
-      std::fill(w.mins[prev][dir].begin(), w.mins[prev][dir].end(), std::uint8_t{0});
-    }
-    for (int y = std::max(0, y0 - kWarmupRows); y < y1; ++y) {
-      cost_row(y, w.cost.data());
-      kernels::SgmRow row{};
-      row.cost = w.cost.data();
-      row.width = W;
-      row.disparities = D;
-      row.p1 = config_.p1;
-      row.p2 = config_.p2;
-      for (int dir = 0; dir < 3; ++dir) {
-        row.prev[dir] = w.paths[prev][dir].data();
-        row.cur[dir] = w.paths[1 - prev][dir].data();
-        row.prev_min[dir] = w.mins[prev][dir].data();
-        row.cur_min[dir] = w.mins[1 - prev][dir].data();
-      }
-      row.scratch = w.scratch.data();
-      row.sums = w.sums.data();
-      // Warm-up rows write their winners into the row that follows them in the output; it is
-      // overwritten before it is final (rows y0 - kWarmupRows .. y0 - 1 belong to the stripe
-      // above, which writes them itself).
-      row.wta = wta_row(y >= y0 ? y : y0);
-      k.sgm(row);
-      prev = 1 - prev;
-      if (y >= y0) check_row(y);
-    }
-    return;
+    sgm_stripe(w, y0, y1, left, right);
+  } else {
+    bm_stripe(w, y0, y1, left, right);
   }
+}
 
-  // Block matching: a ring of cost rows y - r - 1 .. y + r and their vertical sums.
+// Rows y0..y1 of the output, aggregated from kWarmupRows above (those belong to the stripe
+// above, which writes them itself).
+void StereoMatcher::sgm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right) {
+  const int W = config_.width;
+  const int D = config_.max_disparity;
+  const std::size_t stride = static_cast<std::size_t>(D) + 32;
+  int prev = 0;
+  for (int dir = 0; dir < 3; ++dir) {
+    auto& p = w.paths[prev][dir];
+    for (int x = 0; x < W; ++x) {
+      std::fill_n(
+          p.begin() + static_cast<std::ptrdiff_t>((static_cast<std::size_t>(x) + 1) * stride + 16),
+          D, std::uint8_t{0});
+    }
+    std::fill(w.mins[prev][dir].begin(), w.mins[prev][dir].end(), std::uint8_t{0});
+  }
+  for (int y = std::max(0, y0 - kWarmupRows); y < y1; ++y) {
+    w.cost_row(left, right, y, D, w.cost.data());
+    kernels::SgmRow row{};
+    row.cost = w.cost.data();
+    row.width = W;
+    row.disparities = D;
+    row.p1 = config_.p1;
+    row.p2 = config_.p2;
+    for (int dir = 0; dir < 3; ++dir) {
+      row.prev[dir] = w.paths[prev][dir].data();
+      row.cur[dir] = w.paths[1 - prev][dir].data();
+      row.prev_min[dir] = w.mins[prev][dir].data();
+      row.cur_min[dir] = w.mins[1 - prev][dir].data();
+    }
+    row.scratch = w.scratch.data();
+    row.sums = w.sums.data();
+    // Warm-up rows write their winners into the row that follows them in the output; it is
+    // overwritten before it is final.
+    row.wta = wta_row(config_, w, disparity_.row(y >= y0 ? y : y0));
+    w.kernels.sgm(row);
+    prev = 1 - prev;
+    if (y >= y0) check_row(config_, w, disparity_.row(y));
+  }
+}
+
+// Block matching: a ring of cost rows y - r - 1 .. y + r and their vertical sums.
+void StereoMatcher::bm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right) {
+  const int H = config_.height;
+  const int D = config_.max_disparity;
+  const std::ptrdiff_t wd = static_cast<std::ptrdiff_t>(config_.width) * D;
   const int r = config_.block_size / 2;
   const int ring = config_.block_size + 1;
   const auto ring_row = [&](int y) { return w.cost.data() + (y % ring) * wd; };
   std::fill(w.columns.begin(), w.columns.end(), std::uint16_t{0});
   const int first = std::max(0, y0 - r);
   for (int y = first; y < std::min(H, y0 + r); ++y) {
-    cost_row(y, ring_row(y));
-    k.box_columns(w.columns.data(), ring_row(y), nullptr, static_cast<int>(wd));
+    w.cost_row(left, right, y, D, ring_row(y));
+    w.kernels.box_columns(w.columns.data(), ring_row(y), nullptr, static_cast<int>(wd));
   }
   for (int y = y0; y < y1; ++y) {
-    kernels::BmRow row{nullptr, nullptr, w.columns.data(), W, D, r, w.sums.data(), wta_row(y)};
+    kernels::BmRow row{nullptr, nullptr, w.columns.data(), config_.width,
+                       D,       r,       w.sums.data(),    wta_row(config_, w, disparity_.row(y))};
     if (y + r < H) {
-      cost_row(y + r, ring_row(y + r));
+      w.cost_row(left, right, y + r, D, ring_row(y + r));
       row.entering = ring_row(y + r);
     }
     if (y - r - 1 >= first) row.leaving = ring_row(y - r - 1);
-    k.bm(row);
-    check_row(y);
+    w.kernels.bm(row);
+    check_row(config_, w, disparity_.row(y));
   }
 }
 

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <cstdint>
 
-#include "epipole/vision/stereo.hpp"
 #include "stereo_census.hpp"
+#include "stereo_kernels.hpp"
 #include "stereo_winner.hpp"
 
 namespace epipole::vision::kernels {

@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "epipole/vision/stereo.hpp"
+#include "stereo_kernels.hpp"
 
 namespace epipole::vision::kernels {
 

@@ -99,16 +99,4 @@ class SparseStereoMatcher {
   bool truncated_ = false;
 };
 
-namespace kernels {
-
-// Hamming distances between one 32-byte descriptor and n consecutive ones.
-using HammingKernel = void(const std::uint8_t* query, const std::uint8_t* candidates, int n,
-                           std::uint16_t* distances);
-void hamming_ref(const std::uint8_t* query, const std::uint8_t* candidates, int n,
-                 std::uint16_t* distances);
-void hamming_neon(const std::uint8_t* query, const std::uint8_t* candidates, int n,
-                  std::uint16_t* distances);
-HammingKernel* hamming_kernel(SimdPath path);
-
-}  // namespace kernels
 }  // namespace epipole::vision

@@ -63,6 +63,9 @@ class StereoMatcher {
 
  private:
   void run_stripe(int stripe, int worker, GrayView left, GrayView right);
+  void sgm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right);
+  void bm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right);
+
   void remove_speckles();
 
   StereoConfig config_;
@@ -77,104 +80,4 @@ class StereoMatcher {
   std::vector<std::uint32_t> labels_;
 };
 
-namespace kernels {
-
-// The census of a row in four byte planes: bits 0..7 of every pixel in planes[0], 8..15 in
-// planes[1], 16..23 in planes[2], 24..30 in planes[3]. Census: 9x7 centre-symmetric, bit
-// b = I(x+dx_b, y+dy_b) > I(x-dx_b, y-dy_b) for the 31 offsets of the upper half window.
-// rows[0..6] are rows y-3..y+3 (clamped at the image border by the caller); columns are clamped
-// too.
-using CensusRowKernel = void(const std::uint8_t* const* rows, int width,
-                             std::uint8_t* const* planes);
-// Matching cost of one row: cost[x * D + d] = Hamming distance (0..31) between the left census
-// at x and the right census at x - d, and 31 (kMaxCensusCost) where d > x (beyond the left
-// border). The right census comes reversed: right[p][k] is plane p of right pixel
-// width - 1 - k, for k < width + D (the caller pads k >= width).
-using CostRowKernel = void(const std::uint8_t* const* left, const std::uint8_t* const* right,
-                           int width, int disparities, std::uint8_t* cost);
-
-// Winner take all of one row of aggregated costs S(x, d) (each below kNoCost), as the last step
-// of the SGM and BM row kernels. disparity[x]: d * 16 with parabolic sub-pixel, or
-// kInvalidDisparity when not unique or when d > x; best[x]: that integer d or -1.
-// right_best[xr]: the right image's best disparity at xr, the smallest S(xr + d, d) over
-// 0 <= d < min(D, width - xr), the smallest d among equal costs. window: 2 * (D + 16) values
-// of scratch.
-constexpr std::uint16_t kNoCost = 0x7FFF;
-struct WtaRow {
-  int uniqueness;
-  std::int16_t* disparity;
-  std::int16_t* best;
-  std::int16_t* right_best;
-  std::uint16_t* window;
-};
-
-// One row of semi-global aggregation and its winner take all. Path values are 8-bit: each path
-// step is C + min(...) - min_prev, between 0 and max cost + P2 = 31 + P2, so P2 <= 224 keeps
-// them exact. Path arrays hold, per x in -1..width, `stride` = D + 32 bytes with the
-// disparities at offset 16; entries -1 and width are zero, and the values at d = -1 and d = D
-// are kSgmPad. mins hold each x's minimum (index x + 1).
-constexpr std::uint8_t kSgmPad = 0xFF;
-constexpr int kMaxSgmP2 = 255 - 31;
-struct SgmRow {
-  const std::uint8_t* cost;  // [x * D + d], each 0..31
-  int width;
-  int disparities;
-  int p1;
-  int p2;
-  const std::uint8_t* prev[3];  // top, top-left, top-right: the previous row
-  std::uint8_t* cur[3];
-  const std::uint8_t* prev_min[3];
-  std::uint8_t* cur_min[3];
-  std::uint8_t* scratch;  // 2 * stride bytes: the horizontal paths
-  std::uint16_t* sums;    // width * D values of scratch: the sums over the paths
-  WtaRow wta;
-};
-using SgmRowKernel = void(const SgmRow& row);
-
-// Box filter step (fast mode): sums[i] += add[i] - sub[i] over n values (add or sub may be
-// null).
-using BoxColumnsKernel = void(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub,
-                              int n);
-
-// One row of block matching in one pass (what box_columns + box_wta_ref do one after the
-// other): the column sums are updated with the cost row entering the box and the one leaving
-// it (either may be null), and the box and its winner are taken.
-struct BmRow {
-  const std::uint8_t* entering;
-  const std::uint8_t* leaving;
-  std::uint16_t* columns;  // width * D
-  int width;
-  int disparities;
-  int radius;
-  std::uint16_t* sums;  // width * D values of scratch (width >= 2)
-  WtaRow wta;
-};
-using BmRowKernel = void(const BmRow& row);
-
-struct StereoKernels {
-  CensusRowKernel* census;
-  CostRowKernel* cost;
-  SgmRowKernel* sgm;
-  BoxColumnsKernel* box_columns;
-  BmRowKernel* bm;
-};
-
-StereoKernels stereo_kernels(SimdPath path);
-
-void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* const* planes);
-void cost_row_ref(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
-                  int disparities, std::uint8_t* cost);
-void sgm_row_ref(const SgmRow& row);
-void box_columns_ref(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub, int n);
-void bm_row_ref(const BmRow& row);
-// The horizontal box of radius r over a row of per-x columns of D values into sums
-// [x * D + d], and its winner take all.
-void box_wta_ref(const std::uint16_t* columns, int width, int disparities, int radius,
-                 std::uint16_t* sums, const WtaRow& wta);
-// The definition of the winner take all over a whole row of sums [x * D + d].
-void wta_row_ref(const std::uint16_t* sums, int width, int disparities, const WtaRow& wta);
-
-// One pixel of the census (clamped columns), shared by every path for the border columns.
-void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint8_t* const* planes);
-}  // namespace kernels
 }  // namespace epipole::vision
