@@ -3,13 +3,27 @@
 #include <pthread.h>
 #include <sched.h>
 
+#include <cerrno>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "epipole/core/error.hpp"
+#include "epipole/hal/registry.hpp"
 
 namespace epipole::firmware {
 
 namespace {
+
+void check_budget(const std::string& board, std::optional<std::size_t> budget, std::size_t needed) {
+  if (!budget) return;
+  require(needed <= *budget, "board ", board, ": memory_budget_mb: the frame loop needs ",
+          needed / 1024, " KiB but the budget is ", *budget / 1024, " KiB");
+}
 
 const BoardConfig::SimScene* scene_with_calibration(const BoardConfig& config) {
   const BoardConfig::SimScene* scene = config.sim_scene();
@@ -77,17 +91,102 @@ void Firmware::build(std::unique_ptr<Board> board) {
   link.baud = config_.serial.port.baud;
   link_ = std::make_unique<Link>(board_->serial(), board_->clock(), link);
   loop_ = std::make_unique<FrameLoop>(config_, *board_, *pipeline_, *link_);
-  if (config_.memory_budget_bytes) {
-    require(working_set_bytes() <= *config_.memory_budget_bytes, "board ", config_.name,
-            ": memory_budget_mb: the frame loop needs ", working_set_bytes() / 1024,
-            " KiB but the "
-            "budget is ",
-            *config_.memory_budget_bytes / 1024, " KiB");
-  }
+  check_budget(config_.name, config_.memory_budget_bytes, working_set_bytes());
 }
 
-std::size_t Firmware::working_set_bytes() const {
-  return pipeline_->working_set_bytes() + LinkConfig{}.queue_bytes;
+MemoryReport Firmware::memory_report() const {
+  MemoryReport report;
+  pipeline_->add_memory(report);
+  report.add("link", link_->working_set_bytes());
+  loop_->add_memory(report);
+  std::size_t cameras = board_->left().working_set_bytes() + board_->right().working_set_bytes();
+  if (const hal::SimBoard* sim = board_->sim()) {
+    for (const auto* side : {sim->left.get(), sim->right.get()}) {
+      for (const GrayImage& image : *side) cameras += image.size_bytes();  // the scene
+    }
+  }
+  report.add(kCameras, cameras);
+  return report;
+}
+
+namespace {
+
+// The first backend of the registry's list that is part of the simulated board.
+template <typename Traits>
+std::string simulated_backend(const std::vector<std::string>& names, Traits traits) {
+  for (const std::string& name : names) {
+    if (traits(name).simulated) return name;
+  }
+  throw Error("this build has no simulated backend to stand in for the board's devices");
+}
+
+// The stand-ins for the board's devices: simulated cameras of the same size (grey, whatever the
+// board's cameras deliver: the frame loop sees gray planes either way) and a simulated trigger
+// master at the board's rate.
+SceneImages stand_in_for_devices(BoardConfig& config) {
+  const hal::BackendRegistry& registry = hal::BackendRegistry::builtin();
+  config.cameras.backend = simulated_backend(
+      registry.camera_backends(), [&](const std::string& n) { return registry.camera_traits(n); });
+  for (auto [camera, name] :
+       {std::pair{&config.cameras.left, "left"}, std::pair{&config.cameras.right, "right"}}) {
+    camera->device = name;
+    camera->format = hal::PixelFormat::grey;
+  }
+  if (config.has_trigger()) {
+    config.trigger.backend =
+        simulated_backend(registry.trigger_backends(),
+                          [&](const std::string& n) { return registry.trigger_traits(n); });
+    config.trigger.line.role = hal::TriggerRole::master;
+  }
+  SceneImages images;
+  images.left.emplace_back(config.width(), config.height());
+  images.right.emplace_back(config.width(), config.height());
+  return images;
+}
+
+// A temporary folder, removed with everything in it when this goes.
+class TemporaryFolder {
+ public:
+  TemporaryFolder() {
+    std::string pattern =
+        (std::filesystem::temp_directory_path() / "epipole-check-XXXXXX").string();
+    require(::mkdtemp(pattern.data()) != nullptr, "a temporary folder in ",
+            std::filesystem::temp_directory_path().string(), ": ", std::strerror(errno));
+    path_ = pattern;
+  }
+  ~TemporaryFolder() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TemporaryFolder(const TemporaryFolder&) = delete;
+  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace
+
+MemoryReport check_memory(BoardConfig config) {
+  const bool stand_in = !config.simulated();
+  SceneImages images = stand_in ? stand_in_for_devices(config) : load_scene_images(config);
+  config.serial.backend = std::string(hal::kNoBackend);  // the link's queue is made all the same
+  std::optional<TemporaryFolder> snapshots;
+  if (!config.snapshot_directory.empty()) {
+    snapshots.emplace();
+    config.snapshot_directory = snapshots->path();
+  }
+  const std::string board = config.name;
+  const std::optional<std::size_t> budget = config.memory_budget_bytes;
+  config.memory_budget_bytes.reset();  // checked below, without the stand-ins' images
+  MemoryReport report = Firmware(std::move(config), std::move(images)).memory_report();
+  if (stand_in) {
+    std::erase_if(report.parts(),
+                  [](const MemoryReport::Part& p) { return p.name == Firmware::kCameras; });
+  }
+  check_budget(board, budget, report.total());
+  return report;
 }
 
 RunSummary Firmware::run(std::uint64_t max_frames, const std::atomic<bool>& stop) {

@@ -335,7 +335,9 @@ void FrameLoop::say_device_changes() {
   const hal::RecoveringSerialPort* serial = board_.serial_recovery();
   if (serial != nullptr && serial->connected() != serial_connected_) {
     serial_connected_ = !serial_connected_;
-    std::fprintf(stderr, "epipole-fw: serial port %s %s\n", config_.serial.port.device.c_str(),
+    const std::string& device = config_.serial.port.device;
+    std::fprintf(stderr, "epipole-fw: serial port %s %s\n",
+                 device.empty() ? board_.serial_peer().c_str() : device.c_str(),
                  serial_connected_ ? "open" : "gone (hung up), waiting for it");
   }
 }
@@ -432,6 +434,12 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   }
   if (observer_ != nullptr) observer_->on_frame(r);
   ++summary_.frames;
+}
+
+void FrameLoop::add_memory(MemoryReport& report) const {
+  report.add("frame loop", sizeof(FrameLoop) + (trigger_ ? sizeof(TriggerWatch) : 0) +
+                               health_.working_set_bytes());
+  if (snapshots_.enabled()) report.add("snapshots", snapshots_.working_set_bytes());
 }
 
 RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& stop) {

@@ -34,6 +34,51 @@ void install_signal_handlers() {
   signal(SIGPIPE, SIG_IGN);
 }
 
+// One journal line for each thing a fresh board runs without (a calibration, a compiled
+// cascade), with how to make it.
+void say_what_runs_without(epipole::firmware::Firmware& fw) {
+  using namespace epipole;
+  if (!fw.missing_calibration().empty()) {
+    std::fprintf(stderr,
+                 "epipole-fw: not calibrated: %s does not exist yet; running uncalibrated "
+                 "(images taken as rectified, no depth, health flags say so). Calibrate on the "
+                 "board: snapshots, `epipole calibrate ... -o %s`, restart (docs/deploy.md)\n",
+                 fw.missing_calibration().c_str(), fw.missing_calibration().c_str());
+  } else if (!fw.calibration()) {
+    std::fprintf(stderr,
+                 "epipole-fw: warning: no calibration: images are taken as rectified and "
+                 "nothing gets a depth\n");
+  }
+  if (const std::filesystem::path& cascade = fw.pipeline().missing_cascade(); !cascade.empty()) {
+    std::fprintf(stderr,
+                 "epipole-fw: no detection: the cascade %s does not exist yet; running without "
+                 "it. Make it with `%s` and restart (docs/deploy.md)\n",
+                 cascade.c_str(), firmware::cascade_compile_command(cascade).c_str());
+  }
+}
+
+// --check: the board file validated and the frame loop's memory made and measured part by part,
+// with stand-ins for the devices (none is opened). 0 when the board would start, 1 otherwise.
+int check_board(const epipole::firmware::BoardConfig& config, const std::string& board_path) {
+  using namespace epipole;
+  const firmware::MemoryReport report = firmware::check_memory(config);
+  std::printf("epipole-fw: %s: board %s, %dx%d, valid\n", board_path.c_str(), config.name.c_str(),
+              config.width(), config.height());
+  if (!config.calibration.empty() && !std::filesystem::exists(config.calibration)) {
+    std::printf("  not calibrated yet (%s): rectification not counted\n",
+                config.calibration.c_str());
+  }
+  for (const firmware::MemoryReport::Part& part : report.parts()) {
+    std::printf("  %-18s %10zu KiB\n", part.name.c_str(), (part.bytes + 1023) / 1024);
+  }
+  std::printf("  %-18s %10zu KiB", "total", (report.total() + 1023) / 1024);
+  if (config.memory_budget_bytes) {
+    std::printf(" of a budget of %zu KiB", *config.memory_budget_bytes / 1024);
+  }
+  std::printf("\n");
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -46,6 +91,10 @@ int main(int argc, char** argv) {
   app.add_option("--board", board_path, "Board folder (with board.yaml) or board file")->required();
   app.add_option("--frames", frames, "Stop after this many frame pairs (0: run until stopped)");
   app.add_option("--scene", scene, "Simulated board: the scene to replay (default: the board's)");
+  bool check = false;
+  app.add_flag("--check", check,
+               "Validate the board file and print the frame loop's memory per stage, opening no "
+               "device; exit 0 when the board would start");
   CLI11_PARSE(app, argc, argv);
 
   firmware::ServiceNotifier service;
@@ -59,6 +108,7 @@ int main(int argc, char** argv) {
         !problem.empty()) {
       throw Error(board_path + ": " + problem);
     }
+    if (check) return check_board(config, board_path);
     install_signal_handlers();
     for (const std::string& problem : firmware::apply_scheduling(config.threads)) {
       std::fprintf(stderr, "epipole-fw: warning: %s\n", problem.c_str());
@@ -73,23 +123,7 @@ int main(int argc, char** argv) {
                  fw.working_set_bytes() / 1024,
                  fw.board().serial_peer().empty() ? "" : ", link at ",
                  fw.board().serial_peer().c_str());
-    if (!fw.missing_calibration().empty()) {
-      std::fprintf(stderr,
-                   "epipole-fw: not calibrated: %s does not exist yet; running uncalibrated "
-                   "(images taken as rectified, no depth, health flags say so). Calibrate on the "
-                   "board: snapshots, `epipole calibrate ... -o %s`, restart (docs/deploy.md)\n",
-                   fw.missing_calibration().c_str(), fw.missing_calibration().c_str());
-    } else if (!fw.calibration()) {
-      std::fprintf(stderr,
-                   "epipole-fw: warning: no calibration: images are taken as rectified and "
-                   "nothing gets a depth\n");
-    }
-    if (const std::filesystem::path& cascade = fw.pipeline().missing_cascade(); !cascade.empty()) {
-      std::fprintf(stderr,
-                   "epipole-fw: no detection: the cascade %s does not exist yet; running without "
-                   "it. Make it with `%s` and restart (docs/deploy.md)\n",
-                   cascade.c_str(), firmware::cascade_compile_command(cascade).c_str());
-    }
+    say_what_runs_without(fw);
     fw.frame_loop().set_heartbeat([&service] { service.watchdog(); });
     service.ready();
     service.status("running");

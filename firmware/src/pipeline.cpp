@@ -192,20 +192,25 @@ Pipeline::Pipeline(const BoardConfig& board,
 
 Pipeline::~Pipeline() = default;
 
-std::size_t Pipeline::working_set_bytes() const {
-  std::size_t n =
-      stages_->corners_left.working_set_bytes() + stages_->corners_right.working_set_bytes() +
-      stages_->matcher->working_set_bytes() + stages_->sparse.working_set_bytes() +
-      points_.size() *
-          (sizeof(SparsePoint) + sizeof(std::uint32_t) + sizeof(calib::RectifiedMatch)) +
-      calibration_health_.working_set_bytes();
+void Pipeline::add_memory(MemoryReport& report) const {
+  const auto name = [](Stage s) { return std::string(protocol::stage_info(s).name); };
   if (stages_->rectifiers) {
-    n += stages_->rectifiers->left.working_set_bytes() +
-         stages_->rectifiers->right.working_set_bytes();
+    report.add(name(Stage::rectify), stages_->rectifiers->left.working_set_bytes() +
+                                         stages_->rectifiers->right.working_set_bytes());
   }
-  if (obstacles_) n += obstacles_->working_set_bytes();
-  if (detector_) n += detector_->working_set_bytes() + depths_.size() * sizeof(DetectionDepth);
-  return n;
+  report.add(name(Stage::corners), stages_->corners_left.working_set_bytes() +
+                                       stages_->corners_right.working_set_bytes());
+  report.add(name(Stage::disparity), stages_->matcher->working_set_bytes() +
+                                         (obstacles_ ? obstacles_->working_set_bytes() : 0));
+  report.add(name(Stage::sparse),
+             stages_->sparse.working_set_bytes() + points_.capacity() * sizeof(SparsePoint) +
+                 point_order_.capacity() * sizeof(std::uint32_t) +
+                 rectified_matches_.capacity() * sizeof(calib::RectifiedMatch) +
+                 calibration_health_.working_set_bytes());
+  if (detector_) {
+    report.add(name(Stage::detect),
+               detector_->working_set_bytes() + depths_.capacity() * sizeof(DetectionDepth));
+  }
 }
 
 const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_t frame,

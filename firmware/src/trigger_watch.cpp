@@ -10,7 +10,9 @@ namespace epipole::firmware {
 using detail::steady_now;
 
 TriggerWatch::TriggerWatch(hal::TriggerLine& line, hal::Nanoseconds period)
-    : line_(line), line_records_itself_(line.record_edges_to(&record_)), period_(period) {}
+    : line_(line), period_(period) {
+  line_records_itself_ = line_.record_edges_to(&record_);  // once record_ is made
+}
 
 TriggerWatch::~TriggerWatch() {
   stop();

@@ -118,7 +118,12 @@ RecoveringSerialPort::RecoveringSerialPort(SerialPort& port, Clock& clock, Backo
     : port_(port), clock_(clock), backoff_(config), connected_(port.is_open()) {}
 
 void RecoveringSerialPort::reopen() {
-  port_.reopen();
+  try {
+    port_.reopen();
+  } catch (...) {
+    connected_.store(port_.is_open(), std::memory_order_relaxed);  // closed, by contract
+    throw;
+  }
   connected_.store(true, std::memory_order_relaxed);
 }
 

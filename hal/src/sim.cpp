@@ -360,6 +360,13 @@ SimBoard::SimBoard(TriggerConfig trigger_config, std::vector<GrayImage> left_ima
 
 // ----------------------------------------------------------------------------------------------
 
+std::size_t SimCamera::working_set_bytes() const {
+  std::size_t n = held_.capacity() + buffer_truth_.capacity() * sizeof(std::uint32_t) +
+                  queue_.capacity() * sizeof(Pending) + faults_.capacity() * sizeof(SimFault);
+  for (const GrayImage& b : buffers_) n += b.size_bytes();
+  return n;
+}
+
 GrayImage synthesize_right(GrayView left, int disparity) {
   require(!left.empty(), "synthesize_right: the left image is empty");
   require(disparity >= 0 && disparity < left.width(), "synthesize_right: disparity ", disparity,

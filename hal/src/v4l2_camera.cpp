@@ -454,4 +454,10 @@ void V4l2Camera::release(const Frame& frame) {
   (void)xioctl(fd_.get(), VIDIOC_QBUF, &buf);
 }
 
+std::size_t V4l2Camera::working_set_bytes() const {
+  std::size_t n = 0;
+  for (const GrayImage& image : scratch_) n += image.size_bytes();
+  return n;
+}
+
 }  // namespace epipole::hal

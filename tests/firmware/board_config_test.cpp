@@ -10,6 +10,7 @@
 #include "epipole/calib/calibration.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/firmware.hpp"
 #include "error_of.hpp"
 #include "sim_rig.hpp"
 #include "test_data.hpp"
@@ -208,11 +209,15 @@ TEST(BoardConfig, EveryShippedBoardLoads) {
         if (calibration.empty() || !fs::exists(calibration)) continue;
         EXPECT_EQ(test::error_of([&] { calib::load_calibration(calibration); }), "") << calibration;
       }
-      if (c.cameras.backend == "sim") {
+      if (c.simulated()) {
         for (const auto& scene : c.sim.scenes) {
           EXPECT_TRUE(fs::exists(scene.calibration)) << name << ": scene " << scene.name;
         }
       }
+      // `epipole-fw --check` on it: the frame loop made with stand-ins for its devices.
+      MemoryReport report;
+      EXPECT_EQ(test::error_of([&] { report = check_memory(c); }), "") << entry.path();
+      EXPECT_GT(report.total(), 0u) << entry.path();
     }
   }
   ::unsetenv("EPIPOLE_DATA_DIR");

@@ -141,6 +141,34 @@ TEST(EpipoleFw, DevicesNotThereAtStartAreWaitedFor) {
   EXPECT_NE(out.find("stopped after 0 pairs"), std::string::npos) << out;
 }
 
+TEST(EpipoleFw, CheckPrintsTheMemoryPerStageOpeningNoDevice) {
+  const test::TempDir dir;
+  const std::string board =
+      "version: 1\nname: check-me\n"
+      "cameras: {backend: v4l2, left: /dev/video-epipole-none-0, right: "
+      "/dev/video-epipole-none-1, width: 320, height: 240, trigger: external, timeout_ms: 100}\n"
+      "trigger: {backend: gpiod, line: EPIPOLE_NO_SUCH_LINE, rate_hz: 30}\n"
+      "serial: {backend: termios, device: /dev/tty-epipole-none, baud: 115200}\n"
+      "stereo: {max_disparity: 64}\n";
+  std::ofstream(dir.path() / "board.yaml") << board;
+  const auto [code, out] =
+      finish(start({"--board", (dir.path() / "board.yaml").string(), "--check"}));
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("board check-me, 320x240, valid"), std::string::npos) << out;
+  for (const char* part : {"corners", "disparity", "sparse", "link", "frame loop", "total"}) {
+    EXPECT_NE(out.find(std::string("  ") + part), std::string::npos) << part << "\n" << out;
+  }
+  EXPECT_EQ(out.find("not there"), std::string::npos) << "no device was opened:\n" << out;
+  EXPECT_EQ(out.find("  cameras"), std::string::npos) << "the stand-ins are not the board's\n"
+                                                      << out;
+
+  std::ofstream(dir.path() / "small.yaml") << board << "memory_budget_mb: 0.5\n";
+  const auto [over, said] =
+      finish(start({"--board", (dir.path() / "small.yaml").string(), "--check"}));
+  EXPECT_EQ(over, 1) << said;
+  EXPECT_NE(said.find("memory_budget_mb: the frame loop needs"), std::string::npos) << said;
+}
+
 TEST(EpipoleFw, RunsTheGivenNumberOfFrames) {
   BoardFolder board;
   const auto [code, out] = finish(start({"--board", board.path(), "--frames", "25"}));

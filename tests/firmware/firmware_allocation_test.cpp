@@ -5,8 +5,11 @@
 
 #include <array>
 #include <atomic>
+#include <cstdio>
 #include <functional>
 #include <span>
+#include <string>
+#include <vector>
 
 #include "allocation_counter.hpp"
 #include "epipole/firmware/firmware.hpp"
@@ -37,6 +40,38 @@ TEST(FirmwareAllocations, CounterSeesAllocationsOfOtherThreads) {
   std::thread([] { auto p = std::make_unique<int>(1); }).join();
   EXPECT_GE(test::allocations_in_all_threads(), before + 1)
       << "the counter must see other threads, or the test below proves nothing";
+}
+
+// The memory report is what the firmware really keeps: the heap it holds once made, less the
+// small objects (configuration, strings, the parts' own objects) it does not list.
+TEST(FirmwareAllocations, TheMemoryReportIsTheHeapTheFirmwareHolds) {
+  test::SimRig rig(320, 240, 8);
+  BoardConfig config = rig.parse("threads: {count: 2}\nsnapshot_directory: snapshots\n");
+  config.stages |= protocol::stage_bit(protocol::Stage::sparse);
+  rig.add_cascade(config);
+  const std::size_t before = test::live_bytes_in_all_threads();
+  std::size_t held = 0;
+  MemoryReport report;
+  {
+    const Firmware fw(config, rig.images(2));
+    held = test::live_bytes_in_all_threads() - before;
+    report = fw.memory_report();
+  }
+  std::size_t listed = 0;
+  std::vector<std::string> names;
+  for (const MemoryReport::Part& p : report.parts()) {
+    EXPECT_GT(p.bytes, 0u) << p.name;
+    listed += p.bytes;
+    names.push_back(p.name);
+  }
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"rectify", "corners", "disparity", "sparse", "detect", "link",
+                                      "frame loop", "snapshots", Firmware::kCameras}));
+  EXPECT_EQ(listed, report.total());
+  std::printf("memory report %zu B, heap held %zu B\n", report.total(), held);
+  EXPECT_LE(report.total(), held) << "nothing listed that was not allocated";
+  EXPECT_GE(report.total(), held - held / 10) << "at least 90 % of what it holds is listed";
+  EXPECT_LE(test::live_bytes_in_all_threads(), before + 64 * 1024) << "and given back";
 }
 
 class SteadyState : public testing::TestWithParam<BoardConfig::LinkProtocol> {};

@@ -1,6 +1,8 @@
 // Replaces the global operator new/delete of the test program with versions that count.
 #include "allocation_counter.hpp"
 
+#include <malloc.h>
+
 #include <atomic>
 #include <cstdlib>
 #include <new>
@@ -9,6 +11,7 @@ namespace {
 thread_local bool counting = false;
 thread_local std::size_t allocations = 0;
 std::atomic<std::size_t> all_allocations{0};
+std::atomic<std::size_t> live_bytes{0};  // usable sizes of the blocks operator new handed out
 
 void* allocate(std::size_t size, std::size_t alignment) {
   if (counting) ++allocations;
@@ -22,7 +25,13 @@ void* allocate(std::size_t size, std::size_t alignment) {
     p = std::aligned_alloc(alignment, (size + alignment - 1) / alignment * alignment);
   }
   if (p == nullptr) throw std::bad_alloc();
+  live_bytes.fetch_add(malloc_usable_size(p), std::memory_order_relaxed);
   return p;
+}
+
+void release(void* p) {
+  if (p != nullptr) live_bytes.fetch_sub(malloc_usable_size(p), std::memory_order_relaxed);
+  std::free(p);
 }
 }  // namespace
 
@@ -39,6 +48,9 @@ std::size_t AllocationCounter::count() const {
 }
 std::size_t allocations_in_all_threads() {
   return all_allocations.load();
+}
+std::size_t live_bytes_in_all_threads() {
+  return live_bytes.load();
 }
 }  // namespace epipole::test
 
@@ -69,26 +81,26 @@ void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
   }
 }
 void operator delete(void* p) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete[](void* p) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete(void* p, std::align_val_t) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete[](void* p, std::align_val_t) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
-  std::free(p);
+  release(p);
 }
 void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
-  std::free(p);
+  release(p);
 }

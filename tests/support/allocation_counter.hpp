@@ -19,5 +19,7 @@ class AllocationCounter {
 // Every operator new call of the whole program so far, in any thread (for code that runs on
 // threads of its own: compare two readings taken while nothing else runs).
 std::size_t allocations_in_all_threads();
+// The bytes operator new has handed out and not yet had back (usable sizes of the blocks).
+std::size_t live_bytes_in_all_threads();
 
 }  // namespace epipole::test

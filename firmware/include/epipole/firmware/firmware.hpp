@@ -13,6 +13,7 @@
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/frame_loop.hpp"
 #include "epipole/firmware/link.hpp"
+#include "epipole/firmware/memory_report.hpp"
 #include "epipole/firmware/pipeline.hpp"
 
 namespace epipole::firmware {
@@ -29,6 +30,14 @@ std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig
 // for SCHED_FIFO), one line each; the firmware runs on without it.
 std::vector<std::string> apply_scheduling(const BoardConfig::Threads& threads);
 
+// What `epipole-fw --check` prints: the memory report of the firmware made for `config` with its
+// cameras and trigger replaced by simulated stand-ins of the same size and its link by its
+// queue alone, so that every buffer of the frame loop is allocated as on the board but no
+// device is opened (the snapshots' copies are sized in a temporary folder; the board's own
+// snapshot folder is not made). Throws Error as the firmware would: a calibration that does not
+// fit, a compiled cascade that does not read, a total over the board's memory budget.
+MemoryReport check_memory(BoardConfig config);
+
 // The whole firmware for one board: its hardware, the vision pipeline, the serial link and the
 // frame loop, all made (and every buffer allocated) by the constructor, which throws Error
 // naming the file and the setting when something in the configuration cannot work.
@@ -40,6 +49,8 @@ class Firmware {
   ~Firmware();
 
   RunSummary run(std::uint64_t max_frames, const std::atomic<bool>& stop);
+  // The memory report's part of the cameras' own frame buffers (and a simulated board's scene).
+  static constexpr const char* kCameras = "cameras";
 
   const BoardConfig& config() const { return config_; }
   Board& board() { return *board_; }
@@ -53,9 +64,12 @@ class Firmware {
   std::filesystem::path missing_calibration() const {
     return calibration_ ? std::filesystem::path() : config_.calibration;
   }
-  // The frame loop's buffers: vision stages and link queue (the cameras' buffers are the
-  // drivers').
-  std::size_t working_set_bytes() const;
+  // The frame loop's buffers, part by part: every stage's, the link's queue, the loop's own,
+  // the snapshots' copies, the cameras' frame buffers on the heap (a driver's mmap'ed ones are
+  // the kernel's) and a simulated board's scene images. The board's memory_budget_mb bounds the
+  // total.
+  MemoryReport memory_report() const;
+  std::size_t working_set_bytes() const { return memory_report().total(); }
 
  private:
   void build(std::unique_ptr<Board> board);

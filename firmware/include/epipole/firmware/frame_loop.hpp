@@ -10,6 +10,7 @@
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/health_monitor.hpp"
 #include "epipole/firmware/link.hpp"
+#include "epipole/firmware/memory_report.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/snapshot.hpp"
 #include "epipole/firmware/trigger_watch.hpp"
@@ -66,6 +67,9 @@ class FrameLoop {
   // Runs until `stop` is set or `max_frames` pairs (0: no limit) were processed. Returns within
   // the cameras' timeout of `stop` being set, with the link drained of what it was writing.
   RunSummary run(std::uint64_t max_frames, const std::atomic<bool>& stop);
+
+  // Its own buffers (itself with the pairer's queues, health's latencies, the snapshots' copies).
+  void add_memory(MemoryReport& report) const;
 
  private:
   void start();

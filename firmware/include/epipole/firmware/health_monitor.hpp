@@ -43,6 +43,9 @@ class HealthMonitor {
   std::optional<protocol::Health> due(hal::Nanoseconds now, const FaultCounts& faults);
 
   std::uint64_t frames() const { return frames_; }
+  std::size_t working_set_bytes() const {
+    return static_cast<std::size_t>(capacity_) * sizeof(hal::Nanoseconds);
+  }
 
  private:
   hal::Nanoseconds start_;

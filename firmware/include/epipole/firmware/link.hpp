@@ -78,6 +78,8 @@ class Link {
   void take_bytes(std::span<const std::byte> bytes);
 
   LinkCounters counters() const;
+  // The queue of encoded frames it allocated, and itself (the command queues are in it).
+  std::size_t working_set_bytes() const { return config_.queue_bytes + sizeof(Link); }
   LinkProtocol protocol() const { return config_.protocol; }
   // Whether the link's thread went round its loop within `age` (steady clock; true without a
   // thread: no port): the service watchdog is pinged only while it does.

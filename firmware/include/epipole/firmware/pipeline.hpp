@@ -16,6 +16,7 @@
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/detection_depth.hpp"
 #include "epipole/firmware/health_monitor.hpp"
+#include "epipole/firmware/memory_report.hpp"
 #include "epipole/firmware/obstacles.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/firmware/sparse_points.hpp"
@@ -87,7 +88,8 @@ class Pipeline {
   const std::filesystem::path& missing_cascade() const { return missing_cascade_; }
   const calib::Triangulator* triangulator() const { return triangulator_.get(); }
   const ObstacleSectors* obstacle_sectors() const { return obstacles_.get(); }
-  std::size_t working_set_bytes() const;
+  // Every stage's buffers, one part per stage (as the table of stages names them).
+  void add_memory(MemoryReport& report) const;
 
  private:
   void run_stage(protocol::Stage stage, FrameResult& r);

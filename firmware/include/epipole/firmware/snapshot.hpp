@@ -63,6 +63,11 @@ class SnapshotWriter {
   std::uint64_t failures() const { return failures_.load(); }
   // Snapshots in the folder: those there at start-up and those written since.
   int count() const { return existing_ + static_cast<int>(written_.load()); }
+  // The copies of a pair it keeps for the writer thread (none when disabled).
+  std::size_t working_set_bytes() const {
+    return left_raw_.size_bytes() + right_raw_.size_bytes() + left_.size_bytes() +
+           right_.size_bytes() + disparity_.size_bytes();
+  }
 
  private:
   void run();

@@ -35,7 +35,7 @@ class TriggerWatch {
   void run();
 
   hal::TriggerLine& line_;
-  bool line_records_itself_;
+  bool line_records_itself_ = false;
   std::atomic<hal::Nanoseconds> period_;
   hal::TriggerRecord record_;
   std::atomic<std::uint64_t> losses_{0};

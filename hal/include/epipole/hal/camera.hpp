@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -131,6 +132,8 @@ class CameraSource {
   // How long after its trigger edge a frame is stamped, when the backend knows it (the
   // simulated cameras); on hardware the board file says (pairing.edge_delay_us).
   virtual std::optional<Nanoseconds> edge_delay() const { return std::nullopt; }
+  // The frame buffers it keeps on the heap (a driver's mmap'ed buffers are the kernel's).
+  virtual std::size_t working_set_bytes() const { return 0; }
 };
 
 }  // namespace epipole::hal

@@ -66,6 +66,7 @@ class RecoveringCamera final : public CameraSource {
   AcquireResult acquire(Nanoseconds timeout) override;
   void release(const Frame& frame) override { camera_.release(frame); }
   std::optional<Nanoseconds> edge_delay() const override { return camera_.edge_delay(); }
+  std::size_t working_set_bytes() const override { return camera_.working_set_bytes(); }
   void reopen() override;
   void set_exposure(Nanoseconds exposure, double gain) override;
 

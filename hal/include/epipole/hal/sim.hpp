@@ -119,6 +119,7 @@ class SimCamera final : public CameraSource {
   // values (each where both it and the configured one are not automatic), saturating at 255.
   void set_exposure(Nanoseconds exposure, double gain) override;
   std::optional<Nanoseconds> edge_delay() const override { return timing_.exposure_delay; }
+  std::size_t working_set_bytes() const override;
 
   void inject(const SimFault& fault);
   void set_fault_rates(const SimFaultRates& rates) { rates_ = rates; }

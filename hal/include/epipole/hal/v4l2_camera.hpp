@@ -85,6 +85,7 @@ class V4l2Camera final : public CameraSource {
   bool streaming() const override { return streaming_; }
   AcquireResult acquire(Nanoseconds timeout) override;
   void release(const Frame& frame) override;
+  std::size_t working_set_bytes() const override;
   void reopen() override;
   // Sets the controls of plan_exposure_controls() (the ones used at start-up) at once.
   void set_exposure(Nanoseconds exposure, double gain) override;
