@@ -9,7 +9,7 @@
 #include "cascade_program.hpp"
 #include "cascade_simd.hpp"
 #include "epipole/core/neon.hpp"
-#include "simd/neon_cascade.hpp"
+#include "simd/neon.hpp"
 
 namespace epipole::vision::kernels {
 
@@ -118,7 +118,7 @@ void split_row_neon(const std::uint32_t* row, int count, std::uint32_t* even, st
 int cascade_row_neon(const CascadeProgram& program, const std::uint32_t* row, int positions,
                      std::int32_t* hits) {
   if (!program.fixed_point_exact) return cascade_row_ref(program, row, positions, hits);
-  return cascade_row_simd<simd::NeonCascade>(program, row, positions, hits);
+  return cascade_row_simd<simd::Neon>(program, row, positions, hits);
 }
 
 }  // namespace epipole::vision::kernels

@@ -1,13 +1,12 @@
 #pragma once
 
-// The cascade window kernel, written once over a small vector vocabulary (simd/neon_cascade.hpp:
-// 4 lanes, simd/avx2_cascade.hpp: 8 lanes). Lanes are neighbouring window positions of one row
-// of one level (consecutive entries of its integral layout), so every corner of every feature is
-// one vector load. Per
-// group of lanes: the variance normalisation, then the stages; the group stops at the first
-// stage that rejects all its lanes. OpenCV's rule "a window rejected by the first stage skips
-// the next position" is applied after the first stage, lane by lane in order, so the same
-// windows are evaluated as in cascade_row_ref.
+// The cascade window kernel, written once over the word lanes of the vector vocabulary
+// (simd/neon.hpp: 4 lanes, simd/avx2.hpp: 8 lanes). Lanes are neighbouring window positions of one
+// row of one level (consecutive entries of its integral layout), so every corner of every feature
+// is one vector load. Per group of lanes: the variance normalisation, then the stages; the group
+// stops at the first stage that rejects all its lanes. OpenCV's rule "a window rejected by the
+// first stage skips the next position" is applied after the first stage, lane by lane in order, so
+// the same windows are evaluated as in cascade_row_ref.
 //
 // Arithmetic is the reference's: the same float operations in the same order for Haar feature
 // values (cascade_simd files are compiled with -ffp-contract=off), the same integer LBP codes,
@@ -22,8 +21,8 @@ namespace epipole::vision::kernels {
 
 template <typename V>
 typename V::I corner_sum(const std::uint32_t* w, const std::int32_t* o) {
-  return V::add(V::sub(V::sub(V::load(w + o[0]), V::load(w + o[1])), V::load(w + o[2])),
-                V::load(w + o[3]));
+  return V::addi(V::subi(V::subi(V::loadi(w + o[0]), V::loadi(w + o[1])), V::loadi(w + o[2])),
+                 V::loadi(w + o[3]));
 }
 
 template <typename V>
@@ -34,13 +33,13 @@ typename V::M haar_stage(const ProgramStage& stage, const HaarStump* stumps, con
     const HaarStump& s = stumps[k];
     const HaarTerms& t = s.terms;
     typename V::F value =
-        V::add(V::mul(V::splat(t.weights[0]), V::to_float(corner_sum<V>(w, t.offsets[0]))),
-               V::mul(V::splat(t.weights[1]), V::to_float(corner_sum<V>(w, t.offsets[1]))));
+        V::addf(V::mulf(V::splatf(t.weights[0]), V::tof(corner_sum<V>(w, t.offsets[0]))),
+                V::mulf(V::splatf(t.weights[1]), V::tof(corner_sum<V>(w, t.offsets[1]))));
     if (t.rect_count == 3) {
-      value = V::add(value,
-                     V::mul(V::splat(t.weights[2]), V::to_float(corner_sum<V>(w, t.offsets[2]))));
+      value =
+          V::addf(value, V::mulf(V::splatf(t.weights[2]), V::tof(corner_sum<V>(w, t.offsets[2]))));
     }
-    V::acc_add(acc, V::less(V::mul(value, factor), V::splat(s.threshold)), s.delta);
+    V::acc_add(acc, V::ltf(V::mulf(value, factor), V::splatf(s.threshold)), s.delta);
   }
   return V::acc_at_least(acc, stage.fixed_threshold);
 }
@@ -58,35 +57,35 @@ typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const
     I above[3];
     I below[3];
     const auto differences = [&](int r, I* d) {
-      const I c0 = V::load(w + o[4 * r]);
-      const I c1 = V::load(w + o[4 * r + 1]);
-      const I c2 = V::load(w + o[4 * r + 2]);
-      const I c3 = V::load(w + o[4 * r + 3]);
-      d[0] = V::sub(c0, c1);
-      d[1] = V::sub(c1, c2);
-      d[2] = V::sub(c2, c3);
+      const I c0 = V::loadi(w + o[4 * r]);
+      const I c1 = V::loadi(w + o[4 * r + 1]);
+      const I c2 = V::loadi(w + o[4 * r + 2]);
+      const I c3 = V::loadi(w + o[4 * r + 3]);
+      d[0] = V::subi(c0, c1);
+      d[1] = V::subi(c1, c2);
+      d[2] = V::subi(c2, c3);
     };
     differences(0, above);
     differences(1, below);
-    const I top_left = V::sub(above[0], below[0]);
-    const I top = V::sub(above[1], below[1]);
-    const I top_right = V::sub(above[2], below[2]);
+    const I top_left = V::subi(above[0], below[0]);
+    const I top = V::subi(above[1], below[1]);
+    const I top_right = V::subi(above[2], below[2]);
     differences(2, above);
-    const I left = V::sub(below[0], above[0]);
-    const I centre = V::sub(below[1], above[1]);
-    const I right = V::sub(below[2], above[2]);
+    const I left = V::subi(below[0], above[0]);
+    const I centre = V::subi(below[1], above[1]);
+    const I right = V::subi(below[2], above[2]);
     differences(3, below);
-    const I bottom_left = V::sub(above[0], below[0]);
-    const I bottom = V::sub(above[1], below[1]);
-    const I bottom_right = V::sub(above[2], below[2]);
+    const I bottom_left = V::subi(above[0], below[0]);
+    const I bottom = V::subi(above[1], below[1]);
+    const I bottom_right = V::subi(above[2], below[2]);
     // Clockwise from the top-left block (bit 7) to the middle-left one (bit 0).
     const auto bit = [&centre](I block, int weight) {
-      return V::mask_to(V::greater_equal(block, centre), weight);
+      return V::masked_splati(V::gei(block, centre), weight);
     };
-    const I code = V::add(V::add(V::add(bit(top_left, 128), bit(top, 64)),
-                                 V::add(bit(top_right, 32), bit(right, 16))),
-                          V::add(V::add(bit(bottom_right, 8), bit(bottom, 4)),
-                                 V::add(bit(bottom_left, 2), bit(left, 1))));
+    const I code = V::addi(V::addi(V::addi(bit(top_left, 128), bit(top, 64)),
+                                   V::addi(bit(top_right, 32), bit(right, 16))),
+                           V::addi(V::addi(bit(bottom_right, 8), bit(bottom, 4)),
+                                   V::addi(bit(bottom_left, 2), bit(left, 1))));
     V::acc_add(acc, V::subset_bit(s.subset, code), s.delta);
   }
   return V::acc_at_least(acc, stage.fixed_threshold);
@@ -95,7 +94,7 @@ typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const
 template <typename V>
 int cascade_row_simd(const CascadeProgram& p, const std::uint32_t* row, int positions,
                      std::int32_t* hits) {
-  constexpr int kLanes = V::kLanes;
+  constexpr int kLanes = V::kLanesI;
   const bool lbp = p.type == CascadeFeatureType::lbp;
   const int stage_count = static_cast<int>(p.stages.size());
   int count = 0;
@@ -103,20 +102,20 @@ int cascade_row_simd(const CascadeProgram& p, const std::uint32_t* row, int posi
   for (int first = 0; first < positions; first += kLanes) {
     const std::uint32_t* w = row + first;
     const int lanes = std::min(kLanes, positions - first);
-    typename V::F factor = V::splat(1.0f);
+    typename V::F factor = V::splatf(1.0f);
     unsigned ok = (1u << lanes) - 1;
     if (!lbp) {
       typename V::M variance_ok;
       V::variance(corner_sum<V>(w, p.norm_offsets),
                   corner_sum<V>(w + p.square_offset, p.norm_offsets), p.norm_area, factor,
                   variance_ok);
-      ok &= V::bits(variance_ok);
+      ok &= V::bitsm(variance_ok);
     }
     const auto run_stage = [&](int s) {
       const ProgramStage& st = p.stages[s];
       const auto first_stump = static_cast<std::size_t>(st.first_weak);
-      return lbp ? V::bits(lbp_stage<V>(st, &p.lbp_stumps[first_stump], w))
-                 : V::bits(haar_stage<V>(st, &p.haar_stumps[first_stump], w, factor));
+      return lbp ? V::bitsm(lbp_stage<V>(st, &p.lbp_stumps[first_stump], w))
+                 : V::bitsm(haar_stage<V>(st, &p.haar_stumps[first_stump], w, factor));
     };
     unsigned alive = 0;
     if (ok != 0) {

@@ -1,7 +1,7 @@
 // The stereo kernels with AVX2, 16 disparities at a time (bytes in SSE registers, 16-bit sums
 // in AVX registers): the generic kernels of stereo_simd.hpp; the cost row 32 disparities at a
 // time in AVX registers (x86 hosts only).
-#include "simd/avx2_x16.hpp"
+#include "simd/avx2.hpp"
 #include "stereo_simd.hpp"
 
 namespace epipole::vision::kernels {
@@ -10,7 +10,7 @@ namespace {
 
 void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
                    int disparities, std::uint8_t* cost) {
-  using V = simd::Avx2X16;
+  using V = simd::Avx2x16;
   const __m256i table = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2,
                                          1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
   const __m256i low = _mm256_set1_epi8(0x0F);
@@ -50,8 +50,8 @@ void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* r
 }  // namespace
 
 StereoKernels stereo_kernels_avx2() {
-  return {census_row_simd<simd::Avx2X16>, cost_row_avx2, sgm_row_simd<simd::Avx2X16>,
-          box_columns_simd<simd::Avx2X16>, bm_row_simd<simd::Avx2X16>};
+  return {census_row_simd<simd::Avx2x16>, cost_row_avx2, sgm_row_simd<simd::Avx2x16>,
+          box_columns_simd<simd::Avx2x16>, bm_row_simd<simd::Avx2x16>};
 }
 
 }  // namespace epipole::vision::kernels

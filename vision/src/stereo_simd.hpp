@@ -1,7 +1,7 @@
 #pragma once
 
 // The stereo kernels written once over a vocabulary of 16 lanes, as bytes and as 16-bit values
-// (simd/neon_x16.hpp, simd/avx2_x16.hpp). Each gives the same bits as its *_ref in stereo.cpp.
+// (simd/neon.hpp, simd/avx2.hpp: Avx2x16). Each gives the same bits as its *_ref in stereo.cpp.
 // Disparities go 16 at a time (the range is a multiple of 16): costs and SGM path values in
 // bytes, sums in 16-bit lanes.
 #include <algorithm>

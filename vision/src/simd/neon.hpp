@@ -1,0 +1,226 @@
+#pragma once
+
+// The vector vocabulary of the NEON kernels (native on ARM, SIMDe elsewhere): the generic
+// kernels (*_simd.hpp) are written once over it, and simd/avx2.hpp gives the same names on x86.
+// A name's suffix says the lanes it works on:
+//   b: 16 unsigned bytes (B)           h: the same 16 lanes as unsigned 16-bit values (H)
+//   i, f, m: 4 lanes of 32-bit integers (I), floats (F) and masks (M)
+// Only intrinsics that exist on both AArch64 and ARMv7 are used (no float64 or 64-bit compare
+// vectors: ARMv7 has neither).
+#include <cmath>
+#include <cstdint>
+
+#include "epipole/core/neon.hpp"
+
+namespace epipole::vision::simd {
+
+struct Neon {
+  // Bytes: 16 unsigned lanes.
+  using B = uint8x16_t;
+  static constexpr int kLanesB = 16;
+  static B loadb(const std::uint8_t* p) { return vld1q_u8(p); }
+  static void storeb(std::uint8_t* p, B v) { vst1q_u8(p, v); }
+  static B splatb(std::uint8_t v) { return vdupq_n_u8(v); }
+  static B zerob() { return vdupq_n_u8(0); }
+  static B minb(B a, B b) { return vminq_u8(a, b); }
+  static B addb(B a, B b) { return vaddq_u8(a, b); }    // wrapping
+  static B subb(B a, B b) { return vsubq_u8(a, b); }    // wrapping
+  static B addsb(B a, B b) { return vqaddq_u8(a, b); }  // saturating
+  static B subsb(B a, B b) { return vqsubq_u8(a, b); }  // saturating
+  static B orb(B a, B b) { return vorrq_u8(a, b); }
+  static B xorb(B a, B b) { return veorq_u8(a, b); }
+  static B andb(B a, B b) { return vandq_u8(a, b); }
+  static B maxb(B a, B b) { return vmaxq_u8(a, b); }
+  static B gtb(B a, B b) { return vcgtq_u8(a, b); }
+  static B ltb(B a, B b) { return vcltq_u8(a, b); }
+  static bool anyb(B mask) {
+    const uint64x2_t halves = vreinterpretq_u64_u8(mask);
+    return (vgetq_lane_u64(halves, 0) | vgetq_lane_u64(halves, 1)) != 0;
+  }
+  // One bit per lane of a comparison mask (lane i -> bit i).
+  static std::uint32_t bitsb(B mask) {
+    static constexpr std::uint8_t kWeights[16] = {1, 2, 4, 8, 16, 32, 64, 128,
+                                                  1, 2, 4, 8, 16, 32, 64, 128};
+    const uint8x16_t bits = vandq_u8(mask, vld1q_u8(kWeights));
+    uint8x8_t sum = vpadd_u8(vget_low_u8(bits), vget_high_u8(bits));
+    sum = vpadd_u8(sum, sum);
+    sum = vpadd_u8(sum, sum);
+    return vget_lane_u16(vreinterpret_u16_u8(sum), 0);
+  }
+  static B iotab() {
+    static constexpr std::uint8_t kIota[16] = {0, 1, 2,  3,  4,  5,  6,  7,
+                                               8, 9, 10, 11, 12, 13, 14, 15};
+    return vld1q_u8(kIota);
+  }
+  // acc with `bit` set in the lanes where a > c.
+  static B set_if_greater(B acc, B a, B c, B bit) {
+    return vorrq_u8(acc, vandq_u8(vcgtq_u8(a, c), bit));
+  }
+  // Per lane: popcount(a) + popcount(b) + popcount(c) + popcount(d).
+  static B popcount4(B a, B b, B c, B d) {
+    return vaddq_u8(vaddq_u8(vcntq_u8(a), vcntq_u8(b)), vaddq_u8(vcntq_u8(c), vcntq_u8(d)));
+  }
+  static std::uint8_t hminb(B v) {
+    uint8x8_t m = vmin_u8(vget_low_u8(v), vget_high_u8(v));
+    m = vpmin_u8(m, m);
+    m = vpmin_u8(m, m);
+    m = vpmin_u8(m, m);
+    return vget_lane_u8(m, 0);
+  }
+
+  // Halves: the same 16 lanes as unsigned 16-bit values, in two registers.
+  using H = uint16x8x2_t;
+  static H loadh(const std::uint16_t* p) { return {{vld1q_u16(p), vld1q_u16(p + 8)}}; }
+  static void storeh(std::uint16_t* p, H v) {
+    vst1q_u16(p, v.val[0]);
+    vst1q_u16(p + 8, v.val[1]);
+  }
+  static H splath(std::uint16_t v) { return {{vdupq_n_u16(v), vdupq_n_u16(v)}}; }
+  static H widen(B v) { return {{vmovl_u8(vget_low_u8(v)), vmovl_u8(vget_high_u8(v))}}; }
+  static H addw(H a, B b) {
+    return {{vaddw_u8(a.val[0], vget_low_u8(b)), vaddw_u8(a.val[1], vget_high_u8(b))}};
+  }
+  static H addh(H a, H b) {
+    return {{vaddq_u16(a.val[0], b.val[0]), vaddq_u16(a.val[1], b.val[1])}};
+  }
+  static H subh(H a, H b) {
+    return {{vsubq_u16(a.val[0], b.val[0]), vsubq_u16(a.val[1], b.val[1])}};
+  }
+  static H minh(H a, H b) {
+    return {{vminq_u16(a.val[0], b.val[0]), vminq_u16(a.val[1], b.val[1])}};
+  }
+  static H orh(H a, H b) {
+    return {{vorrq_u16(a.val[0], b.val[0]), vorrq_u16(a.val[1], b.val[1])}};
+  }
+  // a > b for values below 0x8000.
+  static H gth(H a, H b) {
+    return {{vcgtq_u16(a.val[0], b.val[0]), vcgtq_u16(a.val[1], b.val[1])}};
+  }
+  static H eqh(H a, H b) {
+    return {{vceqq_u16(a.val[0], b.val[0]), vceqq_u16(a.val[1], b.val[1])}};
+  }
+  static H selecth(H mask, H a, H b) {
+    return {
+        {vbslq_u16(mask.val[0], a.val[0], b.val[0]), vbslq_u16(mask.val[1], a.val[1], b.val[1])}};
+  }
+  static H iotah() {
+    static constexpr std::uint16_t kIota[16] = {0, 1, 2,  3,  4,  5,  6,  7,
+                                                8, 9, 10, 11, 12, 13, 14, 15};
+    return loadh(kIota);
+  }
+  // Lane 15 of prev, then lanes 0..14 of cur: a window moved up by one lane.
+  static H shift_in(H prev, H cur) {
+    return {{vextq_u16(prev.val[1], cur.val[0], 7), vextq_u16(cur.val[0], cur.val[1], 7)}};
+  }
+  static std::uint16_t last(H v) { return vgetq_lane_u16(v.val[1], 7); }
+  static std::uint16_t hminh(H v) {
+    const uint16x8_t q = vminq_u16(v.val[0], v.val[1]);
+    uint16x4_t m = vmin_u16(vget_low_u16(q), vget_high_u16(q));
+    m = vpmin_u16(m, m);
+    m = vpmin_u16(m, m);
+    return vget_lane_u16(m, 0);
+  }
+  static std::uint32_t hsumh(H v) {
+    const uint64x2_t q = vpaddlq_u32(vpaddlq_u16(vaddq_u16(v.val[0], v.val[1])));
+    return static_cast<std::uint32_t>(vgetq_lane_u64(q, 0) + vgetq_lane_u64(q, 1));
+  }
+  static bool anyh(H mask) {
+    const uint64x2_t halves = vreinterpretq_u64_u16(vorrq_u16(mask.val[0], mask.val[1]));
+    return (vgetq_lane_u64(halves, 0) | vgetq_lane_u64(halves, 1)) != 0;
+  }
+
+  // Words: 4 lanes of 32-bit integers (I), floats (F) and masks (M).
+  static constexpr int kLanesI = 4;
+  using I = int32x4_t;
+  using F = float32x4_t;
+  using M = uint32x4_t;
+  struct Acc {
+    int64x2_t low;
+    int64x2_t high;
+  };
+
+  // Consecutive entries of an integral row.
+  static I loadi(const std::uint32_t* p) { return vreinterpretq_s32_u32(vld1q_u32(p)); }
+  static I addi(I a, I b) { return vaddq_s32(a, b); }
+  static I subi(I a, I b) { return vsubq_s32(a, b); }
+  static F tof(I a) { return vcvtq_f32_s32(a); }
+  static F splatf(float v) { return vdupq_n_f32(v); }
+  static F mulf(F a, F b) { return vmulq_f32(a, b); }
+  static F addf(F a, F b) { return vaddq_f32(a, b); }
+  static M ltf(F a, F b) { return vcltq_f32(a, b); }
+  static M gei(I a, I b) { return vcgeq_s32(a, b); }
+  static I masked_splati(M m, int value) {
+    return vreinterpretq_s32_u32(vandq_u32(m, vdupq_n_u32(static_cast<std::uint32_t>(value))));
+  }
+  static M andm(M a, M b) { return vandq_u32(a, b); }
+  // Lanes 0..3 as bits 0..3.
+  static unsigned bitsm(M m) {
+    static constexpr std::uint32_t kBits[4] = {1, 2, 4, 8};
+    const uint32x4_t b = vandq_u32(m, vld1q_u32(kBits));
+    const uint32x2_t pair = vadd_u32(vget_low_u32(b), vget_high_u32(b));
+    return vget_lane_u32(vpadd_u32(pair, pair), 0);
+  }
+  static M from_bitsm(unsigned bits) {
+    static constexpr std::uint32_t kBits[4] = {1, 2, 4, 8};
+    return vtstq_u32(vdupq_n_u32(bits), vld1q_u32(kBits));
+  }
+
+  // The variance normalisation of 4 windows (see variance_factor): nf exactly in int64 lanes,
+  // then, per lane, OpenCV's double square root and division.
+  static void variance(I sum, I squares, double area, F& factor, M& ok) {
+    const auto area32 = static_cast<std::uint32_t>(area);
+    const uint32x4_t sq = vreinterpretq_u32_s32(squares);
+    const int64x2_t nf_low = vsubq_s64(vreinterpretq_s64_u64(vmull_n_u32(vget_low_u32(sq), area32)),
+                                       vmull_s32(vget_low_s32(sum), vget_low_s32(sum)));
+    const int64x2_t nf_high =
+        vsubq_s64(vreinterpretq_s64_u64(vmull_n_u32(vget_high_u32(sq), area32)),
+                  vmull_s32(vget_high_s32(sum), vget_high_s32(sum)));
+    std::int64_t nf[4];
+    vst1q_s64(nf, nf_low);
+    vst1q_s64(nf + 2, nf_high);
+    float f[4];
+    std::uint32_t pass[4];
+    for (int k = 0; k < 4; ++k) {
+      f[k] = 1.0f;
+      pass[k] = 0;
+      if (nf[k] > 0) {
+        f[k] = static_cast<float>(1.0 / std::sqrt(static_cast<double>(nf[k])));
+        pass[k] = area * static_cast<double>(f[k]) < 0.1 ? ~0u : 0u;
+      }
+    }
+    factor = vld1q_f32(f);
+    ok = vld1q_u32(pass);
+  }
+
+  // Bit `code` of a 256-bit subset (32 bytes) for 4 codes in 0..255: byte code >> 3 by table
+  // lookup, tested against the bit code & 7 (from a second table).
+  static M subset_bit(const std::uint8_t* subset, I code) {
+    static constexpr std::uint8_t kBit[8] = {1, 2, 4, 8, 16, 32, 64, 128};
+    const uint8x8x4_t table = {
+        {vld1_u8(subset), vld1_u8(subset + 8), vld1_u8(subset + 16), vld1_u8(subset + 24)}};
+    const uint16x4_t c16 = vmovn_u32(vreinterpretq_u32_s32(code));
+    const uint8x8_t c8 = vmovn_u16(vcombine_u16(c16, c16));
+    const uint8x8_t bytes = vtbl4_u8(table, vshr_n_u8(c8, 3));
+    const uint8x8_t bit = vtbl1_u8(vld1_u8(kBit), vand_u8(c8, vdup_n_u8(7)));
+    const int8x8_t set = vreinterpret_s8_u8(vtst_u8(bytes, bit));  // 0 or -1
+    return vreinterpretq_u32_s32(vmovl_s16(vget_low_s16(vmovl_s8(set))));
+  }
+
+  static Acc acc_zero() { return {vdupq_n_s64(0), vdupq_n_s64(0)}; }
+  static void acc_add(Acc& acc, M mask, std::int64_t delta) {
+    const int32x4_t m = vreinterpretq_s32_u32(mask);
+    const int64x2_t d = vdupq_n_s64(delta);
+    acc.low = vaddq_s64(acc.low, vandq_s64(vmovl_s32(vget_low_s32(m)), d));
+    acc.high = vaddq_s64(acc.high, vandq_s64(vmovl_s32(vget_high_s32(m)), d));
+  }
+  // acc >= threshold, per lane (from the sign of acc - threshold).
+  static M acc_at_least(const Acc& acc, std::int64_t threshold) {
+    const int64x2_t t = vdupq_n_s64(threshold);
+    const int64x2_t below_low = vshrq_n_s64(vsubq_s64(acc.low, t), 63);
+    const int64x2_t below_high = vshrq_n_s64(vsubq_s64(acc.high, t), 63);
+    const int32x4_t below = vcombine_s32(vmovn_s64(below_low), vmovn_s64(below_high));
+    return vmvnq_u32(vreinterpretq_u32_s32(below));
+  }
+};
+
+}  // namespace epipole::vision::simd
