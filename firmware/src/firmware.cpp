@@ -99,13 +99,8 @@ MemoryReport Firmware::memory_report() const {
   pipeline_->add_memory(report);
   report.add("link", link_->working_set_bytes());
   loop_->add_memory(report);
-  std::size_t cameras = board_->left().working_set_bytes() + board_->right().working_set_bytes();
-  if (const hal::SimBoard* sim = board_->sim()) {
-    for (const auto* side : {sim->left.get(), sim->right.get()}) {
-      for (const GrayImage& image : *side) cameras += image.size_bytes();  // the scene
-    }
-  }
-  report.add(kCameras, cameras);
+  report.add(kCameras, board_->left().working_set_bytes() + board_->right().working_set_bytes() +
+                           board_->hardware().scene_bytes());
   return report;
 }
 

@@ -401,9 +401,8 @@ bool FrameLoop::take_freshest(hal::PairResult& got) {
 // hal/stereo_pairing.hpp); the left frame's time otherwise.
 FrameLoop::TriggerTime FrameLoop::trigger_time(const hal::StereoPair& pair) const {
   if (trigger_ && grabber_.pairer().numbers_are_the_triggers()) {
-    if (const auto edge = trigger_->record().find(pair.left.sequence)) {
-      return {edge->timestamp, false};
-    }
+    const auto edge = trigger_->record().find(pair.left.sequence);
+    if (edge && edge->clock == board_.clock().id()) return {edge->timestamp, false};
   }
   return {pair.left.timestamp, true};
 }

@@ -4,7 +4,6 @@
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/board.hpp"
-#include "epipole/hal/sim.hpp"
 #include "epipole/hal/sim_files.hpp"
 #include "epipole/hal/sim_scene.hpp"
 
@@ -23,6 +22,10 @@ SceneImages from_video(const std::string& key, const std::function<hal::StereoIm
 }
 
 }  // namespace
+
+bool can_load_scene_images() {
+  return true;
+}
 
 SceneImages load_scene_images(const BoardConfig& board) {
   const BoardConfig::SimScene* scene = board.sim_scene();

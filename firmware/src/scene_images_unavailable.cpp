@@ -4,6 +4,10 @@
 
 namespace epipole::firmware {
 
+bool can_load_scene_images() {
+  return false;
+}
+
 SceneImages load_scene_images(const BoardConfig& board) {
   throw Error(cat("board ", board.name,
                   ": this build cannot read image files (it was built "

@@ -2,12 +2,8 @@
 
 #include <algorithm>
 
+#include "backends.hpp"
 #include "epipole/core/error.hpp"
-#include "epipole/hal/gpiod_trigger.hpp"
-#include "epipole/hal/libcamera_camera.hpp"
-#include "epipole/hal/pty_serial.hpp"
-#include "epipole/hal/sim.hpp"
-#include "epipole/hal/v4l2_camera.hpp"
 
 namespace epipole::hal {
 
@@ -40,68 +36,14 @@ const auto& find_entry(const Entries& entries, std::string_view kind, std::strin
   return *it;
 }
 
-// The board's trigger, lent to whoever asked the registry for the "sim" trigger.
-class SimTriggerHandle final : public TriggerLine {
- public:
-  explicit SimTriggerHandle(SimTrigger& trigger) : trigger_(trigger) {}
-  const TriggerConfig& config() const override { return trigger_.config(); }
-  void start() override { trigger_.start(); }
-  void stop() override { trigger_.stop(); }
-  EdgeResult wait_edge(Nanoseconds timeout) override { return trigger_.wait_edge(timeout); }
-  void set_rate(double rate_hz) override { trigger_.set_rate(rate_hz); }
-  bool record_edges_to(TriggerRecord* record) override { return trigger_.record_edges_to(record); }
-
- private:
-  SimTrigger& trigger_;
-};
-
 BackendRegistry make_builtin() {
   BackendRegistry r;
-  r.add_camera("sim",
-               [](const CameraConfig& config, const BackendContext& context) {
-                 require(context.sim != nullptr, "camera ", config.device,
-                         ": backend 'sim' needs the simulated board");
-                 require(config.device == "left" || config.device == "right", "camera ",
-                         config.device, ": the simulated board has cameras 'left' and 'right'");
-                 SimBoard& board = *context.sim;
-                 const bool left = config.device == "left";
-                 SimCameraTiming timing = board.timing;
-                 if (!left)
-                   timing.seed = timing.seed * 0x9e3779b97f4a7c15ULL + 1;  // independent jitter
-                 auto camera = std::make_unique<SimCamera>(config, left ? board.left : board.right,
-                                                           board.clock, timing);
-                 // A free-running camera ignores the trigger line: it runs on its own at its frame
-                 // rate.
-                 if (config.trigger == TriggerMode::external) board.trigger.connect(*camera);
-                 board.cameras[left ? 0 : 1] = camera.get();
-                 return std::unique_ptr<CameraSource>(std::move(camera));
-               },
-               {.simulated = true});
-  r.add_camera("v4l2",
-               [](const CameraConfig& config, const BackendContext&) {
-                 return std::unique_ptr<CameraSource>(std::make_unique<V4l2Camera>(config));
-               },
-               {.needs_device = true});
+  register_sim(r);
+  register_v4l2(r);
   register_libcamera(r);
-  r.add_trigger("sim",
-                [](const TriggerConfig& config, const BackendContext& context) {
-                  require(context.sim != nullptr, "trigger ", config.line,
-                          ": backend 'sim' needs the simulated board");
-                  return std::unique_ptr<TriggerLine>(
-                      std::make_unique<SimTriggerHandle>(context.sim->trigger));
-                },
-                {.simulated = true});
   register_gpiod(r);
-  r.add_serial("termios",
-               [](const SerialConfig& config, const BackendContext&) {
-                 return std::unique_ptr<SerialPort>(std::make_unique<TermiosSerialPort>(config));
-               },
-               {.needs_device = true});
-  r.add_serial("pty",
-               [](const SerialConfig& config, const BackendContext&) {
-                 return std::unique_ptr<SerialPort>(std::make_unique<PtySerialPort>(config));
-               },
-               {.simulated = true});
+  register_termios(r);
+  register_pty(r);
   return r;
 }
 

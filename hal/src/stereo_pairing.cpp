@@ -42,6 +42,8 @@ bool StereoPairer::on_trigger(const Frame& left, const Frame& right) const {
   if (trigger_ == nullptr) return true;
   const std::optional<TriggerEdge> edge = trigger_->find(left.sequence);
   if (!edge) return false;
+  // Times on different clocks say nothing of each other: the sequence numbers pair them.
+  if (edge->clock != left.clock || edge->clock != right.clock) return true;
   const Nanoseconds expected = edge->timestamp + config_.edge_delay;
   auto fits = [&](Nanoseconds t) {
     return (t > expected ? t - expected : expected - t) <= config_.edge_tolerance;
@@ -159,7 +161,7 @@ bool StereoPairer::renumber() {
       while (!q.numbered && q.size > 0) {
         const Frame& f = q.front();
         const auto edge =
-            trigger_->find_near(f.timestamp - config_.edge_delay, config_.edge_tolerance);
+            trigger_->find_near(f.timestamp - config_.edge_delay, config_.edge_tolerance, f.clock);
         if (edge) {
           number(side, edge->sequence - f.sequence);
           numbers_are_the_triggers_ = true;

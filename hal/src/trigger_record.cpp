@@ -15,12 +15,13 @@ std::optional<TriggerEdge> TriggerRecord::find(std::uint32_t sequence) const {
   return slot.edge;
 }
 
-std::optional<TriggerEdge> TriggerRecord::find_near(Nanoseconds time, Nanoseconds tolerance) const {
+std::optional<TriggerEdge> TriggerRecord::find_near(Nanoseconds time, Nanoseconds tolerance,
+                                                    ClockId clock) const {
   const std::lock_guard<std::mutex> lock(mutex_);
   std::optional<TriggerEdge> nearest;
   Nanoseconds best = tolerance;
   for (const Slot& slot : slots_) {
-    if (!slot.valid) continue;
+    if (!slot.valid || slot.edge.clock != clock) continue;
     const Nanoseconds d =
         slot.edge.timestamp > time ? slot.edge.timestamp - time : time - slot.edge.timestamp;
     if (d <= best) {

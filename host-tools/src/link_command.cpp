@@ -14,6 +14,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/protocol/codec.hpp"
 #include "epipole/firmware/protocol/fields.hpp"
+#include "epipole/hal/registry.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "message_json.hpp"
 
@@ -152,7 +153,9 @@ void run_link(const LinkOptions& options) {
     return;
   }
 
-  hal::TermiosSerialPort port({options.port, options.baud});
+  const std::unique_ptr<hal::SerialPort> opened =
+      hal::BackendRegistry::builtin().create_serial("termios", {options.port, options.baud});
+  hal::SerialPort& port = *opened;
   std::array<std::uint8_t, kMaxFrameSize> frame{};
   std::uint16_t sequence = 0;
   for (const Message& command : commands) {

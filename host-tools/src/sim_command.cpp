@@ -48,7 +48,7 @@ class LinkRecorder {
  public:
   LinkRecorder(const std::string& peer, JsonStreamDecoder::Protocol protocol,
                const fs::path& directory)
-      : port_({peer, 115200}),
+      : port_(hal::BackendRegistry::builtin().create_serial("termios", {peer, 115200})),
         raw_(directory / "serial.bin", std::ios::binary),
         lines_(directory / "serial.jsonl"),
         decoder_(protocol) {
@@ -70,7 +70,7 @@ class LinkRecorder {
   void run() {
     std::array<std::byte, 4096> buffer{};
     for (;;) {
-      const hal::IoResult r = port_.read(buffer, 50'000'000);
+      const hal::IoResult r = port_->read(buffer, 50'000'000);
       if (r.status != hal::IoStatus::ok) {
         if (stopping_) return;
         continue;
@@ -89,7 +89,7 @@ class LinkRecorder {
     return true;
   }
 
-  hal::TermiosSerialPort port_;
+  std::unique_ptr<hal::SerialPort> port_;  // the robot's end: a terminal like any UART
   std::ofstream raw_;
   std::ofstream lines_;
   JsonStreamDecoder decoder_;
@@ -205,7 +205,7 @@ nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& 
     config.detector.cascade = compiled;
   }
   firmware::Firmware fw(config);
-  const int images = static_cast<int>(fw.board().sim()->left->size());
+  const int images = static_cast<int>(fw.board().hardware().scene_images());
   PictureWriter pictures(directory, images, options.pictures, config.stereo.max_disparity);
   fw.frame_loop().set_observer(&pictures);
   std::unique_ptr<LinkRecorder> recorder;

@@ -214,9 +214,15 @@ TEST(BoardConfig, EveryShippedBoardLoads) {
           EXPECT_TRUE(fs::exists(scene.calibration)) << name << ": scene " << scene.name;
         }
       }
-      // `epipole-fw --check` on it: the frame loop made with stand-ins for its devices.
+      // `epipole-fw --check` on it: the frame loop made with stand-ins for its devices (a
+      // simulated board's scene is read from its files, which cross builds cannot read).
       MemoryReport report;
-      EXPECT_EQ(test::error_of([&] { report = check_memory(c); }), "") << entry.path();
+      const std::string check_error = test::error_of([&] { report = check_memory(c); });
+      if (c.simulated() && !can_load_scene_images()) {
+        EXPECT_NE(check_error.find("cannot read image files"), std::string::npos) << check_error;
+        continue;
+      }
+      EXPECT_EQ(check_error, "") << entry.path();
       EXPECT_GT(report.total(), 0u) << entry.path();
     }
   }

@@ -17,9 +17,10 @@
 
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/protocol/codec.hpp"
-#include "epipole/hal/pty_serial.hpp"
 #include "epipole/hal/serial_port.hpp"
+#include "pty/pty_serial.hpp"
 #include "sim_rig.hpp"
+#include "termios/termios_serial.hpp"
 #include "test_paths.hpp"
 
 namespace epipole::firmware {

@@ -14,6 +14,7 @@
 #include "allocation_counter.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "sim_rig.hpp"
+#include "termios/termios_serial.hpp"
 
 namespace epipole::firmware {
 namespace {

@@ -18,6 +18,7 @@
 #include "epipole/hal/serial_port.hpp"
 #include "error_of.hpp"
 #include "sim_rig.hpp"
+#include "termios/termios_serial.hpp"
 #include "test_paths.hpp"
 #include "trigger_accounting.hpp"
 
@@ -328,7 +329,7 @@ TEST(FrameLoop, EachLostTriggerIsCountedOnceUnderItsCause) {
     hal::SimFault f;
     f.kind = kind;
     f.sequence = sequence;
-    fw.board().sim_camera(side)->inject(f);
+    fw.board().hardware().sim()->camera(side)->inject(f);
   };
   inject(hal::Side::left, hal::SimFaultKind::drop, 10);   // one side
   inject(hal::Side::right, hal::SimFaultKind::drop, 11);  // the other side, the next trigger
@@ -403,7 +404,7 @@ TEST(FrameLoop, RecoversFromALostCameraWithoutRestarting) {
   gone.kind = hal::SimFaultKind::disconnect;
   gone.sequence = 30;
   gone.count = 2;  // two reopen attempts fail before the camera is back
-  fw.board().sim_camera(hal::Side::left)->inject(gone);
+  fw.board().hardware().sim()->camera(hal::Side::left)->inject(gone);
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
@@ -757,7 +758,7 @@ TEST(FrameLoop, SetExposureReachesBothCameras) {
       << "20 s does not fit in the trigger's period";
   EXPECT_EQ(acks[3].reason, protocol::AckReason::out_of_range);
   for (const hal::Side side : {hal::Side::left, hal::Side::right}) {
-    const hal::CameraConfig& c = linked.fw->board().sim_camera(side)->config();
+    const hal::CameraConfig& c = linked.fw->board().hardware().sim()->camera(side)->config();
     EXPECT_EQ(c.exposure, 6'000'000);
     EXPECT_NEAR(c.gain, 2.0, 0.001) << "6.02 dB";
   }
@@ -824,8 +825,8 @@ TEST(FrameLoop, FreeRunningCamerasWithoutATriggerPairByTime) {
   EXPECT_GE(longest_gap, 8u) << "the phase went through the band";
   // By sequence, left and right frame n are 0.33 n ms apart: beyond the 15 ms from frame 46 on.
   EXPECT_GT(recorder.frames.back().frame, 240u);
-  const hal::SimCamera& left = *linked.fw->board().sim_camera(hal::Side::left);
-  const hal::SimCamera& right = *linked.fw->board().sim_camera(hal::Side::right);
+  const hal::SimCamera& left = *linked.fw->board().hardware().sim()->camera(hal::Side::left);
+  const hal::SimCamera& right = *linked.fw->board().hardware().sim()->camera(hal::Side::right);
   const hal::PairingCounters& p = s.pairing;
   EXPECT_EQ(p.pairs, 240u + s.stale);
   EXPECT_GT(p.left().unpaired + p.right().unpaired, 20u);

@@ -12,7 +12,8 @@
 #include <thread>
 #include <vector>
 
-#include "epipole/hal/pty_serial.hpp"
+#include "pty/pty_serial.hpp"
+#include "termios/termios_serial.hpp"
 
 namespace epipole::firmware {
 namespace {

@@ -16,8 +16,9 @@
 #include "epipole/calib/calibration.hpp"
 #include "epipole/firmware/board.hpp"
 #include "epipole/firmware/board_config.hpp"
-#include "epipole/hal/sim.hpp"
+#include "epipole/hal/sim_scene.hpp"
 #include "random_image.hpp"
+#include "sim/sim.hpp"
 
 namespace epipole::test {
 

@@ -25,6 +25,7 @@
 #include "allocation_counter.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "sim_rig.hpp"
+#include "termios/termios_serial.hpp"
 
 namespace epipole::firmware {
 namespace {
@@ -198,7 +199,7 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
   rates.max_delay = 20'000'000;
   for (const hal::Side side : {hal::Side::left, hal::Side::right}) {
     rates.seed = side == hal::Side::left ? 17 : 71;
-    hal::SimCamera& camera = *fw.board().sim_camera(side);
+    hal::SimCamera& camera = *fw.board().hardware().sim()->camera(side);
     camera.set_fault_rates(rates);
     // One camera lost every 3000 triggers, the sides taking turns.
     for (std::uint32_t at = side == hal::Side::left ? 3000 : 4500; at < 3'000'000; at += 3000) {

@@ -11,8 +11,9 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/firmware.hpp"
-#include "epipole/hal/sim.hpp"
+#include "epipole/hal/sim_scene.hpp"
 #include "fuzz_file.hpp"
+#include "sim/sim.hpp"
 
 namespace {
 
@@ -67,7 +68,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (acks.count != s.commands || s.commands != answerable) std::abort();
   hal::validate(fw.board().trigger()->config());  // throws (and the fuzzer reports) if broken
   for (const hal::Side side : {hal::Side::left, hal::Side::right}) {
-    const hal::CameraConfig& camera = fw.board().sim_camera(side)->config();
+    const hal::CameraConfig& camera = fw.board().hardware().sim()->camera(side)->config();
     hal::validate_exposure(camera.device, camera.exposure, camera.gain);
   }
   return 0;

@@ -4,8 +4,8 @@
 #include <string>
 
 #include "epipole/core/error.hpp"
-#include "epipole/hal/gpiod_trigger.hpp"
 #include "epipole/hal/registry.hpp"
+#include "gpiod/gpiod_trigger.hpp"
 
 namespace epipole::hal {
 namespace {

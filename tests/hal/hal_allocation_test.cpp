@@ -5,10 +5,10 @@
 #include <vector>
 
 #include "allocation_counter.hpp"
-#include "epipole/hal/libcamera_camera.hpp"
 #include "epipole/hal/recovery.hpp"
-#include "epipole/hal/sim.hpp"
 #include "epipole/hal/stereo_pairing.hpp"
+#include "libcamera/libcamera_camera.hpp"
+#include "sim/sim.hpp"
 
 namespace epipole::hal {
 namespace {

@@ -8,8 +8,8 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
-#include "epipole/hal/libcamera_camera.hpp"
 #include "epipole/hal/registry.hpp"
+#include "libcamera/libcamera_camera.hpp"
 
 namespace epipole::hal {
 namespace {

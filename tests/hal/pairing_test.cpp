@@ -12,11 +12,11 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
-#include "epipole/hal/libcamera_camera.hpp"
 #include "epipole/hal/recovery.hpp"
 #include "epipole/hal/registry.hpp"
-#include "epipole/hal/sim.hpp"
 #include "epipole/hal/stereo_pairing.hpp"
+#include "libcamera/libcamera_camera.hpp"
+#include "sim/sim.hpp"
 
 namespace epipole::hal {
 namespace {
@@ -266,6 +266,20 @@ TEST(StereoPairing, EdgeToleranceMustBeBelowHalfThePeriod) {
         << e.what();
   }
   EXPECT_NO_THROW(StereoPairer(rig.left, rig.right, c)) << "no record: the edges are not used";
+}
+
+TEST(TriggerRecord, FindsTheNearestEdgeOnlyOnTheFramesClock) {
+  TriggerRecord record;
+  record.add({0, 1000, ClockId::virtual_clock});
+  record.add({1, 1000 + kPeriod, ClockId::monotonic});
+  const auto near_first = record.find_near(1000 + 10, 100, ClockId::virtual_clock);
+  ASSERT_TRUE(near_first.has_value());
+  EXPECT_EQ(near_first->sequence, 0u);
+  EXPECT_FALSE(record.find_near(1000 + 10, 100, ClockId::monotonic).has_value())
+      << "the edge at that time is on another clock";
+  EXPECT_FALSE(record.find_near(1000 + kPeriod, 100, ClockId::virtual_clock).has_value());
+  EXPECT_EQ(record.find_near(1000 + kPeriod - 50, 100, ClockId::monotonic)->sequence, 1u);
+  EXPECT_FALSE(record.find_near(1000 + kPeriod, 100, ClockId::other).has_value());
 }
 
 TEST(TriggerRecord, HoldsTheLastEdges) {

@@ -1,6 +1,6 @@
 // The termios serial port on real kernel pseudo-terminals: the test holds the master side,
 // the port opens the slave device as it would /dev/ttyUSB0.
-#include "epipole/hal/serial_port.hpp"
+#include "termios/termios_serial.hpp"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>

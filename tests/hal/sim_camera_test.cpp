@@ -7,7 +7,8 @@
 #include <vector>
 
 #include "epipole/core/error.hpp"
-#include "epipole/hal/sim.hpp"
+#include "epipole/hal/sim_scene.hpp"
+#include "sim/sim.hpp"
 
 namespace epipole::hal {
 namespace {
@@ -66,6 +67,7 @@ TEST(SimTrigger, EdgesAtTheRateOnTheVirtualClock) {
     ASSERT_EQ(r.status, EdgeStatus::ok);
     EXPECT_EQ(r.edge.sequence, i);
     EXPECT_EQ(r.edge.timestamp, 1000 + static_cast<Nanoseconds>(i) * 10 * kMs);
+    EXPECT_EQ(r.edge.clock, ClockId::virtual_clock);
     EXPECT_EQ(clock.now(), r.edge.timestamp);
   }
   EXPECT_EQ(trigger.wait_edge(kMs).status, EdgeStatus::timeout);

@@ -10,7 +10,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
 #include "epipole/hal/registry.hpp"
-#include "epipole/hal/v4l2_camera.hpp"
+#include "v4l2/v4l2_camera.hpp"
 
 namespace epipole::hal {
 namespace {

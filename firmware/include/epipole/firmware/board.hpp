@@ -8,9 +8,9 @@
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/clock.hpp"
+#include "epipole/hal/hardware.hpp"
 #include "epipole/hal/recovery.hpp"
 #include "epipole/hal/serial_port.hpp"
-#include "epipole/hal/sim.hpp"
 #include "epipole/hal/stereo_pairing.hpp"
 #include "epipole/hal/trigger.hpp"
 
@@ -26,11 +26,13 @@ struct SceneImages {
 // size (hal/sim_scene.hpp), or synthesised. Throws Error naming the file; builds without image
 // files (cross builds without libpng/libjpeg) throw saying so.
 SceneImages load_scene_images(const BoardConfig& board);
+// False in builds without image files, whose simulated board has nothing to replay.
+bool can_load_scene_images();
 
 // The hardware of a board — cameras, trigger line, serial link, clock — made from its
-// configuration through the backend registry, each camera and the link wrapped so that they
-// recover from faults by themselves (hal/recovery.hpp). On the simulated board everything runs
-// on its virtual clock.
+// configuration by the HAL (hal::Hardware, through the backend registry), each camera and the
+// link wrapped so that they recover from faults by themselves (hal/recovery.hpp). On the
+// simulated board everything runs on its virtual clock.
 class Board {
  public:
   // The simulated board's images are loaded with load_scene_images().
@@ -41,29 +43,25 @@ class Board {
   Board(const Board&) = delete;
   Board& operator=(const Board&) = delete;
 
-  hal::Clock& clock() { return *clock_; }
-  hal::CameraSource& left() { return *left_; }
-  hal::CameraSource& right() { return *right_; }
-  const hal::RecoveringCamera& left_recovery() const { return *left_; }
-  const hal::RecoveringCamera& right_recovery() const { return *right_; }
-  hal::TriggerLine* trigger() { return trigger_.get(); }
+  hal::Clock& clock() { return hardware_.clock(); }
+  hal::CameraSource& left() { return left_; }
+  hal::CameraSource& right() { return right_; }
+  const hal::RecoveringCamera& left_recovery() const { return left_; }
+  const hal::RecoveringCamera& right_recovery() const { return right_; }
+  hal::TriggerLine* trigger() { return hardware_.trigger(); }
   // Null when the board has no link.
   hal::SerialPort* serial() { return serial_ ? serial_.get() : nullptr; }
   const hal::RecoveringSerialPort* serial_recovery() const { return serial_.get(); }
   // The robot's end of a simulated link ("pty" backend), else empty.
   std::string serial_peer() const;
-  // The simulated board and its cameras, when the cameras are simulated.
-  hal::SimBoard* sim() { return sim_.get(); }
-  hal::SimCamera* sim_camera(hal::Side side);
+  // The devices themselves, unwrapped (the simulated scene's size; tests reach the simulation
+  // through hal::Hardware::sim()).
+  hal::Hardware& hardware() { return hardware_; }
+  const hal::Hardware& hardware() const { return hardware_; }
 
  private:
-  std::unique_ptr<hal::SimBoard> sim_;
-  std::unique_ptr<hal::MonotonicClock> monotonic_;
-  hal::Clock* clock_ = nullptr;
-  std::unique_ptr<hal::CameraSource> left_camera_, right_camera_;
-  std::unique_ptr<hal::RecoveringCamera> left_, right_;
-  std::unique_ptr<hal::TriggerLine> trigger_;
-  std::unique_ptr<hal::SerialPort> port_;
+  hal::Hardware hardware_;
+  hal::RecoveringCamera left_, right_;
   std::unique_ptr<hal::RecoveringSerialPort> serial_;
 };
 

@@ -40,9 +40,6 @@ GrayView convert_plane(const std::uint8_t* data, std::size_t bytes, int width, i
                        std::size_t stride, std::size_t row_bytes, RowConversion convert,
                        MutableGrayView scratch);
 
-// The clock a frame timestamp was taken on.
-enum class ClockId { monotonic, virtual_clock, other };
-
 enum class TriggerMode { free_running, external };
 
 struct CameraConfig {

@@ -9,6 +9,10 @@ namespace epipole::hal {
 // trigger edges, frame timestamps and latencies.
 using Nanoseconds = std::int64_t;
 
+// The clock a timestamp was taken on: a frame's and a trigger edge's say it, and times are only
+// compared on one clock (a V4L2 driver may stamp on another: `other`).
+enum class ClockId { monotonic, virtual_clock, other };
+
 class Clock {
  public:
   virtual ~Clock() = default;
@@ -19,6 +23,8 @@ class Clock {
   // itself; a simulated one that charges compute time moves by it, so that a simulation sees the
   // host's speed.
   virtual void spend(Nanoseconds /*elapsed*/) {}
+  // Which clock this is, to compare with the clock a timestamp says it was taken on.
+  virtual ClockId id() const = 0;
 };
 
 // CLOCK_MONOTONIC: the same clock the kernel stamps V4L2 buffers and GPIO edge events with.
@@ -26,6 +32,7 @@ class MonotonicClock final : public Clock {
  public:
   Nanoseconds now() const override;
   void sleep_until(Nanoseconds deadline) override;
+  ClockId id() const override { return ClockId::monotonic; }
 };
 
 // Simulated time that only moves when told to: sleep_until jumps straight to the deadline, so
@@ -39,6 +46,7 @@ class VirtualClock final : public Clock {
   void advance(Nanoseconds delta);
   // Whether spend() advances the clock (off unless asked for).
   void charge_compute(bool on) { charge_compute_ = on; }
+  ClockId id() const override { return ClockId::virtual_clock; }
 
  private:
   std::atomic<Nanoseconds> now_;

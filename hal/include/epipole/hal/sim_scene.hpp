@@ -20,4 +20,8 @@ Letterbox letterbox_geometry(int from_width, int from_height, int to_width, int 
 // unchanged when the sizes agree. Start-up code (allocates the result).
 GrayImage letterbox(GrayView image, int width, int height, std::uint8_t fill = 0);
 
+// The right view of a scene whose left view is `left`, at a constant disparity (pixels):
+// right(x, y) = left(x + disparity, y), the border column repeated.
+GrayImage synthesize_right(GrayView left, int disparity);
+
 }  // namespace epipole::hal

@@ -40,8 +40,8 @@ struct PairingSideCounters {
 struct PairingCounters {
   std::uint64_t pairs = 0;
   std::array<PairingSideCounters, 2> sides{};  // by Side
-  PairingSideCounters& of(Side side) { return sides[side == Side::left ? 0 : 1]; }
-  const PairingSideCounters& of(Side side) const { return sides[side == Side::left ? 0 : 1]; }
+  PairingSideCounters& of(Side side) { return sides[index(side)]; }
+  const PairingSideCounters& of(Side side) const { return sides[index(side)]; }
   PairingSideCounters& left() { return sides[0]; }
   PairingSideCounters& right() { return sides[1]; }
   const PairingSideCounters& left() const { return sides[0]; }

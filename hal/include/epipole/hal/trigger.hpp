@@ -15,6 +15,7 @@ namespace epipole::hal {
 struct TriggerEdge {
   std::uint32_t sequence = 0;
   Nanoseconds timestamp = 0;
+  ClockId clock = ClockId::monotonic;  // the clock `timestamp` was taken on
 };
 
 enum class TriggerRole {
@@ -114,8 +115,10 @@ class TriggerRecord {
   void add(const TriggerEdge& edge);
   // The edge of that sequence, while it is among the last kCapacity.
   std::optional<TriggerEdge> find(std::uint32_t sequence) const;
-  // The edge nearest `time`, when one of the last kCapacity lies within `tolerance` of it.
-  std::optional<TriggerEdge> find_near(Nanoseconds time, Nanoseconds tolerance) const;
+  // The edge nearest `time` (a time on `clock`), when one of the last kCapacity taken on that
+  // clock lies within `tolerance` of it.
+  std::optional<TriggerEdge> find_near(Nanoseconds time, Nanoseconds tolerance,
+                                       ClockId clock) const;
   std::uint64_t added() const;
   void clear();
 

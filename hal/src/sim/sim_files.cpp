@@ -7,7 +7,6 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
-#include "epipole/hal/sim.hpp"
 #include "epipole/hal/sim_scene.hpp"
 #include "video_decoder.hpp"
 

@@ -101,4 +101,17 @@ GrayImage letterbox(GrayView image, int width, int height, std::uint8_t fill) {
   return out;
 }
 
+GrayImage synthesize_right(GrayView left, int disparity) {
+  require(!left.empty(), "synthesize_right: the left image is empty");
+  require(disparity >= 0 && disparity < left.width(), "synthesize_right: disparity ", disparity,
+          " is outside 0..", left.width() - 1);
+  GrayImage right(left.width(), left.height());
+  for (int y = 0; y < left.height(); ++y) {
+    const std::uint8_t* in = left.row(y);
+    std::uint8_t* out = right.view().row(y);
+    for (int x = 0; x < left.width(); ++x) out[x] = in[std::min(x + disparity, left.width() - 1)];
+  }
+  return right;
+}
+
 }  // namespace epipole::hal

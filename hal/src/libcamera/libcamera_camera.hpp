@@ -16,8 +16,6 @@
 
 namespace epipole::hal {
 
-class BackendRegistry;
-
 // --- The libcamera-independent logic of the libcamera backend (built and tested everywhere) ---
 
 // How the first plane of a libcamera format holds its samples.
@@ -258,8 +256,6 @@ class LibcameraCamera final : public CameraSource {
   std::unique_ptr<Impl> impl_;
 };
 
-// Adds "libcamera" to a registry: the backend when it was built, else the reason it was not.
-void register_libcamera(BackendRegistry& registry);
 // The libcamera version this binary was built with ("0.0.3"); empty when it was not.
 std::string libcamera_build_version();
 

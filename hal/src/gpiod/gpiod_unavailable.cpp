@@ -1,6 +1,6 @@
 // Built instead of gpiod_trigger.cpp when libgpiod 1.x was not found. EPIPOLE_GPIOD_MISSING
 // says why (not found, or libgpiod 2.x).
-#include "epipole/hal/gpiod_trigger.hpp"
+#include "backends.hpp"
 #include "epipole/hal/registry.hpp"
 
 #ifndef EPIPOLE_GPIOD_MISSING

@@ -1,4 +1,4 @@
-#include "epipole/hal/pty_serial.hpp"
+#include "pty/pty_serial.hpp"
 
 #include <fcntl.h>
 #include <pty.h>
@@ -11,7 +11,9 @@
 #include <system_error>
 #include <utility>
 
+#include "backends.hpp"
 #include "epipole/core/error.hpp"
+#include "epipole/hal/registry.hpp"
 #include "fd_io.hpp"
 
 namespace epipole::hal {
@@ -82,6 +84,14 @@ IoResult PtySerialPort::read(std::span<std::byte> buffer, Nanoseconds timeout) {
 IoResult PtySerialPort::write(std::span<const std::byte> data, Nanoseconds timeout) {
   if (!master_) return {IoStatus::closed, 0};
   return detail::write_fd(master_.get(), data, timeout);
+}
+
+void register_pty(BackendRegistry& registry) {
+  registry.add_serial("pty",
+                      [](const SerialConfig& config, const BackendContext&) {
+                        return std::unique_ptr<SerialPort>(std::make_unique<PtySerialPort>(config));
+                      },
+                      {.simulated = true});
 }
 
 }  // namespace epipole::hal

@@ -8,8 +8,8 @@
 #include "epipole/core/error.hpp"
 #include "epipole/hal/clock.hpp"
 #include "epipole/hal/device_missing.hpp"
-#include "epipole/hal/libcamera_camera.hpp"
-#include "libcamera_formats.hpp"
+#include "libcamera/libcamera_camera.hpp"
+#include "libcamera/libcamera_formats.hpp"
 
 namespace epipole::hal {
 

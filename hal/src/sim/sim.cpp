@@ -1,4 +1,4 @@
-#include "epipole/hal/sim.hpp"
+#include "sim/sim.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -80,8 +80,8 @@ void SimTrigger::connect(SimCamera& camera) {
 void SimTrigger::emit_until(Nanoseconds until) {
   if (!running_) return;
   while (schedule_.time(next_emit_) <= until) {
-    const TriggerEdge edge{next_emit_, schedule_.time(next_emit_)};
-    for (int i = 0; i < camera_count_; ++i) cameras_[i]->on_trigger(edge);
+    const TriggerEdge e = edge(next_emit_);
+    for (int i = 0; i < camera_count_; ++i) cameras_[i]->on_trigger(e);
     ++next_emit_;
   }
   // The cameras are told of edges ahead of time (they schedule their frames); the record, like
@@ -90,7 +90,7 @@ void SimTrigger::emit_until(Nanoseconds until) {
   const Nanoseconds now = clock_.now();
   next_record_ = std::max(next_record_, schedule_.oldest());
   while (next_record_ < next_emit_ && schedule_.time(next_record_) <= now) {
-    if (record_ != nullptr) record_->add({next_record_, schedule_.time(next_record_)});
+    if (record_ != nullptr) record_->add(edge(next_record_));
     ++next_record_;
   }
 }
@@ -99,11 +99,12 @@ EdgeResult SimTrigger::wait_edge(Nanoseconds timeout) {
   if (!running_) return {EdgeStatus::lost, {}};
   const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
   next_report_ = std::max(next_report_, schedule_.oldest());
-  const Nanoseconds t = schedule_.time(next_report_);
-  if (t <= deadline) {
-    clock_.sleep_until(t);
-    emit_until(t);
-    return {EdgeStatus::ok, TriggerEdge{next_report_++, t}};
+  const TriggerEdge next = edge(next_report_);
+  if (next.timestamp <= deadline) {
+    clock_.sleep_until(next.timestamp);
+    emit_until(next.timestamp);
+    ++next_report_;
+    return {EdgeStatus::ok, next};
   }
   clock_.sleep_until(deadline);
   emit_until(deadline);
@@ -365,19 +366,6 @@ std::size_t SimCamera::working_set_bytes() const {
                   queue_.capacity() * sizeof(Pending) + faults_.capacity() * sizeof(SimFault);
   for (const GrayImage& b : buffers_) n += b.size_bytes();
   return n;
-}
-
-GrayImage synthesize_right(GrayView left, int disparity) {
-  require(!left.empty(), "synthesize_right: the left image is empty");
-  require(disparity >= 0 && disparity < left.width(), "synthesize_right: disparity ", disparity,
-          " is outside 0..", left.width() - 1);
-  GrayImage right(left.width(), left.height());
-  for (int y = 0; y < left.height(); ++y) {
-    const std::uint8_t* in = left.row(y);
-    std::uint8_t* out = right.view().row(y);
-    for (int x = 0; x < left.width(); ++x) out[x] = in[std::min(x + disparity, left.width() - 1)];
-  }
-  return right;
 }
 
 }  // namespace epipole::hal

@@ -1,4 +1,4 @@
-#include "epipole/hal/v4l2_camera.hpp"
+#include "v4l2/v4l2_camera.hpp"
 
 #include <fcntl.h>
 #include <linux/videodev2.h>
@@ -12,9 +12,11 @@
 #include <cmath>
 #include <cstring>
 
+#include "backends.hpp"
 #include "device_node.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
+#include "epipole/hal/registry.hpp"
 
 namespace epipole::hal {
 
@@ -39,6 +41,40 @@ int xioctl(int fd, unsigned long request, void* arg) {
   } while (r < 0 && errno == EINTR);
   return r;
 }
+
+// The capture buffer type of the API the driver speaks.
+std::uint32_t capture_type(bool multiplanar) {
+  return multiplanar ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
+}
+
+// A memory-mapped capture buffer to query, queue or dequeue, with room for the planes of the
+// multi-planar API (where the first plane holds the image); single-planar drivers fill `buf`.
+class MappedBuffer {
+ public:
+  explicit MappedBuffer(bool multiplanar, std::uint32_t index = 0) : multiplanar_(multiplanar) {
+    buf.type = capture_type(multiplanar);
+    buf.memory = V4L2_MEMORY_MMAP;
+    buf.index = index;
+    if (multiplanar) {
+      buf.m.planes = planes_;
+      buf.length = VIDEO_MAX_PLANES;
+    }
+  }
+  MappedBuffer(const MappedBuffer&) = delete;  // buf points into planes_
+  MappedBuffer& operator=(const MappedBuffer&) = delete;
+
+  std::size_t length() const { return multiplanar_ ? planes_[0].length : buf.length; }
+  std::size_t bytes_used() const { return multiplanar_ ? planes_[0].bytesused : buf.bytesused; }
+  off_t offset() const {
+    return static_cast<off_t>(multiplanar_ ? planes_[0].m.mem_offset : buf.m.offset);
+  }
+
+  v4l2_buffer buf{};
+
+ private:
+  bool multiplanar_;
+  v4l2_plane planes_[VIDEO_MAX_PLANES]{};
+};
 
 std::string fourcc_name(std::uint32_t fourcc) {
   std::string s(4, ' ');
@@ -218,8 +254,7 @@ void V4l2Camera::open_device() {
 }
 
 void V4l2Camera::negotiate() {
-  const auto type = static_cast<std::uint32_t>(multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE
-                                                            : V4L2_BUF_TYPE_VIDEO_CAPTURE);
+  const std::uint32_t type = capture_type(multiplanar_);
   std::vector<std::uint32_t> offered;
   for (std::uint32_t i = 0; i < 256; ++i) {
     v4l2_fmtdesc desc{};
@@ -322,8 +357,7 @@ void V4l2Camera::set_exposure(Nanoseconds exposure, double gain) {
 void V4l2Camera::start() {
   if (streaming_) return;
   if (!fd_) open_and_negotiate();  // it was not there when the camera was made
-  const auto type = static_cast<std::uint32_t>(multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE
-                                                            : V4L2_BUF_TYPE_VIDEO_CAPTURE);
+  const std::uint32_t type = capture_type(multiplanar_);
   v4l2_requestbuffers req{};
   req.count = static_cast<std::uint32_t>(config_.buffer_count);
   req.type = type;
@@ -333,22 +367,13 @@ void V4l2Camera::start() {
           " buffers");
   buffers_.assign(req.count, Buffer{});
   for (std::uint32_t i = 0; i < req.count; ++i) {
-    v4l2_buffer buf{};
-    v4l2_plane planes[VIDEO_MAX_PLANES]{};
-    buf.type = type;
-    buf.memory = V4L2_MEMORY_MMAP;
-    buf.index = i;
-    if (multiplanar_) {
-      buf.m.planes = planes;
-      buf.length = VIDEO_MAX_PLANES;
-    }
-    if (xioctl(fd_.get(), VIDIOC_QUERYBUF, &buf) != 0) fail("VIDIOC_QUERYBUF", errno);
-    const std::size_t length = multiplanar_ ? planes[0].length : buf.length;
-    const auto offset = static_cast<off_t>(multiplanar_ ? planes[0].m.mem_offset : buf.m.offset);
-    void* p = ::mmap(nullptr, length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(), offset);
+    MappedBuffer b(multiplanar_, i);
+    if (xioctl(fd_.get(), VIDIOC_QUERYBUF, &b.buf) != 0) fail("VIDIOC_QUERYBUF", errno);
+    void* p =
+        ::mmap(nullptr, b.length(), PROT_READ | PROT_WRITE, MAP_SHARED, fd_.get(), b.offset());
     if (p == MAP_FAILED) fail("mmap", errno);
-    buffers_[i] = {p, length};
-    if (xioctl(fd_.get(), VIDIOC_QBUF, &buf) != 0) fail("VIDIOC_QBUF", errno);
+    buffers_[i] = {p, b.length()};
+    if (xioctl(fd_.get(), VIDIOC_QBUF, &b.buf) != 0) fail("VIDIOC_QBUF", errno);
   }
   scratch_.clear();
   if (!is_zero_copy(format_)) {
@@ -362,7 +387,7 @@ void V4l2Camera::start() {
 
 void V4l2Camera::stop() {
   if (fd_ && streaming_) {
-    int t = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    int t = static_cast<int>(capture_type(multiplanar_));
     (void)xioctl(fd_.get(), VIDIOC_STREAMOFF, &t);
   }
   for (const Buffer& b : buffers_) {
@@ -371,7 +396,7 @@ void V4l2Camera::stop() {
   buffers_.clear();
   if (fd_ && streaming_) {
     v4l2_requestbuffers req{};
-    req.type = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    req.type = capture_type(multiplanar_);
     req.memory = V4L2_MEMORY_MMAP;
     (void)xioctl(fd_.get(), VIDIOC_REQBUFS, &req);
   }
@@ -406,18 +431,12 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
   if (ready < 0 || (p.revents & (POLLERR | POLLHUP | POLLNVAL)) != 0) {
     return {AcquireStatus::device_lost, {}};
   }
-  v4l2_buffer buf{};
-  v4l2_plane planes[VIDEO_MAX_PLANES]{};
-  buf.type = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  buf.memory = V4L2_MEMORY_MMAP;
-  if (multiplanar_) {
-    buf.m.planes = planes;
-    buf.length = VIDEO_MAX_PLANES;
-  }
+  MappedBuffer dequeued(multiplanar_);
+  v4l2_buffer& buf = dequeued.buf;
   if (xioctl(fd_.get(), VIDIOC_DQBUF, &buf) != 0) {
     return {errno == EAGAIN ? AcquireStatus::timeout : AcquireStatus::device_lost, {}};
   }
-  const std::size_t used = multiplanar_ ? planes[0].bytesused : buf.bytesused;
+  const std::size_t used = dequeued.bytes_used();
   const Buffer& mapped = buffers_[buf.index];
   const std::size_t bytes = std::min(used == 0 ? mapped.length : used, mapped.length);
   const std::size_t need = plane_bytes(format_, config_.width, config_.height, bytes_per_line_);
@@ -442,22 +461,22 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
 
 void V4l2Camera::release(const Frame& frame) {
   if (!frame.valid() || frame.generation != generation_ || !fd_) return;
-  v4l2_buffer buf{};
-  v4l2_plane planes[VIDEO_MAX_PLANES]{};
-  buf.type = multiplanar_ ? V4L2_BUF_TYPE_VIDEO_CAPTURE_MPLANE : V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  buf.memory = V4L2_MEMORY_MMAP;
-  buf.index = static_cast<std::uint32_t>(frame.buffer);
-  if (multiplanar_) {
-    buf.m.planes = planes;
-    buf.length = VIDEO_MAX_PLANES;
-  }
-  (void)xioctl(fd_.get(), VIDIOC_QBUF, &buf);
+  MappedBuffer b(multiplanar_, static_cast<std::uint32_t>(frame.buffer));
+  (void)xioctl(fd_.get(), VIDIOC_QBUF, &b.buf);
 }
 
 std::size_t V4l2Camera::working_set_bytes() const {
   std::size_t n = 0;
   for (const GrayImage& image : scratch_) n += image.size_bytes();
   return n;
+}
+
+void register_v4l2(BackendRegistry& registry) {
+  registry.add_camera("v4l2",
+                      [](const CameraConfig& config, const BackendContext&) {
+                        return std::unique_ptr<CameraSource>(std::make_unique<V4l2Camera>(config));
+                      },
+                      {.needs_device = true});
 }
 
 }  // namespace epipole::hal

@@ -1,4 +1,4 @@
-#include "epipole/hal/gpiod_trigger.hpp"
+#include "gpiod/gpiod_trigger.hpp"
 
 #include <gpiod.h>
 
@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "backends.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/hal/registry.hpp"
 
@@ -177,7 +178,7 @@ EdgeResult GpiodTrigger::wait_edge(Nanoseconds timeout) {
     const Nanoseconds fired = clock_.now();
     clock_.sleep_until(fired + config_.pulse_width);
     if (gpiod_line_set_value(line_, 0) != 0) return line_went_away();
-    return {EdgeStatus::ok, TriggerEdge{next_++, fired}};
+    return {EdgeStatus::ok, TriggerEdge{next_++, fired, ClockId::monotonic}};
   }
   const timespec ts{static_cast<time_t>(timeout / kPerSecond),
                     static_cast<long>(timeout % kPerSecond)};
@@ -187,7 +188,9 @@ EdgeResult GpiodTrigger::wait_edge(Nanoseconds timeout) {
   if (r < 0 || gpiod_line_event_read(line_, &event) != 0) return line_went_away();
   const Nanoseconds stamp = static_cast<Nanoseconds>(event.ts.tv_sec) * kPerSecond +
                             static_cast<Nanoseconds>(event.ts.tv_nsec);
-  return {EdgeStatus::ok, TriggerEdge{next_++, stamp}};
+  // The kernel stamps line events on CLOCK_MONOTONIC (since Linux 5.7, older than any kernel of a
+  // supported board: earlier ones used the real-time clock).
+  return {EdgeStatus::ok, TriggerEdge{next_++, stamp, ClockId::monotonic}};
 }
 
 void register_gpiod(BackendRegistry& registry) {

@@ -5,7 +5,7 @@
 // libcamera_camera.cpp checks it against libcamera's own formats.h at compile time.
 #include <cstdint>
 
-#include "epipole/hal/libcamera_camera.hpp"
+#include "libcamera/libcamera_camera.hpp"
 
 namespace epipole::hal {
 

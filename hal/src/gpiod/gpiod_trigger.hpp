@@ -14,8 +14,6 @@ struct gpiod_line;
 
 namespace epipole::hal {
 
-class BackendRegistry;
-
 // The trigger line through libgpiod's 1.x API (Debian bookworm: 1.6), the line looked up by
 // name (in config.chip when given, else on every chip) when it starts. A line that is not there
 // (its chip's driver not loaded yet, a GPIO expander unplugged) or that cannot be requested is
@@ -72,8 +70,5 @@ class GpiodTrigger final : public TriggerLine {
   EdgeSchedule schedule_;            // wait_edge()'s thread only
   std::uint32_t next_ = 0;
 };
-
-// Adds "gpiod" to a registry: the backend when it was built, else the reason it was not.
-void register_gpiod(BackendRegistry& registry);
 
 }  // namespace epipole::hal

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "epipole/hal/serial_port.hpp"
+#include "epipole/hal/unique_fd.hpp"
 
 namespace epipole::hal {
 

@@ -1,4 +1,4 @@
-#include "epipole/hal/serial_port.hpp"
+#include "termios/termios_serial.hpp"
 
 #include <fcntl.h>
 #include <poll.h>
@@ -11,9 +11,11 @@
 #include <iterator>
 #include <utility>
 
+#include "backends.hpp"
 #include "device_node.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
+#include "epipole/hal/registry.hpp"
 #include "fd_io.hpp"
 
 namespace epipole::hal {
@@ -151,5 +153,14 @@ IoResult write_fd(int fd, std::span<const std::byte> data, Nanoseconds timeout) 
 }
 
 }  // namespace detail
+
+void register_termios(BackendRegistry& registry) {
+  registry.add_serial(
+      "termios",
+      [](const SerialConfig& config, const BackendContext&) {
+        return std::unique_ptr<SerialPort>(std::make_unique<TermiosSerialPort>(config));
+      },
+      {.needs_device = true});
+}
 
 }  // namespace epipole::hal

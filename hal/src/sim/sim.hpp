@@ -45,6 +45,10 @@ class SimTrigger final : public TriggerLine {
   bool running() const { return running_; }
 
  private:
+  // Edge n of the schedule, on the virtual clock.
+  TriggerEdge edge(std::uint32_t sequence) const {
+    return {sequence, schedule_.time(sequence), ClockId::virtual_clock};
+  }
   TriggerConfig config_;
   VirtualClock& clock_;
   Nanoseconds period_;
@@ -190,12 +194,8 @@ struct SimBoard {
   std::shared_ptr<const std::vector<GrayImage>> right;
   SimCameraTiming timing;
   // The cameras the "sim" backend made on this board (null until it did), for fault injection.
-  SimCamera* camera(Side side) const { return cameras[side == Side::left ? 0 : 1]; }
+  SimCamera* camera(Side side) const { return cameras[index(side)]; }
   std::array<SimCamera*, 2> cameras{};
 };
-
-// The right view of a scene whose left view is `left`, at a constant disparity (pixels):
-// right(x, y) = left(x + disparity, y), the border column repeated.
-GrayImage synthesize_right(GrayView left, int disparity);
 
 }  // namespace epipole::hal

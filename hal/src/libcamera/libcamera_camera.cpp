@@ -23,11 +23,12 @@
 #include <string_view>
 #include <vector>
 
+#include "backends.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
-#include "epipole/hal/libcamera_camera.hpp"
 #include "epipole/hal/registry.hpp"
-#include "libcamera_formats.hpp"
+#include "libcamera/libcamera_camera.hpp"
+#include "libcamera/libcamera_formats.hpp"
 
 // ExposureTimeMode and AnalogueGainMode (manual or automatic) came with libcamera 0.5; before
 // it, setting ExposureTime or AnalogueGain fixes the value by itself.

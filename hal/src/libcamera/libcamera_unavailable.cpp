@@ -1,7 +1,8 @@
 // Built instead of libcamera_camera.cpp when libcamera was not found (or not looked for: cross
 // builds without a sysroot). EPIPOLE_LIBCAMERA_MISSING says why.
-#include "epipole/hal/libcamera_camera.hpp"
+#include "backends.hpp"
 #include "epipole/hal/registry.hpp"
+#include "libcamera/libcamera_camera.hpp"
 
 #ifndef EPIPOLE_LIBCAMERA_MISSING
 #define EPIPOLE_LIBCAMERA_MISSING "libcamera was not found when this binary was built"
