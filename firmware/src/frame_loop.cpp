@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 
 #include "epipole/core/error.hpp"
+#include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/pair_messages.hpp"
 #include "epipole/firmware/protocol/mavlink.hpp"
 #include "steady_time.hpp"
@@ -97,8 +97,8 @@ void FrameLoop::start() {
   if (const hal::RecoveringSerialPort* serial = board_.serial_recovery()) {
     serial_connected_ = serial->connected();
     if (!serial_connected_) {
-      std::fprintf(stderr, "epipole-fw: serial port %s is not there yet: waiting for it\n",
-                   config_.serial.port.device.c_str());
+      journal(Priority::warning, "serial port %s is not there yet: waiting for it",
+              config_.serial.port.device.c_str());
     }
   }
   link_.start();
@@ -226,8 +226,8 @@ FrameLoop::Verdict FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& c
   if (line == nullptr || !trigger_) return {AckStatus::unsupported, AckReason::none};
   const double rate_hz = command.rate_millihz / 1000.0;
   const auto rejected = [&](AckReason reason, const std::string& why) {
-    std::fprintf(stderr, "epipole-fw: set_trigger_rate %u mHz rejected: %s\n",
-                 static_cast<unsigned>(command.rate_millihz), why.c_str());
+    journal(Priority::warning, "set_trigger_rate %u mHz rejected: %s",
+            static_cast<unsigned>(command.rate_millihz), why.c_str());
     return Verdict{AckStatus::rejected, reason};
   };
   hal::StereoPairer& pairer = grabber_.pairer();
@@ -265,9 +265,9 @@ FrameLoop::Verdict FrameLoop::set_exposure(const protocol::SetExposure& command)
   const hal::Nanoseconds exposure = exposure_of(command);
   const double gain = gain_of(command);
   const auto rejected = [&](AckReason reason, const std::string& why) {
-    std::fprintf(stderr, "epipole-fw: set_exposure %u us, %u cdB rejected: %s\n",
-                 static_cast<unsigned>(command.exposure_us),
-                 static_cast<unsigned>(command.gain_centidb), why.c_str());
+    journal(Priority::warning, "set_exposure %u us, %u cdB rejected: %s",
+            static_cast<unsigned>(command.exposure_us), static_cast<unsigned>(command.gain_centidb),
+            why.c_str());
     return Verdict{AckStatus::rejected, reason};
   };
   if (const std::string problem =
@@ -316,9 +316,9 @@ void FrameLoop::say_device_changes() {
                               std::pair{&board_.right_recovery(), &right_lost_}}) {
     if (camera->recovering() != *lost) {
       *lost = camera->recovering();
-      std::fprintf(stderr, "epipole-fw: camera %s %s%s%s\n", camera->name().c_str(),
-                   *lost ? "lost, reopening" : "recovered", *lost ? ": " : "",
-                   *lost ? camera->last_error().c_str() : "");
+      journal(*lost ? Priority::warning : Priority::info, "camera %s %s%s%s",
+              camera->name().c_str(), *lost ? "lost, reopening" : "recovered", *lost ? ": " : "",
+              *lost ? camera->last_error().c_str() : "");
     }
   }
   // The firmware goes on without the trigger's edges while its line is not there.
@@ -326,19 +326,19 @@ void FrameLoop::say_device_changes() {
     trigger_missing_ = !trigger_missing_;
     const std::string& line = config_.trigger.line.line;
     if (trigger_missing_) {
-      std::fprintf(stderr, "epipole-fw: trigger %s not there, waiting for it: %s\n", line.c_str(),
-                   trigger_->line().unavailable_reason().c_str());
+      journal(Priority::warning, "trigger %s not there, waiting for it: %s", line.c_str(),
+              trigger_->line().unavailable_reason().c_str());
     } else {
-      std::fprintf(stderr, "epipole-fw: trigger %s found\n", line.c_str());
+      journal(Priority::info, "trigger %s found", line.c_str());
     }
   }
   const hal::RecoveringSerialPort* serial = board_.serial_recovery();
   if (serial != nullptr && serial->connected() != serial_connected_) {
     serial_connected_ = !serial_connected_;
     const std::string& device = config_.serial.port.device;
-    std::fprintf(stderr, "epipole-fw: serial port %s %s\n",
-                 device.empty() ? board_.serial_peer().c_str() : device.c_str(),
-                 serial_connected_ ? "open" : "gone (hung up), waiting for it");
+    journal(serial_connected_ ? Priority::info : Priority::warning, "serial port %s %s",
+            device.empty() ? board_.serial_peer().c_str() : device.c_str(),
+            serial_connected_ ? "open" : "gone (hung up), waiting for it");
   }
 }
 

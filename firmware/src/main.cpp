@@ -14,8 +14,12 @@
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/build_info.hpp"
 #include "epipole/firmware/firmware.hpp"
+#include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/service.hpp"
+
+using epipole::firmware::journal;
+using epipole::firmware::Priority;
 
 namespace {
 
@@ -39,21 +43,20 @@ void install_signal_handlers() {
 void say_what_runs_without(epipole::firmware::Firmware& fw) {
   using namespace epipole;
   if (!fw.missing_calibration().empty()) {
-    std::fprintf(stderr,
-                 "epipole-fw: not calibrated: %s does not exist yet; running uncalibrated "
-                 "(images taken as rectified, no depth, health flags say so). Calibrate on the "
-                 "board: snapshots, `epipole calibrate ... -o %s`, restart (docs/deploy.md)\n",
-                 fw.missing_calibration().c_str(), fw.missing_calibration().c_str());
+    journal(Priority::warning,
+            "not calibrated: %s does not exist yet; running uncalibrated (images taken as "
+            "rectified, no depth, health flags say so). Calibrate on the board: snapshots, "
+            "`epipole calibrate ... -o %s`, restart (docs/deploy.md)",
+            fw.missing_calibration().c_str(), fw.missing_calibration().c_str());
   } else if (!fw.calibration()) {
-    std::fprintf(stderr,
-                 "epipole-fw: warning: no calibration: images are taken as rectified and "
-                 "nothing gets a depth\n");
+    journal(Priority::warning,
+            "warning: no calibration: images are taken as rectified and nothing gets a depth");
   }
   if (const std::filesystem::path& cascade = fw.pipeline().missing_cascade(); !cascade.empty()) {
-    std::fprintf(stderr,
-                 "epipole-fw: no detection: the cascade %s does not exist yet; running without "
-                 "it. Make it with `%s` and restart (docs/deploy.md)\n",
-                 cascade.c_str(), firmware::cascade_compile_command(cascade).c_str());
+    journal(Priority::warning,
+            "no detection: the cascade %s does not exist yet; running without it. Make it with "
+            "`%s` and restart (docs/deploy.md)",
+            cascade.c_str(), firmware::cascade_compile_command(cascade).c_str());
   }
 }
 
@@ -111,38 +114,36 @@ int main(int argc, char** argv) {
     if (check) return check_board(config, board_path);
     install_signal_handlers();
     for (const std::string& problem : firmware::apply_scheduling(config.threads)) {
-      std::fprintf(stderr, "epipole-fw: warning: %s\n", problem.c_str());
+      journal(Priority::warning, "warning: %s", problem.c_str());
     }
     firmware::Firmware fw(std::move(config));
     if (fw.config().threads.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
-      std::fprintf(stderr, "epipole-fw: warning: threads.lock_memory: mlockall failed: %s\n",
-                   std::strerror(errno));
+      journal(Priority::warning, "warning: threads.lock_memory: mlockall failed: %s",
+              std::strerror(errno));
     }
-    std::fprintf(stderr, "epipole-fw: board %s, %dx%d, %zu KiB of frame buffers%s%s\n",
-                 fw.config().name.c_str(), fw.config().width(), fw.config().height(),
-                 fw.working_set_bytes() / 1024,
-                 fw.board().serial_peer().empty() ? "" : ", link at ",
-                 fw.board().serial_peer().c_str());
+    journal(Priority::info, "board %s, %dx%d, %zu KiB of frame buffers%s%s",
+            fw.config().name.c_str(), fw.config().width(), fw.config().height(),
+            fw.working_set_bytes() / 1024, fw.board().serial_peer().empty() ? "" : ", link at ",
+            fw.board().serial_peer().c_str());
     say_what_runs_without(fw);
     fw.frame_loop().set_heartbeat([&service] { service.watchdog(); });
     service.ready();
     service.status("running");
     const firmware::RunSummary s = fw.run(frames, g_stop);
     service.stopping();
-    std::fprintf(stderr,
-                 "epipole-fw: stopped after %llu pairs (%llu stale, %llu timeouts), %llu health "
-                 "messages, %llu messages sent, %llu dropped\n",
-                 static_cast<unsigned long long>(s.frames),
-                 static_cast<unsigned long long>(s.stale),
-                 static_cast<unsigned long long>(s.timeouts),
-                 static_cast<unsigned long long>(s.health_messages),
-                 static_cast<unsigned long long>(s.link.messages_sent),
-                 static_cast<unsigned long long>(s.link.messages_dropped));
+    journal(Priority::info,
+            "stopped after %llu pairs (%llu stale, %llu timeouts), %llu health messages, %llu "
+            "messages sent, %llu dropped",
+            static_cast<unsigned long long>(s.frames), static_cast<unsigned long long>(s.stale),
+            static_cast<unsigned long long>(s.timeouts),
+            static_cast<unsigned long long>(s.health_messages),
+            static_cast<unsigned long long>(s.link.messages_sent),
+            static_cast<unsigned long long>(s.link.messages_dropped));
   } catch (const Error& e) {
-    std::fprintf(stderr, "epipole-fw: %s\n", e.what());
+    journal(Priority::error, "%s", e.what());
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "epipole-fw: internal error: %s\n", e.what());
+    journal(Priority::error, "internal error: %s", e.what());
     return 2;
   }
   return 0;

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,6 +12,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <thread>
 #include <vector>
@@ -33,9 +35,18 @@ struct Process {
   int output = -1;  // stderr and stdout
 };
 
-Process start(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
+// The firmware with its output in a pipe; `as_service`: the pipe is its journal stream, as
+// systemd makes standard error (JOURNAL_STREAM names the pipe's device and inode).
+Process start(const std::vector<std::string>& args, std::vector<std::string> env = {},
+              bool as_service = false) {
   int pipe_fds[2];
   if (::pipe(pipe_fds) != 0) throw std::runtime_error("pipe");
+  if (as_service) {
+    struct stat pipe_file {};
+    ::fstat(pipe_fds[1], &pipe_file);
+    env.push_back("JOURNAL_STREAM=" + std::to_string(pipe_file.st_dev) + ":" +
+                  std::to_string(pipe_file.st_ino));
+  }
   const pid_t pid = ::fork();
   if (pid == 0) {
     ::dup2(pipe_fds[1], 1);
@@ -168,6 +179,45 @@ TEST(EpipoleFw, CheckPrintsTheMemoryPerStageOpeningNoDevice) {
       finish(start({"--board", (dir.path() / "small.yaml").string(), "--check"}));
   EXPECT_EQ(over, 1) << said;
   EXPECT_NE(said.find("memory_budget_mb: the frame loop needs"), std::string::npos) << said;
+}
+
+// Under systemd each line carries its priority, so `journalctl -p warning` finds the warnings
+// and errors; on a terminal or in a file (JOURNAL_STREAM absent or naming another file) the
+// lines are plain.
+TEST(EpipoleFw, LinesCarryTheirPriorityWhenStandardErrorIsTheJournal) {
+  BoardFolder board;
+  const auto [code, out] = finish(start({"--board", board.path(), "--frames", "3"}, {}, true));
+  EXPECT_EQ(code, 0) << out;
+  EXPECT_EQ(out.rfind("<6>epipole-fw: board ", 0), 0u) << out;
+  EXPECT_NE(out.find("\n<6>epipole-fw: stopped after 3 pairs"), std::string::npos) << out;
+  std::size_t lines = 0;
+  for (std::size_t at = 0; at < out.size(); at = out.find('\n', at) + 1, ++lines) {
+    EXPECT_TRUE(out.compare(at, 1, "<") == 0) << "every line: " << out.substr(at, 60);
+    if (out.find('\n', at) == std::string::npos) break;
+  }
+  EXPECT_GE(lines, 2u);
+
+  const auto [bad_code, bad] =
+      finish(start({"--board", board.path() + "/nothing"}, {}, /*as_service=*/true));
+  EXPECT_EQ(bad_code, 1);
+  EXPECT_EQ(bad.rfind("<3>epipole-fw: ", 0), 0u) << bad;
+
+  std::ifstream board_file(board.rig.dir.path() / "board.yaml");
+  std::string fresh_board((std::istreambuf_iterator<char>(board_file)),
+                          std::istreambuf_iterator<char>());
+  fresh_board.replace(fresh_board.find("calibration: rig.yaml"), 21,
+                      "calibration: rig-not-made-yet.yaml");
+  std::ofstream(board.rig.dir.path() / "uncalibrated.yaml") << fresh_board;
+  const auto [fresh_code, fresh] =
+      finish(start({"--board", board.path() + "/uncalibrated.yaml", "--frames", "2"}, {}, true));
+  EXPECT_EQ(fresh_code, 0) << fresh;
+  EXPECT_NE(fresh.find("<4>epipole-fw: not calibrated: "), std::string::npos) << fresh;
+
+  const auto [plain_code, plain] = finish(start({"--board", board.path(), "--frames", "3"},
+                                                {"JOURNAL_STREAM=1:1"}, /*as_service=*/false));
+  EXPECT_EQ(plain_code, 0) << plain;
+  EXPECT_EQ(plain.find('<'), std::string::npos) << "not the journal: plain lines\n" << plain;
+  EXPECT_EQ(plain.rfind("epipole-fw: board ", 0), 0u) << plain;
 }
 
 TEST(EpipoleFw, RunsTheGivenNumberOfFrames) {

@@ -1,0 +1,22 @@
+#pragma once
+
+namespace epipole::firmware {
+
+// The syslog priorities of the firmware's lines (sd-daemon(3)).
+enum class Priority { error = 3, warning = 4, notice = 5, info = 6 };
+
+// One line for the operator on standard error: "epipole-fw: " and the formatted text. When
+// standard error is the journal (systemd sets JOURNAL_STREAM to its device and inode,
+// systemd.exec(5)), the line starts with its priority, "<4>", which journald takes off and keeps,
+// so `journalctl -p warning -u epipole` lists the warnings and errors; on a terminal or in a file
+// the line is plain. One write(2) per line, so the lines of several threads do not mix; a line
+// longer than 1 KiB is cut. Never allocates: the frame loop's threads call it.
+void journal(Priority priority, const char* format, ...) __attribute__((format(printf, 2, 3)));
+
+// Whether standard error is the journal's stream (decided at the first line).
+bool stderr_is_journal();
+
+// Whether a JOURNAL_STREAM value ("device:inode") names the file open on `fd`.
+bool names_stream(const char* journal_stream, int fd);
+
+}  // namespace epipole::firmware

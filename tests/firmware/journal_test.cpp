@@ -1,0 +1,37 @@
+// The journal's stream is recognised by its device and inode (systemd.exec(5), JOURNAL_STREAM).
+#include "epipole/firmware/journal.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <string>
+
+namespace epipole::firmware {
+namespace {
+
+std::string stream_of(int fd) {
+  struct stat file {};
+  EXPECT_EQ(::fstat(fd, &file), 0);
+  return std::to_string(file.st_dev) + ":" + std::to_string(file.st_ino);
+}
+
+TEST(Journal, TheStreamIsTheFileOfThatDeviceAndInode) {
+  int first[2];
+  int second[2];
+  ASSERT_EQ(::pipe(first), 0);
+  ASSERT_EQ(::pipe(second), 0);
+  const std::string value = stream_of(first[1]);
+  EXPECT_TRUE(names_stream(value.c_str(), first[1]));
+  EXPECT_FALSE(names_stream(value.c_str(), second[1])) << "another file: a terminal, a log file";
+  EXPECT_FALSE(names_stream(nullptr, first[1])) << "not run by systemd";
+  EXPECT_FALSE(names_stream("", first[1]));
+  EXPECT_FALSE(names_stream("12", first[1]));
+  EXPECT_FALSE(names_stream((value + "x").c_str(), first[1]));
+  EXPECT_FALSE(names_stream("junk:1", first[1]));
+  EXPECT_FALSE(names_stream(value.c_str(), 999)) << "a descriptor that is not open";
+  for (int fd : {first[0], first[1], second[0], second[1]}) ::close(fd);
+}
+
+}  // namespace
+}  // namespace epipole::firmware
