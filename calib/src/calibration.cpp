@@ -12,6 +12,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "atomic_file.hpp"
 #include "epipole/core/error.hpp"
 #include "yaml_matrix.hpp"
 
@@ -303,7 +304,10 @@ std::string format_calibration(const StereoCalibration& c) {
 }
 
 void save_calibration(const std::filesystem::path& file, const StereoCalibration& calibration) {
-  const std::string text = format_calibration(calibration);
+  detail::write_atomically(file, format_calibration(calibration));
+}
+
+void detail::write_atomically(const std::filesystem::path& file, const std::string& text) {
   std::filesystem::path temporary = file;
   temporary += cat(".tmp", ::getpid());
   {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -42,6 +43,8 @@ struct CalibrateOptions {
   bool drop_outliers = false;
   std::vector<std::string> from_opencv;
   std::vector<std::string> from_ros;
+  std::string export_opencv;  // folders for the calibration in OpenCV's and ROS's files
+  std::string export_ros;
   std::string size;
 };
 
@@ -237,6 +240,21 @@ void write_preview(const calib::StereoCalibration& c, const GrayImage& left, con
   save_image(file, ImageView<const Rgb8>(picture.view()));
 }
 
+// The calibration also as OpenCV's and ROS's files, where asked; one line each.
+void export_calibration(const CalibrateOptions& options, const calib::StereoCalibration& c) {
+  if (!options.export_opencv.empty()) {
+    calib::export_opencv_calibration(c, options.export_opencv);
+    std::cout << "wrote "
+              << (std::filesystem::path(options.export_opencv) / "intrinsics.yml").string()
+              << " and extrinsics.yml (OpenCV)\n";
+  }
+  if (!options.export_ros.empty()) {
+    calib::export_ros_calibration(c, options.export_ros);
+    std::cout << "wrote " << (std::filesystem::path(options.export_ros) / "left.yaml").string()
+              << " and right.yaml (ROS camera_info)\n";
+  }
+}
+
 void run_import(const CalibrateOptions& options) {
   calib::StereoCalibration c;
   if (!options.from_opencv.empty()) {
@@ -259,6 +277,7 @@ void run_import(const CalibrateOptions& options) {
   calib::save_calibration(options.output, c);
   std::cout << "imported a " << c.width << "x" << c.height << " stereo calibration (baseline "
             << c.T.norm() << "): wrote " << options.output << "\n";
+  export_calibration(options, c);
 }
 
 void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global) {
@@ -438,6 +457,7 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
             << (outliers == 1 ? "" : "s") << (options.drop_outliers ? " dropped" : " flagged")
             << "): RMS " << result.rms << " px, rectified row error mean " << row_error.mean
             << " px; wrote " << options.output << "\n";
+  export_calibration(options, c);
 }
 
 }  // namespace
@@ -479,6 +499,11 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global) {
   auto* ros = cmd->add_option("--from-ros", options->from_ros,
                               "Import a ROS camera_info YAML pair instead: LEFT RIGHT")
                   ->expected(2);
+  cmd->add_option("--export-opencv", options->export_opencv,
+                  "Also write the calibration as OpenCV's stereo_calib sample does: "
+                  "DIR/intrinsics.yml and DIR/extrinsics.yml (cv::FileStorage)");
+  cmd->add_option("--export-ros", options->export_ros,
+                  "Also write it as ROS camera_info files: DIR/left.yaml and DIR/right.yaml");
   cmd->add_option("--size", options->size,
                   "With --from-opencv: image size WIDTHxHEIGHT when the files do not record it");
   opencv->excludes(left)->excludes(right)->excludes(ros);

@@ -2,6 +2,7 @@
 // form those tools write (tests/reference/calibration_opencv_test.cpp checks files written by
 // cv::FileStorage itself).
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -265,6 +266,59 @@ TEST(RosImport, RecoversExtrinsicsAndQ) {
   expect_geometry(got, want, 1e-9);
   EXPECT_EQ(got.left.id, "narrow_stereo/left");
   EXPECT_EQ(got.right.id, "narrow_stereo/right");
+}
+
+// `epipole calibrate --export-opencv/--export-ros`, then --from-opencv/--from-ros: the same
+// calibration (OpenCV: every bit, so the same file; ROS: R and T recovered from the
+// rectification, to rounding).
+TEST(CalibrationExport, OpenCvFilesImportToTheSameFile) {
+  const StereoCalibration want = test::sample_calibration();
+  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "export-cv";
+  export_opencv_calibration(want, folder);
+  StereoCalibration got =
+      import_opencv_calibration(folder / "intrinsics.yml", folder / "extrinsics.yml");
+  EXPECT_EQ(got.width, want.width) << "the size is in the files";
+  expect_geometry(got, want, 0.0);
+  // What the OpenCV files do not carry: the ids, the errors, the provenance.
+  got.left.id = want.left.id;
+  got.right.id = want.right.id;
+  got.rms = want.rms;
+  got.views = want.views;
+  got.date = want.date;
+  got.source = want.source;
+  EXPECT_EQ(format_calibration(got), format_calibration(want));
+}
+
+TEST(CalibrationExport, RosFilesImportToTheSameCalibration) {
+  StereoCalibration want = test::sample_calibration();
+  want.left.id = "narrow_stereo/left";
+  want.right.id = "usb: \"cam\" #1 \\ right";  // one string, whatever it holds
+  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "export-ros";
+  export_ros_calibration(want, folder);
+  const StereoCalibration got = import_ros_calibration(folder / "left.yaml", folder / "right.yaml");
+  expect_geometry(got, want, 1e-9);
+  EXPECT_EQ(got.left.camera_matrix(), want.left.camera_matrix());
+  EXPECT_EQ(got.right.projection, want.right.projection);
+  EXPECT_EQ(got.left.id, "narrow_stereo/left");
+  EXPECT_EQ(got.right.id, want.right.id);
+  const YAML::Node left = YAML::LoadFile((folder / "left.yaml").string());
+  EXPECT_EQ(left["distortion_model"].as<std::string>(), "plumb_bob");
+  EXPECT_EQ(left["projection_matrix"]["cols"].as<int>(), 4);
+  EXPECT_EQ(left["distortion_coefficients"]["data"].size(), 5u);
+}
+
+TEST(CalibrationExport, AFolderThatCannotBeMadeIsNamed) {
+  const std::filesystem::path file = write_temp("not-a-folder", "x");
+  const std::string error =
+      error_of([&] { export_ros_calibration(test::sample_calibration(), file / "ros"); });
+  EXPECT_NE(error.find("not-a-folder/ros"), std::string::npos) << error;
+  StereoCalibration broken = test::sample_calibration();
+  broken.width = 0;
+  EXPECT_NE(error_of([&] {
+              export_opencv_calibration(broken, std::filesystem::path(::testing::TempDir()));
+            }),
+            "")
+      << "an invalid calibration is not exported";
 }
 
 TEST(RosImport, BadInput) {

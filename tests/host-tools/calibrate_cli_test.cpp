@@ -158,6 +158,43 @@ TEST(CalibrateCli, RectifiesAPairWithTheProducedFile) {
   EXPECT_EQ(epipole::load_gray(pair).width(), 1280);
 }
 
+// The rig in OpenCV's and ROS's files, and back: OpenCV's files of the imported calibration are
+// the exported ones to the byte; ROS's give the same rig (R and T recovered, to rounding).
+TEST(CalibrateCli, ExportsForOpenCvAndRosAndImportsThemBack) {
+  const Calibration& c = calibration();
+  ASSERT_EQ(c.result.exit_code, 0) << c.result.out;
+  const epipole::calib::StereoCalibration rig = epipole::calib::load_calibration(c.rig);
+  const fs::path first = work_dir() / "export-opencv-1";
+  epipole::calib::export_opencv_calibration(rig, first);
+  const fs::path again = work_dir() / "export-opencv-2";
+  const fs::path ros = work_dir() / "export-ros";
+  const fs::path imported = work_dir() / "rig-from-opencv.yaml";
+  const Result r = run_tool("calibrate --from-opencv " + quoted(first / "intrinsics.yml") + " " +
+                            quoted(first / "extrinsics.yml") + " -o " + quoted(imported) +
+                            " --export-opencv " + quoted(again) + " --export-ros " + quoted(ros));
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_EQ(line_count(r.out), 3) << r.out;
+  EXPECT_EQ(read(again / "intrinsics.yml"), read(first / "intrinsics.yml"));
+  EXPECT_EQ(read(again / "extrinsics.yml"), read(first / "extrinsics.yml"));
+
+  const fs::path from_ros = work_dir() / "rig-from-ros.yaml";
+  const Result back = run_tool("calibrate --from-ros " + quoted(ros / "left.yaml") + " " +
+                               quoted(ros / "right.yaml") + " -o " + quoted(from_ros));
+  ASSERT_EQ(back.exit_code, 0) << back.out;
+  const epipole::calib::StereoCalibration got = epipole::calib::load_calibration(from_ros);
+  EXPECT_EQ(got.left.camera_matrix(), rig.left.camera_matrix());
+  EXPECT_EQ(got.right.projection, rig.right.projection);
+  EXPECT_LT((got.R - rig.R).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((got.T - rig.T).cwiseAbs().maxCoeff(), 1e-12);
+
+  const Result bad = run_tool("calibrate --from-ros " + quoted(ros / "left.yaml") + " " +
+                              quoted(ros / "right.yaml") + " -o " + quoted(from_ros) +
+                              " --export-ros " + quoted(c.rig / "inside-a-file"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_EQ(line_count(bad.out), 2) << "the import's line, then the error\n" << bad.out;
+  EXPECT_NE(bad.out.find("inside-a-file"), std::string::npos) << bad.out;
+}
+
 TEST(CalibrateCli, ReportsRejectedViews) {
   // Five pairs; in the last the right image shows no board.
   const fs::path dir = work_dir() / "rejected";

@@ -267,6 +267,38 @@ TEST(CalibrationVsOpenCV, ImportsFileStorageYamlAndXml) {
   }
 }
 
+// `epipole calibrate --export-opencv`: OpenCV's FileStorage reads the files and finds the
+// calibration's matrices, every bit, and the image size.
+TEST(CalibrationVsOpenCV, ExportedFilesAreReadByFileStorage) {
+  const CvStereo s = epipole_procedure();
+  write_storage(s, ".yml");
+  const StereoCalibration c =
+      import_opencv_calibration(temp("cv-intrinsics.yml"), temp("cv-extrinsics.yml"), 640, 480);
+  const std::filesystem::path folder = temp("exported-opencv");
+  export_opencv_calibration(c, folder);
+  CvStereo read;
+  cv::FileStorage in((folder / "intrinsics.yml").string(), cv::FileStorage::READ);
+  ASSERT_TRUE(in.isOpened());
+  in["M1"] >> read.K1;
+  in["D1"] >> read.D1;
+  in["M2"] >> read.K2;
+  in["D2"] >> read.D2;
+  EXPECT_EQ(static_cast<int>(in["image_width"]), 640);
+  EXPECT_EQ(static_cast<int>(in["image_height"]), 480);
+  cv::FileStorage ex((folder / "extrinsics.yml").string(), cv::FileStorage::READ);
+  ASSERT_TRUE(ex.isOpened());
+  ex["R"] >> read.R;
+  ex["T"] >> read.T;
+  ex["R1"] >> read.R1;
+  ex["R2"] >> read.R2;
+  ex["P1"] >> read.P1;
+  ex["P2"] >> read.P2;
+  ex["Q"] >> read.Q;
+  expect_exact(c, read);
+  EXPECT_EQ(read.D1.total(), 5u);
+  EXPECT_EQ(c.left.camera.distortion.k2, read.D1.at<double>(1));
+}
+
 TEST(CalibrationVsOpenCV, ImportsTheDataSetsIntrinsics) {
   // samples/intrinsics.yml as OpenCV wrote it (M1 D1 M2 D2), with extrinsics rectified for it.
   const std::filesystem::path intrinsics = test::data_file("samples/intrinsics.yml");

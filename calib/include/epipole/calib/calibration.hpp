@@ -85,6 +85,20 @@ StereoCalibration import_opencv_calibration(const std::filesystem::path& intrins
 StereoCalibration import_ros_calibration(const std::filesystem::path& left,
                                          const std::filesystem::path& right);
 
+// Exports for programs that read OpenCV's or ROS's calibration files (docs/calibration.md): the
+// files are written into `directory` (made when missing), each through a temporary file and a
+// rename; numbers with 17 significant digits, so that importing them gives the same doubles.
+// Throws Error naming the file.
+//   OpenCV: intrinsics.yml (M1 D1 M2 D2) and extrinsics.yml (R T R1 R2 P1 P2 Q) as OpenCV's
+//   stereo_calib sample writes them (cv::FileStorage YAML), with image_width and image_height.
+void export_opencv_calibration(const StereoCalibration& calibration,
+                               const std::filesystem::path& directory);
+//   ROS: left.yaml and right.yaml as camera_calibration writes them (image size, camera_name:
+//   the camera's id, camera_matrix, distortion_model plumb_bob, distortion_coefficients,
+//   rectification_matrix, projection_matrix).
+void export_ros_calibration(const StereoCalibration& calibration,
+                            const std::filesystem::path& directory);
+
 // Q of a rectified pair from its projections, as cv::stereoRectify builds it (horizontal rigs:
 // P2(0,3) != 0; vertical rigs: P2(1,3) != 0).
 Eigen::Matrix4d disparity_to_depth(const Eigen::Matrix<double, 3, 4>& P1,
