@@ -129,7 +129,8 @@ void add_features_command(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--threshold,-t", options->threshold, "FAST intensity threshold (0..255)")
       ->check(CLI::Range(0, 255))
       ->capture_default_str();
-  cmd->add_option("--max,-n", options->max_corners, "Keep at most N corners (the strongest)")
+  cmd->add_option("--max-corners,--max,-c", options->max_corners,
+                  "Keep at most N corners (the strongest)")
       ->check(CLI::Range(1, 10'000'000))
       ->capture_default_str();
   cmd->add_flag("--no-nonmax", options->no_nonmax, "FAST: skip 3x3 non-maximum suppression");

@@ -28,17 +28,23 @@ int main(int argc, char** argv) {
   tools::add_sim_command(app, global);
   tools::add_detect_command(app, global);
   tools::add_cascade_compile_command(app, global);
+  // The same exit statuses for every subcommand, said in every --help.
+  constexpr const char* kExitStatus =
+      "Exit status: 0 success, 1 failure (one line on standard error says why), 2 usage error.";
+  app.footer(kExitStatus);
+  for (CLI::App* command : app.get_subcommands({})) command->footer(kExitStatus);
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    const int status = app.exit(e);  // prints the help, the version or the usage error
+    return status == 0 ? 0 : 2;
   } catch (const Error& e) {
     std::cerr << "epipole: " << e.what() << "\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "epipole: internal error: " << e.what() << "\n";
-    return 2;
+    return 1;
   }
   return 0;
 }

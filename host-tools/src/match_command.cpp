@@ -198,7 +198,7 @@ void add_match_command(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--threshold,-t", options->threshold, "FAST intensity threshold (0..255)")
       ->check(CLI::Range(0, 255))
       ->capture_default_str();
-  cmd->add_option("--max-corners,-n", options->max_corners,
+  cmd->add_option("--max-corners,-c", options->max_corners,
                   "Corners per image, and matches, at most")
       ->check(CLI::Range(1, 1'000'000))
       ->capture_default_str();

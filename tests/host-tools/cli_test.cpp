@@ -23,17 +23,47 @@ TEST(Cli, HelpAndVersion) {
   const Result features_help = run_tool("features --help");
   EXPECT_EQ(features_help.exit_code, 0);
   EXPECT_NE(features_help.out.find("--threshold"), std::string::npos) << features_help.out;
+  for (const char* command : {"--help", "features --help", "sim --help", "calibrate --help"}) {
+    const Result r = run_tool(command);
+    EXPECT_NE(r.out.find("Exit status: 0 success, 1 failure"), std::string::npos) << r.out;
+  }
   const Result version = run_tool("--version");
   EXPECT_EQ(version.exit_code, 0);
   EXPECT_EQ(version.out.rfind("epipole ", 0), 0u) << version.out;
 }
 
+// Exit status 2: the command line is wrong; 1: it is right but the work failed.
 TEST(Cli, BadArgumentsFailWithOneLine) {
-  for (const char* arguments : {"", "no-such-command", "features", "features /no/such/file.png",
-                                "features --threshold 300 x.png", "--kernels avx features x.png"}) {
+  for (const char* arguments :
+       {"", "no-such-command", "features", "features --threshold 300 x.png",
+        "--kernels avx features x.png", "features -n 5 x.png", "sim --frames x"}) {
     const Result r = run_tool(arguments);
-    EXPECT_NE(r.exit_code, 0) << arguments;
+    EXPECT_EQ(r.exit_code, 2) << arguments << "\n" << r.out;
     EXPECT_GE(line_count(r.out), 1) << arguments;
+  }
+  const Result missing = run_tool("features /no/such/file.png");
+  EXPECT_EQ(missing.exit_code, 2) << "an input that is not there: the argument is wrong\n"
+                                  << missing.out;
+  EXPECT_NE(missing.out.find("/no/such/file.png"), std::string::npos) << missing.out;
+}
+
+// One meaning per short flag: -c at most this many corners, -n stop after this many, -o the
+// output, -t the FAST threshold, -d the disparities searched.
+TEST(Cli, ShortFlagsMeanOneThing) {
+  const std::string image = epipole::test::data_file("samples/left01.jpg").string();
+  const Result corners = run_tool("features '" + image + "' -c 7 -t 30 --json");
+  ASSERT_EQ(corners.exit_code, 0) << corners.out;
+  EXPECT_EQ(nlohmann::json::parse(corners.out)["keypoints"].size(), 7u);
+  const Result long_name = run_tool("features '" + image + "' --max 7 --json");
+  ASSERT_EQ(long_name.exit_code, 0) << long_name.out;
+  EXPECT_EQ(nlohmann::json::parse(long_name.out)["keypoints"].size(), 7u) << "--max still works";
+  for (const char* help : {"features --help", "match --help"}) {
+    const Result r = run_tool(help);
+    EXPECT_NE(r.out.find("-c,"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("-n,"), std::string::npos) << r.out;
+  }
+  for (const char* help : {"link --help", "sim --help"}) {
+    EXPECT_NE(run_tool(help).out.find("-n,"), std::string::npos) << help;
   }
 }
 
