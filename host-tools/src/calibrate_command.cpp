@@ -23,6 +23,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"
+#include "progress.hpp"
 #include "stereo_preview.hpp"
 
 namespace epipole::tools {
@@ -45,6 +46,7 @@ struct CalibrateOptions {
   std::vector<std::string> from_ros;
   std::string export_opencv;  // folders for the calibration in OpenCV's and ROS's files
   std::string export_ros;
+  bool json = false;  // the summary as JSON on stdout instead of its line
   std::string size;
 };
 
@@ -240,19 +242,29 @@ void write_preview(const calib::StereoCalibration& c, const GrayImage& left, con
   save_image(file, ImageView<const Rgb8>(picture.view()));
 }
 
-// The calibration also as OpenCV's and ROS's files, where asked; one line each.
-void export_calibration(const CalibrateOptions& options, const calib::StereoCalibration& c) {
+// The calibration also as OpenCV's and ROS's files, where asked: one line each, or the files in
+// the JSON summary, which --json prints.
+void export_calibration(const CalibrateOptions& options, const calib::StereoCalibration& c,
+                        nlohmann::json& summary) {
+  summary["exported"] = nlohmann::json::array();
+  const auto wrote = [&](const std::filesystem::path& folder, const char* first, const char* second,
+                         const char* format) {
+    summary["exported"].push_back(
+        {{"format", format}, {"files", {(folder / first).string(), (folder / second).string()}}});
+    if (!options.json) {
+      std::cout << "wrote " << (folder / first).string() << " and " << second << " (" << format
+                << ")\n";
+    }
+  };
   if (!options.export_opencv.empty()) {
     calib::export_opencv_calibration(c, options.export_opencv);
-    std::cout << "wrote "
-              << (std::filesystem::path(options.export_opencv) / "intrinsics.yml").string()
-              << " and extrinsics.yml (OpenCV)\n";
+    wrote(options.export_opencv, "intrinsics.yml", "extrinsics.yml", "opencv");
   }
   if (!options.export_ros.empty()) {
     calib::export_ros_calibration(c, options.export_ros);
-    std::cout << "wrote " << (std::filesystem::path(options.export_ros) / "left.yaml").string()
-              << " and right.yaml (ROS camera_info)\n";
+    wrote(options.export_ros, "left.yaml", "right.yaml", "ros");
   }
+  if (options.json) std::cout << summary.dump(2) << "\n";
 }
 
 void run_import(const CalibrateOptions& options) {
@@ -275,9 +287,15 @@ void run_import(const CalibrateOptions& options) {
     c = calib::import_ros_calibration(options.from_ros[0], options.from_ros[1]);
   }
   calib::save_calibration(options.output, c);
-  std::cout << "imported a " << c.width << "x" << c.height << " stereo calibration (baseline "
-            << c.T.norm() << "): wrote " << options.output << "\n";
-  export_calibration(options, c);
+  if (!options.json) {
+    std::cout << "imported a " << c.width << "x" << c.height << " stereo calibration (baseline "
+              << c.T.norm() << "): wrote " << options.output << "\n";
+  }
+  nlohmann::json summary = {{"imported", c.source},
+                            {"image_size", {{"width", c.width}, {"height", c.height}}},
+                            {"baseline", c.T.norm()},
+                            {"output", options.output}};
+  export_calibration(options, c, summary);
 }
 
 void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global) {
@@ -301,7 +319,9 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
   int width = 0;
   int height = 0;
   std::string first;
+  Progress progress;
   for (std::size_t i = 0; i < lefts.size(); ++i) {
+    progress.show(cat("calibrate: pair ", i + 1, " of ", lefts.size(), ": ", lefts[i]));
     const GrayImage left = load_gray(lefts[i]);
     const GrayImage right = load_gray(rights[i]);
     const std::pair<const GrayImage*, const std::string*> images[] = {{&left, &lefts[i]},
@@ -340,6 +360,7 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
           "images of only ",
           views.size(), " of ", lefts.size(), " pairs (need at least ", kMinViews, ")");
 
+  progress.show(cat("calibrate: calibrating with ", views.size(), " views"));
   const cv::Size size(width, height);
   StereoResult result = stereo_calibrate(views, board, options.square, size);
   // Outliers: the worse camera of a view far above the typical view.
@@ -361,6 +382,7 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
     result = stereo_calibrate(views, board, options.square, size);
   }
 
+  progress.done();
   cv::Mat R1, R2, P1, P2, Q;
   cv::stereoRectify(result.K1, result.D1, result.K2, result.D2, size, result.R, result.T, R1, R2,
                     P1, P2, Q, cv::CALIB_ZERO_DISPARITY, options.alpha);
@@ -399,6 +421,7 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
   calib::save_calibration(options.output, c);
 
   const RowError row_error = rectified_row_error(c, views);
+  nlohmann::json summary;  // the report
   int used_views = 0;
   nlohmann::json view_list = nlohmann::json::array();
   nlohmann::json outlier_list = nlohmann::json::array();
@@ -413,7 +436,7 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
     if (v.outlier) outlier_list.push_back({{"left", v.left}, {"right", v.right}});
   }
 
-  if (!options.report.empty()) {
+  {
     nlohmann::json report = {
         {"rms", result.rms},
         {"rms_before_dropping_outliers", rms_with_all},
@@ -441,10 +464,13 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
         {"left", camera_json(c.left)},
         {"right", camera_json(c.right)},
         {"output", options.output}};
-    std::ofstream out(options.report);
-    out << report.dump(2) << "\n";
-    out.close();
-    require(static_cast<bool>(out), options.report, ": cannot write the report");
+    if (!options.report.empty()) {
+      std::ofstream out(options.report);
+      out << report.dump(2) << "\n";
+      out.close();
+      require(static_cast<bool>(out), options.report, ": cannot write the report");
+    }
+    summary = std::move(report);
   }
   if (!options.preview.empty()) {
     const View& v = *std::find_if(views.begin(), views.end(), [](const View& w) { return w.used; });
@@ -452,12 +478,14 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
                   parse_simd_path(global.kernels));
   }
 
-  std::cout << "calibrated " << used_views << " of " << lefts.size() << " pairs ("
-            << rejected.size() << " rejected, " << outliers << " outlier"
-            << (outliers == 1 ? "" : "s") << (options.drop_outliers ? " dropped" : " flagged")
-            << "): RMS " << result.rms << " px, rectified row error mean " << row_error.mean
-            << " px; wrote " << options.output << "\n";
-  export_calibration(options, c);
+  if (!options.json) {
+    std::cout << "calibrated " << used_views << " of " << lefts.size() << " pairs ("
+              << rejected.size() << " rejected, " << outliers << " outlier"
+              << (outliers == 1 ? "" : "s") << (options.drop_outliers ? " dropped" : " flagged")
+              << "): RMS " << result.rms << " px, rectified row error mean " << row_error.mean
+              << " px; wrote " << options.output << "\n";
+  }
+  export_calibration(options, c, summary);
 }
 
 }  // namespace
@@ -504,6 +532,9 @@ void add_calibrate_command(CLI::App& app, const GlobalOptions& global) {
                   "DIR/intrinsics.yml and DIR/extrinsics.yml (cv::FileStorage)");
   cmd->add_option("--export-ros", options->export_ros,
                   "Also write it as ROS camera_info files: DIR/left.yaml and DIR/right.yaml");
+  cmd->add_flag("--json", options->json,
+                "Print the summary as JSON (the --report object; for an import its size, "
+                "baseline and output) instead of its line");
   cmd->add_option("--size", options->size,
                   "With --from-opencv: image size WIDTHxHEIGHT when the files do not record it");
   opencv->excludes(left)->excludes(right)->excludes(ros);

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "commands.hpp"
@@ -23,6 +24,7 @@ struct RectifyOptions {
   std::string out_left;
   std::string out_right;
   std::string preview;
+  bool json = false;
 };
 
 void run_rectify(const RectifyOptions& options, const GlobalOptions& global) {
@@ -49,6 +51,17 @@ void run_rectify(const RectifyOptions& options, const GlobalOptions& global) {
     const RgbImage picture = side_by_side_preview(rectified_left, rectified_right);
     save_image(options.preview, ImageView<const Rgb8>(picture.view()));
   }
+  if (options.json) {
+    const nlohmann::json summary = {
+        {"image_size", {{"width", calibration.width}, {"height", calibration.height}}},
+        {"kernels", to_string(rectifiers.left.simd_path())},
+        {"ms", elapsed.count()},
+        {"left", options.out_left},
+        {"right", options.out_right},
+        {"preview", options.preview.empty() ? nlohmann::json() : nlohmann::json(options.preview)}};
+    std::cout << summary.dump(2) << "\n";
+    return;
+  }
   std::cout << "rectified a " << calibration.width << "x" << calibration.height << " pair ("
             << to_string(rectifiers.left.simd_path()) << ") in " << elapsed.count()
             << " ms: " << options.out_left << ", " << options.out_right << "\n";
@@ -73,6 +86,8 @@ void add_rectify_command(CLI::App& app, const GlobalOptions& global) {
       ->required();
   cmd->add_option("--preview", options->preview,
                   "Write both rectified images side by side with horizontal lines (.png)");
+  cmd->add_flag("--json", options->json,
+                "Print the summary as JSON: size, kernels, time and the files written");
   cmd->callback([options, &global] { run_rectify(*options, global); });
 }
 

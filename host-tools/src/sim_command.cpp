@@ -26,6 +26,7 @@
 #include "epipole/tools/cascade_xml.hpp"
 #include "message_json.hpp"
 #include "pictures.hpp"
+#include "progress.hpp"
 #include "stereo_preview.hpp"
 
 namespace epipole::tools {
@@ -40,6 +41,7 @@ struct SimOptions {
   std::uint64_t frames = 30;
   int pictures = 1;
   std::string out = "out/sim";
+  bool json = false;  // the summary on stdout instead of a line per scene
 };
 
 // Reads the simulated link's far end, as the robot would, keeping the raw bytes and decoding
@@ -182,6 +184,26 @@ class PictureWriter final : public firmware::FrameObserver {
   std::vector<std::string> written_;
 };
 
+// Counts a scene's pairs on the progress line, then hands each to the pictures.
+class FrameProgress final : public firmware::FrameObserver {
+ public:
+  FrameProgress(firmware::FrameObserver& next, std::string scene, std::uint64_t frames)
+      : next_(next), scene_(std::move(scene)), frames_(frames) {}
+  void on_frame(const firmware::FrameResult& r) override {
+    next_.on_frame(r);
+    ++done_;
+    progress_.show(cat("sim: ", scene_, ": pair ", done_, " of ", frames_), done_ == frames_);
+  }
+  void on_message(const protocol::Message& message) override { next_.on_message(message); }
+
+ private:
+  firmware::FrameObserver& next_;
+  std::string scene_;
+  std::uint64_t frames_;
+  std::uint64_t done_ = 0;
+  Progress progress_;
+};
+
 nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& scene,
                          const SimOptions& options) {
   firmware::BoardConfig config = board;
@@ -207,7 +229,8 @@ nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& 
   firmware::Firmware fw(config);
   const int images = static_cast<int>(fw.board().hardware().scene_images());
   PictureWriter pictures(directory, images, options.pictures, config.stereo.max_disparity);
-  fw.frame_loop().set_observer(&pictures);
+  FrameProgress progress(pictures, scene, options.frames);
+  fw.frame_loop().set_observer(&progress);
   std::unique_ptr<LinkRecorder> recorder;
   if (!fw.board().serial_peer().empty()) {
     recorder =
@@ -271,11 +294,15 @@ void run_sim(const SimOptions& options) {
   nlohmann::json summary = {{"board", board.name}, {"scenes", nlohmann::json::array()}};
   for (const std::string& scene : scenes) {
     const nlohmann::json s = run_scene(board, scene, options);
-    print_scene(s);
+    if (!options.json) print_scene(s);
     summary["scenes"].push_back(s);
   }
   std::ofstream(fs::path(options.out) / "summary.json") << summary.dump(2) << "\n";
-  std::cout << "sim: pictures, serial streams and summary.json in " << options.out << "\n";
+  if (options.json) {
+    std::cout << summary.dump(2) << "\n";
+  } else {
+    std::cout << "sim: pictures, serial streams and summary.json in " << options.out << "\n";
+  }
 }
 
 }  // namespace
@@ -295,6 +322,8 @@ void add_sim_command(CLI::App& app, const GlobalOptions&) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--out,-o", options->out, "Output folder")->capture_default_str();
+  cmd->add_flag("--json", options->json,
+                "Print the summary (as summary.json) instead of a line per scene");
   cmd->callback([options] { run_sim(*options); });
 }
 

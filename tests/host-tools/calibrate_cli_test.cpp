@@ -156,6 +156,17 @@ TEST(CalibrateCli, RectifiesAPairWithTheProducedFile) {
   }
   EXPECT_GT(changed, 640 * 480 / 2);  // the lens distortion is strong: most pixels move
   EXPECT_EQ(epipole::load_gray(pair).width(), 1280);
+
+  const Result json =
+      run_tool("rectify " + quoted(samples() / "left01.jpg") + " " +
+               quoted(samples() / "right01.jpg") + " --calib " + quoted(c.rig) + " --out-left " +
+               quoted(left) + " --out-right " + quoted(right) + " --json");
+  ASSERT_EQ(json.exit_code, 0) << json.out;
+  const auto summary = nlohmann::json::parse(json.out);
+  EXPECT_EQ(summary["image_size"]["width"], 640);
+  EXPECT_EQ(summary["left"], left.string());
+  EXPECT_TRUE(summary["preview"].is_null());
+  EXPECT_GE(summary["ms"].get<double>(), 0.0);
 }
 
 // The rig in OpenCV's and ROS's files, and back: OpenCV's files of the imported calibration are
@@ -176,6 +187,17 @@ TEST(CalibrateCli, ExportsForOpenCvAndRosAndImportsThemBack) {
   EXPECT_EQ(line_count(r.out), 3) << r.out;
   EXPECT_EQ(read(again / "intrinsics.yml"), read(first / "intrinsics.yml"));
   EXPECT_EQ(read(again / "extrinsics.yml"), read(first / "extrinsics.yml"));
+
+  const Result json = run_tool("calibrate --from-opencv " + quoted(first / "intrinsics.yml") + " " +
+                               quoted(first / "extrinsics.yml") + " -o " + quoted(imported) +
+                               " --export-ros " + quoted(ros) + " --json");
+  ASSERT_EQ(json.exit_code, 0) << json.out;
+  const auto summary = nlohmann::json::parse(json.out);
+  EXPECT_EQ(summary["output"], imported.string());
+  EXPECT_EQ(summary["image_size"]["height"], 480);
+  ASSERT_EQ(summary["exported"].size(), 1u);
+  EXPECT_EQ(summary["exported"][0]["format"], "ros");
+  EXPECT_EQ(summary["exported"][0]["files"][0], (ros / "left.yaml").string());
 
   const fs::path from_ros = work_dir() / "rig-from-ros.yaml";
   const Result back = run_tool("calibrate --from-ros " + quoted(ros / "left.yaml") + " " +

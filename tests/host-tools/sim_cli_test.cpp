@@ -204,6 +204,21 @@ TEST(SimCli, BadArgumentsAreOneLineErrors) {
   EXPECT_NE(r3.out.find("'moon' is not a scene"), std::string::npos) << r3.out;
 }
 
+// --json: the summary (as summary.json holds it) is all of stdout, so a script can read it.
+TEST(SimCli, JsonPrintsTheSummaryAlone) {
+  const fs::path out = fs::path(::testing::TempDir()) / "sim-json-out";
+  const auto r =
+      run_tool("sim --board '" + std::string(source_dir()) +
+               "/board/sim' --scene aloe -n 3 --pictures 0 --json -o '" + out.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const nlohmann::json summary = nlohmann::json::parse(r.out);
+  ASSERT_EQ(summary["scenes"].size(), 1u) << r.out;
+  EXPECT_EQ(summary["scenes"][0]["scene"], "aloe");
+  EXPECT_EQ(summary["scenes"][0]["frames"], 3);
+  std::ifstream file(out / "summary.json");
+  EXPECT_EQ(nlohmann::json::parse(file), summary);
+}
+
 // The board folder as shipped, under the firmware program itself (the cascade it names is
 // compiled into the data cache by the build).
 TEST(SimCli, TheFirmwareRunsTheShippedSimulatedBoard) {
