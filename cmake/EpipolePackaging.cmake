@@ -28,6 +28,43 @@ add_custom_command(OUTPUT ${_changelog_gz}
 add_custom_target(epipole_changelog ALL DEPENDS ${_changelog_gz})
 install(FILES ${_changelog_gz} DESTINATION share/doc/epipole)
 
+# Manual pages made from each program's --help by help2man (Debian's help2man), installed with
+# the program. The page is made by running the program: a cross build runs the target's one
+# under qemu-user (CMAKE_CROSSCOMPILING_EMULATOR), through a script named as the program, so
+# that help2man names the page after it.
+find_program(EPIPOLE_HELP2MAN help2man)
+function(epipole_man_page target description)
+  if(NOT EPIPOLE_HELP2MAN)
+    message(WARNING "help2man not found: no manual page for ${target} (scripts/setup.sh installs it)")
+    return()
+  endif()
+  set(folder ${CMAKE_BINARY_DIR}/man)
+  list(JOIN CMAKE_CROSSCOMPILING_EMULATOR " " _emulator)
+  file(GENERATE OUTPUT ${folder}/bin/${target}
+       CONTENT "#!/bin/sh\nexec ${_emulator} \"$<TARGET_FILE:${target}>\" \"$@\"\n"
+       FILE_PERMISSIONS OWNER_READ OWNER_WRITE OWNER_EXECUTE GROUP_READ GROUP_EXECUTE
+                        WORLD_READ WORLD_EXECUTE)
+  set(page ${folder}/${target}.1)
+  add_custom_command(
+    OUTPUT ${page}.gz
+    COMMAND ${EPIPOLE_HELP2MAN} --no-info --no-discard-stderr --section=1
+            --version-string=${PROJECT_VERSION} --name=${description} --output=${page}
+            ${folder}/bin/${target}
+    COMMAND gzip -9nf ${page}
+    DEPENDS ${target}
+    COMMENT "Manual page of ${target} (help2man)"
+    VERBATIM)
+  add_custom_target(${target}_man ALL DEPENDS ${page}.gz)
+  install(FILES ${page}.gz DESTINATION ${CMAKE_INSTALL_MANDIR}/man1)
+endfunction()
+# Packages come from builds without sanitizers (host, aarch64, armhf).
+if(NOT EPIPOLE_SANITIZE)
+  epipole_man_page(epipole-fw "Epipole stereo-vision firmware: runs a board's frame loop")
+  if(TARGET epipole)
+    epipole_man_page(epipole "Epipole's tools at a desk: calibrate, rectify, match, simulate")
+  endif()
+endif()
+
 if(CMAKE_CROSSCOMPILING)
   set(_deb_arch ${EPIPOLE_DEBIAN_ARCH})
 else()

@@ -43,7 +43,8 @@ for f in ./usr/bin/epipole-fw ./usr/lib/systemd/system/epipole.service \
   ./etc/epipole/board.yaml \
   ./usr/share/epipole/board/sim/board.yaml ./usr/share/epipole/board/raspberrypi5-ov9281/board.yaml \
   ./usr/share/epipole/board/usb-stereo/board.yaml ./usr/share/doc/epipole/README.md \
-  ./usr/share/doc/epipole/copyright ./usr/share/doc/epipole/changelog.gz; do
+  ./usr/share/doc/epipole/copyright ./usr/share/doc/epipole/changelog.gz \
+  ./usr/share/man/man1/epipole-fw.1.gz; do
   grep -qxF "$f" <<<"$contents" || fail "$deb: $f is missing"
 done
 
@@ -61,6 +62,9 @@ done
 dpkg-deb -x "$deb" "$control/root"
 fw="$control/root/usr/bin/epipole-fw"
 readelf -h "$fw" | grep -q "Machine:.*$machine" || fail "$deb: epipole-fw is not an $machine binary"
+# The manual page is the target program's own --help (made under qemu-user in a cross build).
+zcat "$control/root/usr/share/man/man1/epipole-fw.1.gz" | grep -qF -- '\-\-board' ||
+  fail "$deb: the manual page of epipole-fw does not describe --board"
 grep -q '^Type=notify' "$control/root/usr/lib/systemd/system/epipole.service" ||
   fail "$deb: the unit is not Type=notify"
 # The unit's sandbox: systemd's exposure score (0 safe .. 10 unsafe) at most 2.5.

@@ -25,6 +25,8 @@ packages=(
   # checking what the main job wrote (scripts/check-demo.sh) and the board package (lintian,
   # systemd-analyze for the unit's sandbox)
   jq lintian systemd
+  # the programs' manual pages, made from their --help
+  help2man
 )
 
 missing=()
