@@ -242,8 +242,8 @@ void write_preview(const calib::StereoCalibration& c, const GrayImage& left, con
   save_image(file, ImageView<const Rgb8>(picture.view()));
 }
 
-// The calibration also as OpenCV's and ROS's files, where asked: one line each, or the files in
-// the JSON summary, which --json prints.
+// The calibration also as OpenCV's and ROS's files, where asked: a line each, or (--json) the
+// files in the summary.
 void export_calibration(const CalibrateOptions& options, const calib::StereoCalibration& c,
                         nlohmann::json& summary) {
   summary["exported"] = nlohmann::json::array();
@@ -264,7 +264,6 @@ void export_calibration(const CalibrateOptions& options, const calib::StereoCali
     calib::export_ros_calibration(c, options.export_ros);
     wrote(options.export_ros, "left.yaml", "right.yaml", "ros");
   }
-  if (options.json) std::cout << summary.dump(2) << "\n";
 }
 
 void run_import(const CalibrateOptions& options) {
@@ -296,6 +295,7 @@ void run_import(const CalibrateOptions& options) {
                             {"baseline", c.T.norm()},
                             {"output", options.output}};
   export_calibration(options, c, summary);
+  if (options.json) std::cout << summary.dump(2) << "\n";
 }
 
 void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global) {
@@ -421,7 +421,6 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
   calib::save_calibration(options.output, c);
 
   const RowError row_error = rectified_row_error(c, views);
-  nlohmann::json summary;  // the report
   int used_views = 0;
   nlohmann::json view_list = nlohmann::json::array();
   nlohmann::json outlier_list = nlohmann::json::array();
@@ -436,41 +435,39 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
     if (v.outlier) outlier_list.push_back({{"left", v.left}, {"right", v.right}});
   }
 
-  {
-    nlohmann::json report = {
-        {"rms", result.rms},
-        {"rms_before_dropping_outliers", rms_with_all},
-        {"image_size", {{"width", width}, {"height", height}}},
-        {"board",
-         {{"type", "chessboard"},
-          {"columns", board.columns},
-          {"rows", board.rows},
-          {"square", options.square}}},
-        {"pairs", lefts.size()},
-        {"views_used", used_views},
-        {"views", view_list},
-        {"rejected", rejected},
-        {"outliers", outlier_list},
-        {"outlier_rule",
-         "worse camera's view RMS > 3 x the median of that figure over the accepted views"},
-        {"rectified_row_error",
-         {{"mean", row_error.mean},
-          {"median", row_error.figure.median_px},
-          {"p90", row_error.figure.p90_px},
-          {"max", row_error.max},
-          {"points", row_error.figure.matches}}},
-        {"alpha", options.alpha},
-        {"baseline", c.T.norm()},
-        {"left", camera_json(c.left)},
-        {"right", camera_json(c.right)},
-        {"output", options.output}};
-    if (!options.report.empty()) {
-      std::ofstream out(options.report);
-      out << report.dump(2) << "\n";
-      out.close();
-      require(static_cast<bool>(out), options.report, ": cannot write the report");
-    }
-    summary = std::move(report);
+  // The report (--report writes it, --json prints it, with the exports added).
+  nlohmann::json report = {
+      {"rms", result.rms},
+      {"rms_before_dropping_outliers", rms_with_all},
+      {"image_size", {{"width", width}, {"height", height}}},
+      {"board",
+       {{"type", "chessboard"},
+        {"columns", board.columns},
+        {"rows", board.rows},
+        {"square", options.square}}},
+      {"pairs", lefts.size()},
+      {"views_used", used_views},
+      {"views", view_list},
+      {"rejected", rejected},
+      {"outliers", outlier_list},
+      {"outlier_rule",
+       "worse camera's view RMS > 3 x the median of that figure over the accepted views"},
+      {"rectified_row_error",
+       {{"mean", row_error.mean},
+        {"median", row_error.figure.median_px},
+        {"p90", row_error.figure.p90_px},
+        {"max", row_error.max},
+        {"points", row_error.figure.matches}}},
+      {"alpha", options.alpha},
+      {"baseline", c.T.norm()},
+      {"left", camera_json(c.left)},
+      {"right", camera_json(c.right)},
+      {"output", options.output}};
+  if (!options.report.empty()) {
+    std::ofstream out(options.report);
+    out << report.dump(2) << "\n";
+    out.close();
+    require(static_cast<bool>(out), options.report, ": cannot write the report");
   }
   if (!options.preview.empty()) {
     const View& v = *std::find_if(views.begin(), views.end(), [](const View& w) { return w.used; });
@@ -485,7 +482,8 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
               << "): RMS " << result.rms << " px, rectified row error mean " << row_error.mean
               << " px; wrote " << options.output << "\n";
   }
-  export_calibration(options, c, summary);
+  export_calibration(options, c, report);
+  if (options.json) std::cout << report.dump(2) << "\n";
 }
 
 }  // namespace
