@@ -3,17 +3,12 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <unistd.h>
 #include <Eigen/Dense>
 #include <cmath>
-#include <cstdio>
 #include <ctime>
-#include <fstream>
-#include <sstream>
-#include <system_error>
 
-#include "atomic_file.hpp"
 #include "epipole/core/error.hpp"
+#include "epipole/core/text_file.hpp"
 #include "yaml_matrix.hpp"
 
 namespace epipole::calib {
@@ -247,7 +242,7 @@ StereoCalibration parse_calibration(const std::string& yaml, const std::string& 
 }
 
 StereoCalibration load_calibration(const std::filesystem::path& file) {
-  return parse_calibration(yaml::read_file(file), file.string());
+  return parse_calibration(read_text_file(file), file.string());
 }
 
 std::string format_calibration(const StereoCalibration& c) {
@@ -304,30 +299,7 @@ std::string format_calibration(const StereoCalibration& c) {
 }
 
 void save_calibration(const std::filesystem::path& file, const StereoCalibration& calibration) {
-  detail::write_atomically(file, format_calibration(calibration));
-}
-
-void detail::write_atomically(const std::filesystem::path& file, const std::string& text) {
-  std::filesystem::path temporary = file;
-  temporary += cat(".tmp", ::getpid());
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    require(out.good(), file.string(), ": cannot write the file");
-    out << text;
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw Error(cat(file.string(), ": write error"));
-    }
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, file, error);
-  if (error) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw Error(cat(file.string(), ": cannot write the file (", error.message(), ")"));
-  }
+  write_text_file_atomically(file, format_calibration(calibration));
 }
 
 Eigen::Matrix4d disparity_to_depth(const Eigen::Matrix<double, 3, 4>& P1,

@@ -4,21 +4,10 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <limits>
-#include <sstream>
 #include <system_error>
 
 namespace epipole::yaml {
-
-std::string read_file(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  require(in.good(), file.string(), ": cannot open the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  require(!in.bad(), file.string(), ": read error");
-  return text.str();
-}
 
 namespace {
 

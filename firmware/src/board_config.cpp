@@ -7,6 +7,7 @@
 #include <algorithm>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/text_file.hpp"
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/hal/registry.hpp"
@@ -589,7 +590,7 @@ BoardConfig load_board_config(const fs::path& path) {
   fs::path file = path;
   std::error_code ec;
   if (fs::is_directory(path, ec)) file = path / "board.yaml";
-  return parse_board_config(yaml::read_file(file), file);
+  return parse_board_config(read_text_file(file), file);
 }
 
 }  // namespace epipole::firmware

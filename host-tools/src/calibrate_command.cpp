@@ -23,6 +23,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"
+#include "epipole/tools/opencv_calibration.hpp"
 #include "progress.hpp"
 #include "stereo_preview.hpp"
 
@@ -257,7 +258,7 @@ void export_calibration(const CalibrateOptions& options, const calib::StereoCali
     }
   };
   if (!options.export_opencv.empty()) {
-    calib::export_opencv_calibration(c, options.export_opencv);
+    export_opencv_calibration(c, options.export_opencv);
     wrote(options.export_opencv, "intrinsics.yml", "extrinsics.yml", "opencv");
   }
   if (!options.export_ros.empty()) {
@@ -273,8 +274,7 @@ void run_import(const CalibrateOptions& options) {
     int height = 0;
     if (!options.size.empty()) std::tie(width, height) = parse_size(options.size, "--size");
     try {
-      c = calib::import_opencv_calibration(options.from_opencv[0], options.from_opencv[1], width,
-                                           height);
+      c = import_opencv_calibration(options.from_opencv[0], options.from_opencv[1], width, height);
     } catch (const Error& e) {
       const std::string message = e.what();
       if (message.starts_with("the image size is unknown")) {

@@ -4,14 +4,15 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 
 #include "commands.hpp"
-#include "epipole/core/draw.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/tools/cascade_xml.hpp"
 #include "epipole/vision/cascade.hpp"
+#include "pictures.hpp"
 
 namespace epipole::tools {
 
@@ -71,13 +72,10 @@ void run_detect(const DetectOptions& options, const GlobalOptions& global) {
   }
 
   if (!options.draw.empty()) {
-    RgbImage picture(image.width(), image.height());
-    gray_to_rgb(image.view(), picture.view());
+    RgbImage picture = rgb_picture(image.view());
+    cv::Mat drawing = canvas(picture.view());
     for (const vision::Detection& d : detections) {
-      for (int k = 0; k < 2; ++k) {  // two pixels thick
-        draw_rectangle(picture.view(), d.x + k, d.y + k, d.width - 2 * k, d.height - 2 * k,
-                       {0, 255, 0});
-      }
+      cv::rectangle(drawing, cv::Rect(d.x, d.y, d.width, d.height), {0, 255, 0}, 2);
     }
     save_image(options.draw, ImageView<const Rgb8>(picture.view()));
   }

@@ -10,7 +10,6 @@
 #include <string>
 
 #include "commands.hpp"
-#include "epipole/core/draw.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/vision/stereo.hpp"

@@ -3,12 +3,13 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "commands.hpp"
-#include "epipole/core/draw.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/vision/fast.hpp"
 #include "epipole/vision/harris.hpp"
+#include "pictures.hpp"
 
 namespace epipole::tools {
 
@@ -106,10 +107,10 @@ void run_features(const FeaturesOptions& options, const GlobalOptions& global) {
   }
 
   if (!options.draw.empty()) {
-    RgbImage picture(image.width(), image.height());
-    gray_to_rgb(image.view(), picture.view());
+    RgbImage picture = rgb_picture(image.view());
+    cv::Mat drawing = canvas(picture.view());
     for (const vision::Corner& c : corners) {
-      draw_circle(picture.view(), c.x, c.y, 3, {0, 255, 0});
+      cv::circle(drawing, {c.x, c.y}, 3, {0, 255, 0}, 1, cv::LINE_AA);
     }
     save_image(options.draw, ImageView<const Rgb8>(picture.view()));
   }

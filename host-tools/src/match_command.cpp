@@ -4,18 +4,19 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
-#include "epipole/core/draw.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/sparse_points.hpp"
 #include "epipole/vision/fast.hpp"
 #include "epipole/vision/harris.hpp"
 #include "epipole/vision/sparse_stereo.hpp"
+#include "pictures.hpp"
 #include "stereo_input.hpp"
 
 namespace epipole::tools {
@@ -75,19 +76,16 @@ RgbImage match_picture(GrayView left, GrayView right, std::span<const vision::Sp
                        int max_disparity) {
   const int w = left.width();
   RgbImage picture(2 * w, left.height());
-  gray_to_rgb(left, picture.view().sub(0, 0, w, left.height()));
-  gray_to_rgb(right, picture.view().sub(w, 0, w, left.height()));
+  cv::Mat drawing = canvas(picture.view());
+  canvas(rgb_picture(left).view()).copyTo(drawing.colRange(0, w));
+  canvas(rgb_picture(right).view()).copyTo(drawing.colRange(w, 2 * w));
   for (const vision::SparseMatch& m : matches) {
-    const double t = std::clamp(static_cast<double>(m.disparity) / max_disparity, 0.0, 1.0);
-    const Rgb8 colour{static_cast<std::uint8_t>(255 * t), static_cast<std::uint8_t>(255 * (1 - t)),
-                      64};
-    const int xl = static_cast<int>(std::lround(m.xl));
-    const int yl = static_cast<int>(std::lround(m.yl));
-    const int xr = static_cast<int>(std::lround(m.xr)) + w;
-    const int yr = static_cast<int>(std::lround(m.yr));
-    draw_circle(picture.view(), xl, yl, 3, colour);
-    draw_circle(picture.view(), xr, yr, 3, colour);
-    draw_line(picture.view(), xl, yl, xr, yr, colour);
+    const cv::Scalar colour = colour_of(static_cast<double>(m.disparity) / max_disparity);
+    const cv::Point l(static_cast<int>(std::lround(m.xl)), static_cast<int>(std::lround(m.yl)));
+    const cv::Point r(static_cast<int>(std::lround(m.xr)) + w, static_cast<int>(std::lround(m.yr)));
+    cv::circle(drawing, l, 3, colour, 1, cv::LINE_AA);
+    cv::circle(drawing, r, 3, colour, 1, cv::LINE_AA);
+    cv::line(drawing, l, r, colour, 1, cv::LINE_AA);
   }
   return picture;
 }

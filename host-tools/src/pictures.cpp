@@ -1,117 +1,124 @@
 #include "pictures.hpp"
 
+#include <opencv2/imgproc.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
 
-#include "epipole/core/draw.hpp"
 #include "epipole/vision/stereo.hpp"
 
 namespace epipole::tools {
 
 namespace {
 
-// A 3x5 font: each glyph is 5 rows of 3 bits (bit 2 = left column).
-using Glyph = std::array<std::uint8_t, 5>;
-constexpr std::array<Glyph, 10> kDigits = {{{7, 5, 5, 5, 7},
-                                            {2, 6, 2, 2, 7},
-                                            {7, 1, 7, 4, 7},
-                                            {7, 1, 7, 1, 7},
-                                            {5, 5, 7, 1, 1},
-                                            {7, 4, 7, 1, 7},
-                                            {7, 4, 7, 5, 7},
-                                            {7, 1, 1, 1, 1},
-                                            {7, 5, 7, 5, 7},
-                                            {7, 5, 7, 1, 7}}};
-constexpr int kFontScale = 2;
+static_assert(sizeof(Rgb8) == 3, "RGB pixels are packed: OpenCV sees them as CV_8UC3");
 
-Glyph glyph_of(char c) {
-  if (c >= '0' && c <= '9') return kDigits[static_cast<std::size_t>(c - '0')];
-  switch (c) {
-    case '.':
-      return {0, 0, 0, 0, 2};
-    case '-':
-      return {0, 0, 7, 0, 0};
-    case ':':
-      return {0, 2, 0, 2, 0};
-    case 'm':
-      return {0, 0, 7, 7, 5};
-    case 'x':
-      return {0, 5, 2, 5, 0};
-    case '%':
-      return {5, 1, 2, 4, 5};
-    default:
-      return {0, 0, 0, 0, 0};
-  }
+constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+constexpr double kFontScale = 0.45;
+constexpr int kLabelPadding = 2;
+
+// TURBO, indexed by t * 255, in R, G, B order (applyColorMap writes B, G, R).
+const std::array<cv::Vec3b, 256>& turbo() {
+  static const std::array<cv::Vec3b, 256> table = [] {
+    cv::Mat ramp(1, 256, CV_8UC1);
+    for (int i = 0; i < 256; ++i) ramp.at<std::uint8_t>(i) = static_cast<std::uint8_t>(i);
+    cv::Mat bgr;
+    cv::applyColorMap(ramp, bgr, cv::COLORMAP_TURBO);
+    cv::cvtColor(bgr, bgr, cv::COLOR_BGR2RGB);
+    std::array<cv::Vec3b, 256> rgb;
+    for (int i = 0; i < 256; ++i) rgb[static_cast<std::size_t>(i)] = bgr.at<cv::Vec3b>(i);
+    return rgb;
+  }();
+  return table;
+}
+
+cv::Size text_size(const std::string& text, int* baseline = nullptr) {
+  int ignored = 0;
+  return cv::getTextSize(text, kFont, kFontScale, 1, baseline != nullptr ? baseline : &ignored);
+}
+
+// Text whose top-left corner is `top_left`, without a box (the legend's black background).
+void draw_text(cv::Mat& picture, cv::Point top_left, const std::string& text, cv::Scalar colour) {
+  cv::putText(picture, text, top_left + cv::Point(0, text_size(text).height), kFont, kFontScale,
+              colour, 1, cv::LINE_AA);
 }
 
 }  // namespace
 
-Rgb8 colour_of(double t) {
-  t = std::clamp(t, 0.0, 1.0);
-  const auto ramp = [](double v) {
-    return static_cast<std::uint8_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);
-  };
-  return {ramp(1.5 - std::abs(4.0 * t - 3.0)), ramp(1.5 - std::abs(4.0 * t - 2.0)),
-          ramp(1.5 - std::abs(4.0 * t - 1.0))};
+cv::Mat canvas(ImageView<Rgb8> image) {
+  return {image.height(), image.width(), CV_8UC3, image.data(),
+          static_cast<std::size_t>(image.stride()) * sizeof(Rgb8)};
 }
 
-void draw_text(ImageView<Rgb8> image, int x, int y, std::string_view text, Rgb8 colour) {
-  for (const char c : text) {
-    const Glyph glyph = glyph_of(c);
-    for (int row = 0; row < 5; ++row) {
-      for (int col = 0; col < 3; ++col) {
-        if ((glyph[static_cast<std::size_t>(row)] >> (2 - col) & 1) == 0) continue;
-        for (int dy = 0; dy < kFontScale; ++dy) {
-          for (int dx = 0; dx < kFontScale; ++dx) {
-            const int px = x + col * kFontScale + dx;
-            const int py = y + row * kFontScale + dy;
-            if (px >= 0 && py >= 0 && px < image.width() && py < image.height()) {
-              image(px, py) = colour;
-            }
-          }
-        }
-      }
-    }
-    x += 4 * kFontScale;
-  }
+RgbImage rgb_picture(GrayView gray) {
+  RgbImage picture(gray.width(), gray.height());
+  const cv::Mat in(gray.height(), gray.width(), CV_8UC1, const_cast<std::uint8_t*>(gray.data()),
+                   static_cast<std::size_t>(gray.stride()));
+  cv::Mat out = canvas(picture.view());
+  cv::cvtColor(in, out, cv::COLOR_GRAY2RGB);
+  return picture;
 }
 
-int text_width(std::string_view text) {
-  return static_cast<int>(text.size()) * 4 * kFontScale;
+cv::Scalar colour_of(double t) {
+  const int index = static_cast<int>(std::lround(std::clamp(t, 0.0, 1.0) * 255.0));
+  const cv::Vec3b c = turbo()[static_cast<std::size_t>(index)];
+  return {static_cast<double>(c[0]), static_cast<double>(c[1]), static_cast<double>(c[2])};
+}
+
+int label_height() {
+  return text_size("0").height + text_size("0").height / 2 + 2 * kLabelPadding;
+}
+
+void draw_label(cv::Mat& picture, cv::Point top_left, const std::string& text, cv::Scalar colour) {
+  int baseline = 0;
+  const cv::Size size = text_size(text, &baseline);
+  const cv::Size box(size.width + 2 * kLabelPadding, size.height + baseline + 2 * kLabelPadding);
+  top_left.x = std::clamp(top_left.x, 0, std::max(0, picture.cols - box.width));
+  top_left.y = std::clamp(top_left.y, 0, std::max(0, picture.rows - box.height));
+  cv::rectangle(picture, cv::Rect(top_left, box), cv::Scalar::all(0), cv::FILLED);
+  draw_text(picture, top_left + cv::Point(kLabelPadding, kLabelPadding), text, colour);
 }
 
 RgbImage disparity_picture(ImageView<const std::int16_t> disparity, int max_disparity) {
-  constexpr int kLegend = 40;
   const int width = disparity.width();
   const int height = disparity.height();
-  RgbImage picture(width, height + kLegend);
-  const ImageView<Rgb8> view = picture.view();
-  for (int y = 0; y < height + kLegend; ++y) std::fill_n(view.row(y), width, Rgb8{});
-  for (int y = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x) {
-      const int d = disparity(x, y);
-      if (d == vision::kInvalidDisparity) continue;
-      view(x, y) = colour_of(d / (16.0 * max_disparity));
-    }
-  }
+  RgbImage picture(width, height + kLegendHeight);
+  cv::Mat all = canvas(picture.view());
+  all.setTo(cv::Scalar::all(0));
+
+  // The map: disparity 0..max_disparity onto TURBO's 256 colours; invalid pixels stay black.
+  const cv::Mat d16(height, width, CV_16SC1, const_cast<std::int16_t*>(disparity.data()),
+                    static_cast<std::size_t>(disparity.stride()) * sizeof(std::int16_t));
+  cv::Mat index;
+  d16.convertTo(index, CV_8U, 255.0 / (16.0 * max_disparity));
+  cv::Mat bgr;
+  cv::applyColorMap(index, bgr, cv::COLORMAP_TURBO);
+  cv::Mat image = all.rowRange(0, height);
+  cv::cvtColor(bgr, image, cv::COLOR_BGR2RGB);
+  image.setTo(cv::Scalar::all(0), d16 == vision::kInvalidDisparity);
+
+  // The legend: "disparity, px" then the colour bar with five labelled ticks.
+  const cv::Scalar white = cv::Scalar::all(255);
   const int margin = 8;
-  const int bar_width = std::max(1, width - 2 * margin);
-  const int bar_top = height + 6;
+  const int top = height + 5;
+  const std::string title = "disparity, px";
+  draw_text(all, {margin, top + 1}, title, white);
+  const int bar_left = std::min(width - 1, 2 * margin + text_size(title).width);
+  const int bar_width = std::max(1, width - margin - bar_left);
   for (int i = 0; i < bar_width; ++i) {
-    const Rgb8 c = colour_of(static_cast<double>(i) / std::max(1, bar_width - 1));
-    for (int y = bar_top; y < bar_top + 12; ++y) view(margin + i, y) = c;
+    const cv::Scalar c = colour_of(static_cast<double>(i) / std::max(1, bar_width - 1));
+    cv::line(all, {bar_left + i, top}, {bar_left + i, top + 11}, c);
   }
-  const Rgb8 white{255, 255, 255};
   constexpr int kTicks = 4;
   for (int t = 0; t <= kTicks; ++t) {
     const std::string label = std::to_string(max_disparity * t / kTicks);
-    const int x = margin + (bar_width - 1) * t / kTicks;
-    draw_line(view, x, bar_top + 12, x, bar_top + 16, white);
-    const int label_x =
-        std::clamp(x - text_width(label) / 2, 0, std::max(0, width - text_width(label)));
-    draw_text(view, label_x, bar_top + 18, label, white);
+    const int x = bar_left + (bar_width - 1) * t / kTicks;
+    cv::line(all, {x, top + 12}, {x, top + 15}, white);
+    const int label_width = text_size(label).width;
+    const int label_x = std::clamp(x - label_width / 2, 0, std::max(0, width - label_width));
+    draw_text(all, {label_x, top + 19}, label, white);
   }
   return picture;
 }

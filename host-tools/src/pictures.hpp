@@ -1,25 +1,37 @@
 #pragma once
 
+// Pictures for people (the host tool's --draw and --color, the simulation's pictures), drawn
+// with OpenCV's imgproc on RGB images: colours are cv::Scalar(red, green, blue).
+
+#include <opencv2/core.hpp>
+
 #include <cstdint>
-#include <string_view>
+#include <string>
 
 #include "epipole/core/image.hpp"
 
 namespace epipole::tools {
 
-// Pictures for people: colour scales, labels, disparity with a legend.
+// An OpenCV header over the image's pixels, to draw on (no copy).
+cv::Mat canvas(ImageView<Rgb8> image);
 
-// A colour for t in [0, 1]: blue (far) through green and yellow to red (near).
-Rgb8 colour_of(double t);
+// A gray image in colour, to draw on.
+RgbImage rgb_picture(GrayView gray);
 
-// Text in a small bitmap font (digits, '.', '-', ':', ' ', 'm', 'x', '%'), scale 2: 8 pixels a
-// character, 10 high. Clipped to the image.
-void draw_text(ImageView<Rgb8> image, int x, int y, std::string_view text, Rgb8 colour);
-int text_width(std::string_view text);
-constexpr int kTextHeight = 10;
+// The colour of t in [0, 1] on OpenCV's perceptual TURBO map: dark blue (0: far, small
+// disparities) through green and yellow to dark red (1: near).
+cv::Scalar colour_of(double t);
 
-// The disparity (x16, vision::kInvalidDisparity: black) in colour above a legend: a colour bar
-// from 0 to max_disparity pixels with labelled ticks.
+// Text in OpenCV's Hershey font on a dark box, so that it reads on any image. `top_left` is the
+// box's corner; the box is moved inside the picture when it would leave it.
+void draw_label(cv::Mat& picture, cv::Point top_left, const std::string& text, cv::Scalar colour);
+// The height of a label's box, pixels.
+int label_height();
+
+// The disparity (x16, vision::kInvalidDisparity: black) on the TURBO map, above a legend of
+// kLegendHeight rows: its title with the unit, the colour bar from 0 to max_disparity and ticks
+// labelled in pixels.
+constexpr int kLegendHeight = 40;
 RgbImage disparity_picture(ImageView<const std::int16_t> disparity, int max_disparity);
 
 }  // namespace epipole::tools

@@ -12,12 +12,12 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "commands.hpp"
-#include "epipole/core/draw.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/firmware.hpp"
@@ -103,23 +103,22 @@ class LinkRecorder {
 
 // The rectified left image with each detection's box and, when known, its distance.
 RgbImage detections_picture(const firmware::FrameResult& r) {
-  RgbImage picture(r.left.width(), r.left.height());
-  gray_to_rgb(r.left, picture.view());
-  const Rgb8 green{0, 255, 0};
+  RgbImage picture = rgb_picture(r.left);
+  cv::Mat drawing = canvas(picture.view());
+  const cv::Scalar green{0, 255, 0};
   for (std::size_t i = 0; i < r.detections.size(); ++i) {
     const vision::Detection& d = r.detections[i];
-    for (int t = 0; t < 2; ++t) {
-      draw_rectangle(picture.view(), d.x - t, d.y - t, d.width + 2 * t, d.height + 2 * t, green);
-    }
+    cv::rectangle(drawing, cv::Rect(d.x, d.y, d.width, d.height), green, 2);
     const firmware::DetectionDepth& depth = r.detection_depths[i];
     char label[32];
     if (depth.valid) {
-      std::snprintf(label, sizeof label, "%.2fm", depth.depth);
+      std::snprintf(label, sizeof label, "%.2f m", depth.depth);
     } else {
-      std::snprintf(label, sizeof label, "-");
+      std::snprintf(label, sizeof label, "depth unknown");
     }
-    const int y = d.y >= kTextHeight + 3 ? d.y - kTextHeight - 3 : d.y + d.height + 3;
-    draw_text(picture.view(), d.x, y, label, green);
+    // Above the box, or below it when the box touches the top.
+    const int above = d.y - 2 - label_height();
+    draw_label(drawing, {d.x, above >= 0 ? above : d.y + d.height + 2}, label, green);
   }
   return picture;
 }
@@ -144,18 +143,16 @@ class PictureWriter final : public firmware::FrameObserver {
     };
     save_image(file("rectified-pair.png"), side_by_side_preview(r.left, r.right).view());
     if (!r.corners_left.empty() || (r.stages & firmware::stage_bit(protocol::Stage::corners))) {
-      RgbImage corners(r.left.width(), r.left.height());
-      gray_to_rgb(r.left, corners.view());
+      RgbImage corners = rgb_picture(r.left);
+      cv::Mat drawing = canvas(corners.view());
       for (const vision::Corner& c : r.corners_left) {
-        draw_circle(corners.view(), c.x, c.y, 3, {0, 255, 0});
+        cv::circle(drawing, {c.x, c.y}, 3, {0, 255, 0}, 1, cv::LINE_AA);
       }
       // Matched corners, coloured by disparity as the disparity picture (red near).
       for (const vision::SparseMatch& m : r.matches) {
-        const Rgb8 colour = colour_of(static_cast<double>(m.disparity) / max_disparity_);
-        for (int radius = 1; radius <= 4; ++radius) {
-          draw_circle(corners.view(), static_cast<int>(m.xl), static_cast<int>(m.yl), radius,
-                      colour);
-        }
+        const cv::Point at(static_cast<int>(m.xl), static_cast<int>(m.yl));
+        cv::circle(drawing, at, 4, colour_of(static_cast<double>(m.disparity) / max_disparity_),
+                   cv::FILLED, cv::LINE_AA);
       }
       save_image(file("corners.png"), corners.view());
     }

@@ -1,8 +1,9 @@
 // libFuzzer target: arbitrary bytes as a calibration in each format the project reads. The first
-// byte picks the format: Epipole's own YAML (anything else), OpenCV's stereo files (intrinsics
-// and extrinsics, YAML or XML: 'o') or ROS camera_info files (left and right: 'r'), the rest
-// split in two at the first 0x00. An accepted calibration is valid, and Epipole's own file of
-// it reads back as the same calibration text; a refused one is an Error.
+// byte picks the format: Epipole's own YAML (anything else), OpenCV's stereo files as the host
+// tool reads them with cv::FileStorage (intrinsics and extrinsics, YAML, XML or JSON: 'o') or
+// ROS camera_info files (left and right: 'r'), the rest split in two at the first 0x00. An
+// accepted calibration is valid, and Epipole's own file of it reads back as the same
+// calibration text; a refused one is an Error.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 
 #include "epipole/calib/calibration.hpp"
 #include "epipole/core/error.hpp"
+#include "epipole/tools/opencv_calibration.hpp"
 #include "fuzz_file.hpp"
 
 namespace {
@@ -36,11 +38,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       split < rest.size() ? rest.subspan(split + 1) : std::span<const std::uint8_t>{};
   try {
     if (format == 'o') {
-      // OpenCV picks the syntax by the file name: '<' first means XML here too.
-      const bool xml = !first.empty() && first[0] == '<';
-      check(calib::import_opencv_calibration(
-          fuzz::write_file(xml ? "intrinsics.xml" : "intrinsics.yml", first),
-          fuzz::write_file(xml ? "extrinsics.xml" : "extrinsics.yml", second)));
+      check(tools::import_opencv_calibration(fuzz::write_file("intrinsics.yml", first),
+                                             fuzz::write_file("extrinsics.yml", second)));
     } else if (format == 'r') {
       check(calib::import_ros_calibration(fuzz::write_file("left.yaml", first),
                                           fuzz::write_file("right.yaml", second)));

@@ -14,6 +14,7 @@
 
 #include "epipole/calib/calibration.hpp"
 #include "epipole/core/image_io.hpp"
+#include "epipole/tools/opencv_calibration.hpp"
 #include "run_tool.hpp"
 #include "test_data.hpp"
 #include "test_paths.hpp"
@@ -176,7 +177,7 @@ TEST(CalibrateCli, ExportsForOpenCvAndRosAndImportsThemBack) {
   ASSERT_EQ(c.result.exit_code, 0) << c.result.out;
   const epipole::calib::StereoCalibration rig = epipole::calib::load_calibration(c.rig);
   const fs::path first = work_dir() / "export-opencv-1";
-  epipole::calib::export_opencv_calibration(rig, first);
+  epipole::tools::export_opencv_calibration(rig, first);
   const fs::path again = work_dir() / "export-opencv-2";
   const fs::path ros = work_dir() / "export-ros";
   const fs::path imported = work_dir() / "rig-from-opencv.yaml";

@@ -21,6 +21,7 @@
 #include "epipole/calib/rectification_map.hpp"
 #include "epipole/calib/triangulation.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"
+#include "epipole/tools/opencv_calibration.hpp"
 #include "opencv_view.hpp"
 #include "test_data.hpp"
 
@@ -257,8 +258,8 @@ TEST(CalibrationVsOpenCV, ImportsFileStorageYamlAndXml) {
   for (const std::string suffix : {".yml", ".xml", ".yaml"}) {
     SCOPED_TRACE(suffix);
     write_storage(s, suffix);
-    const StereoCalibration c = import_opencv_calibration(temp("cv-intrinsics" + suffix),
-                                                          temp("cv-extrinsics" + suffix), 640, 480);
+    const StereoCalibration c = tools::import_opencv_calibration(
+        temp("cv-intrinsics" + suffix), temp("cv-extrinsics" + suffix), 640, 480);
     expect_exact(c, s);
     // And through our own file, unchanged.
     const std::filesystem::path file = temp("imported" + suffix + ".rig.yaml");
@@ -272,10 +273,10 @@ TEST(CalibrationVsOpenCV, ImportsFileStorageYamlAndXml) {
 TEST(CalibrationVsOpenCV, ExportedFilesAreReadByFileStorage) {
   const CvStereo s = epipole_procedure();
   write_storage(s, ".yml");
-  const StereoCalibration c =
-      import_opencv_calibration(temp("cv-intrinsics.yml"), temp("cv-extrinsics.yml"), 640, 480);
+  const StereoCalibration c = tools::import_opencv_calibration(temp("cv-intrinsics.yml"),
+                                                               temp("cv-extrinsics.yml"), 640, 480);
   const std::filesystem::path folder = temp("exported-opencv");
-  export_opencv_calibration(c, folder);
+  tools::export_opencv_calibration(c, folder);
   CvStereo read;
   cv::FileStorage in((folder / "intrinsics.yml").string(), cv::FileStorage::READ);
   ASSERT_TRUE(in.isOpened());
@@ -314,7 +315,7 @@ TEST(CalibrationVsOpenCV, ImportsTheDataSetsIntrinsics) {
   ex << "R" << s.R << "T" << s.T << "R1" << s.R1 << "R2" << s.R2 << "P1" << s.P1 << "P2" << s.P2;
   ex.release();
   const StereoCalibration c =
-      import_opencv_calibration(intrinsics, temp("cv-data-extrinsics.yml"), 640, 480);
+      tools::import_opencv_calibration(intrinsics, temp("cv-data-extrinsics.yml"), 640, 480);
   expect_exact(c, s, false);
 }
 

@@ -67,16 +67,6 @@ std::string format_calibration(const StereoCalibration& calibration);  // valida
 // sees a half-written file. Throws Error naming the file.
 void save_calibration(const std::filesystem::path& file, const StereoCalibration& calibration);
 
-// Imports OpenCV's stereo calibration output: cv::FileStorage files (YAML or XML, detected
-// from the content) as written by OpenCV's stereo_calib sample: `intrinsics` holds M1 D1 M2
-// D2, `extrinsics` R T R1 R2 P1 P2 (Q optional: computed from P1 and P2 when absent). Neither
-// file records the image size: give it, or 0x0 to read image_width/image_height from either
-// file. Distortion vectors of 4, 5, 8, 12 or 14 coefficients are accepted when every
-// coefficient beyond k1 k2 p1 p2 k3 is zero; otherwise Error (the model is not supported).
-StereoCalibration import_opencv_calibration(const std::filesystem::path& intrinsics,
-                                            const std::filesystem::path& extrinsics, int width = 0,
-                                            int height = 0);
-
 // Imports a ROS camera_info YAML pair (camera_calibration_parsers' format: image_width,
 // image_height, camera_name, camera_matrix, distortion_model, distortion_coefficients,
 // rectification_matrix, projection_matrix). R and T are recovered from the rectification and
@@ -85,17 +75,12 @@ StereoCalibration import_opencv_calibration(const std::filesystem::path& intrins
 StereoCalibration import_ros_calibration(const std::filesystem::path& left,
                                          const std::filesystem::path& right);
 
-// Exports for programs that read OpenCV's or ROS's calibration files (docs/calibration.md): the
-// files are written into `directory` (made when missing), each through a temporary file and a
-// rename; numbers with 17 significant digits, so that importing them gives the same doubles.
-// Throws Error naming the file.
-//   OpenCV: intrinsics.yml (M1 D1 M2 D2) and extrinsics.yml (R T R1 R2 P1 P2 Q) as OpenCV's
-//   stereo_calib sample writes them (cv::FileStorage YAML), with image_width and image_height.
-void export_opencv_calibration(const StereoCalibration& calibration,
-                               const std::filesystem::path& directory);
-//   ROS: left.yaml and right.yaml as camera_calibration writes them (image size, camera_name:
-//   the camera's id, camera_matrix, distortion_model plumb_bob, distortion_coefficients,
-//   rectification_matrix, projection_matrix).
+// Exports for ROS programs (docs/calibration.md): left.yaml and right.yaml, as camera_calibration
+// writes them (image size, camera_name: the camera's id, camera_matrix, distortion_model
+// plumb_bob, distortion_coefficients, rectification_matrix, projection_matrix), written into
+// `directory` (made when missing), each through a temporary file and a rename; numbers with 17
+// significant digits, so that importing them gives the same doubles. Throws Error naming the
+// file. (OpenCV's files: epipole/tools/opencv_calibration.hpp, on the host.)
 void export_ros_calibration(const StereoCalibration& calibration,
                             const std::filesystem::path& directory);
 

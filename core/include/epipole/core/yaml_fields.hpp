@@ -16,9 +16,6 @@
 
 namespace epipole::yaml {
 
-// The whole file as text; a file that cannot be opened or read is an Error naming it.
-std::string read_file(const std::filesystem::path& file);
-
 class Fields {
  public:
   explicit Fields(std::string file) : file_(std::move(file)) {}

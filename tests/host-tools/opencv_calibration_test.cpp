@@ -1,53 +1,27 @@
-// Importing OpenCV FileStorage (YAML, XML) and ROS camera_info files, from text in the exact
-// form those tools write (tests/reference/calibration_opencv_test.cpp checks files written by
-// cv::FileStorage itself).
+// OpenCV's calibration files through cv::FileStorage (the host tool's import and export), from
+// text in the exact form OpenCV's stereo_calib sample writes
+// (tests/reference/calibration_opencv_test.cpp checks files written by cv::FileStorage itself).
 #include <gtest/gtest.h>
-#include <yaml-cpp/yaml.h>
 
-#include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 
+#include "../calib/calibration_checks.hpp"
+#include "../calib/sample_calibration.hpp"
 #include "epipole/calib/calibration.hpp"
 #include "epipole/core/error.hpp"
+#include "epipole/tools/opencv_calibration.hpp"
 #include "error_of.hpp"
-#include "sample_calibration.hpp"
 
-namespace epipole::calib {
+namespace epipole::tools {
 namespace {
 
-std::filesystem::path write_temp(const std::string& name, const std::string& text) {
-  const std::filesystem::path file = std::filesystem::path(::testing::TempDir()) / name;
-  std::ofstream(file) << text;
-  return file;
-}
-
-std::string number(double v) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%.16e", v);
-  return text;
-}
-
-template <typename Derived>
-std::string numbers(const Eigen::MatrixBase<Derived>& m, const char* separator) {
-  std::string out;
-  for (Eigen::Index r = 0; r < m.rows(); ++r) {
-    for (Eigen::Index c = 0; c < m.cols(); ++c) {
-      if (!out.empty()) out += separator;
-      out += number(m(r, c));
-    }
-  }
-  return out;
-}
-
-Eigen::Matrix<double, 1, 5> coefficients(const CameraCalibration& c) {
-  const Distortion& d = c.camera.distortion;
-  Eigen::Matrix<double, 1, 5> v;
-  v << d.k1, d.k2, d.p1, d.p2, d.k3;
-  return v;
-}
+using calib::StereoCalibration;
+using test::coefficients;
+using test::error_of;
+using test::expect_geometry;
+using test::numbers;
+using test::write_temp;
 
 template <typename Derived>
 std::string yaml_matrix(const char* name, const Eigen::MatrixBase<Derived>& m) {
@@ -96,24 +70,6 @@ OpenCvFiles opencv_xml(const StereoCalibration& c) {
   return f;
 }
 
-void expect_geometry(const StereoCalibration& got, const StereoCalibration& want, double tol) {
-  EXPECT_EQ(got.width, want.width);
-  EXPECT_EQ(got.height, want.height);
-  EXPECT_LE((got.left.camera_matrix() - want.left.camera_matrix()).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((got.right.camera_matrix() - want.right.camera_matrix()).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((coefficients(got.left) - coefficients(want.left)).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((coefficients(got.right) - coefficients(want.right)).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((got.R - want.R).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((got.T - want.T).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((got.left.rectification - want.left.rectification).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((got.right.rectification - want.right.rectification).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((got.left.projection - want.left.projection).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((got.right.projection - want.right.projection).cwiseAbs().maxCoeff(), tol);
-  EXPECT_LE((got.Q - want.Q).cwiseAbs().maxCoeff(), tol * 1000);
-}
-
-using test::error_of;
-
 TEST(OpenCvImport, YamlAsTheSampleWritesIt) {
   const StereoCalibration want = test::sample_calibration();
   const OpenCvFiles f = opencv_yaml(want);
@@ -126,7 +82,7 @@ TEST(OpenCvImport, YamlAsTheSampleWritesIt) {
   EXPECT_FALSE(got.date.empty());
   EXPECT_FALSE(got.rms.has_value());
   // The result is a valid calibration file.
-  expect_geometry(parse_calibration(format_calibration(got), "x.yaml"), want, 0.0);
+  expect_geometry(calib::parse_calibration(calib::format_calibration(got), "x.yaml"), want, 0.0);
 }
 
 TEST(OpenCvImport, XmlGivesTheSameCalibration) {
@@ -242,36 +198,8 @@ TEST(OpenCvImport, MalformedXml) {
   expect_geometry(import_opencv_calibration(in, ex, 640, 480), c, 0.0);
 }
 
-// A ROS camera_info file (camera_calibration_parsers' layout).
-template <typename M>
-std::string ros_matrix(const char* name, const Eigen::MatrixBase<M>& m) {
-  return cat(name, ":\n  rows: ", m.rows(), "\n  cols: ", m.cols(), "\n  data: [", numbers(m, ", "),
-             "]\n");
-}
-
-std::string ros_file(const CameraCalibration& c, const char* name,
-                     const char* model = "plumb_bob") {
-  return cat("image_width: 640\nimage_height: 480\ncamera_name: ", name, "\n",
-             ros_matrix("camera_matrix", c.camera_matrix()), "distortion_model: ", model, "\n",
-             ros_matrix("distortion_coefficients", coefficients(c)),
-             ros_matrix("rectification_matrix", c.rectification),
-             ros_matrix("projection_matrix", c.projection));
-}
-
-TEST(RosImport, RecoversExtrinsicsAndQ) {
-  const StereoCalibration want = test::sample_calibration();
-  const auto left = write_temp("ros-left.yaml", ros_file(want.left, "narrow_stereo/left"));
-  const auto right = write_temp("ros-right.yaml", ros_file(want.right, "narrow_stereo/right"));
-  const StereoCalibration got = import_ros_calibration(left, right);
-  expect_geometry(got, want, 1e-9);
-  EXPECT_EQ(got.left.id, "narrow_stereo/left");
-  EXPECT_EQ(got.right.id, "narrow_stereo/right");
-}
-
-// `epipole calibrate --export-opencv/--export-ros`, then --from-opencv/--from-ros: the same
-// calibration (OpenCV: every bit, so the same file; ROS: R and T recovered from the
-// rectification, to rounding).
-TEST(CalibrationExport, OpenCvFilesImportToTheSameFile) {
+// `epipole calibrate --export-opencv`, then --from-opencv: every bit, so the same file.
+TEST(OpenCvExport, FilesImportToTheSameFile) {
   const StereoCalibration want = test::sample_calibration();
   const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "export-cv";
   export_opencv_calibration(want, folder);
@@ -286,33 +214,15 @@ TEST(CalibrationExport, OpenCvFilesImportToTheSameFile) {
   got.views = want.views;
   got.date = want.date;
   got.source = want.source;
-  EXPECT_EQ(format_calibration(got), format_calibration(want));
+  EXPECT_EQ(calib::format_calibration(got), calib::format_calibration(want));
 }
 
-TEST(CalibrationExport, RosFilesImportToTheSameCalibration) {
-  StereoCalibration want = test::sample_calibration();
-  want.left.id = "narrow_stereo/left";
-  want.right.id = "usb: \"cam\" #1 \\ right";  // one string, whatever it holds
-  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "export-ros";
-  export_ros_calibration(want, folder);
-  const StereoCalibration got = import_ros_calibration(folder / "left.yaml", folder / "right.yaml");
-  expect_geometry(got, want, 1e-9);
-  EXPECT_EQ(got.left.camera_matrix(), want.left.camera_matrix());
-  EXPECT_EQ(got.right.projection, want.right.projection);
-  EXPECT_EQ(got.left.id, "narrow_stereo/left");
-  EXPECT_EQ(got.right.id, want.right.id);
-  const YAML::Node left = YAML::LoadFile((folder / "left.yaml").string());
-  EXPECT_EQ(left["distortion_model"].as<std::string>(), "plumb_bob");
-  EXPECT_EQ(left["projection_matrix"]["cols"].as<int>(), 4);
-  EXPECT_EQ(left["distortion_coefficients"]["data"].size(), 5u);
-}
-
-TEST(CalibrationExport, AFolderThatCannotBeMadeIsNamed) {
-  const std::filesystem::path file = write_temp("not-a-folder", "x");
+TEST(OpenCvExport, AFolderThatCannotBeMadeIsNamedAndAnInvalidCalibrationRefused) {
+  const std::filesystem::path file = write_temp("not-a-folder-cv", "x");
   const std::string error =
-      error_of([&] { export_ros_calibration(test::sample_calibration(), file / "ros"); });
-  EXPECT_NE(error.find("not-a-folder/ros"), std::string::npos) << error;
-  StereoCalibration broken = test::sample_calibration();
+      error_of([&] { export_opencv_calibration(test::sample_calibration(), file / "cv"); });
+  EXPECT_NE(error.find("not-a-folder-cv/cv"), std::string::npos) << error;
+  calib::StereoCalibration broken = test::sample_calibration();
   broken.width = 0;
   EXPECT_NE(error_of([&] {
               export_opencv_calibration(broken, std::filesystem::path(::testing::TempDir()));
@@ -321,37 +231,5 @@ TEST(CalibrationExport, AFolderThatCannotBeMadeIsNamed) {
       << "an invalid calibration is not exported";
 }
 
-TEST(RosImport, BadInput) {
-  const StereoCalibration c = test::sample_calibration();
-  const auto left = write_temp("ros-left.yaml", ros_file(c.left, "l"));
-  const auto fisheye = write_temp("ros-fisheye.yaml", ros_file(c.right, "r", "equidistant"));
-  std::string e = error_of([&] { import_ros_calibration(left, fisheye); });
-  EXPECT_NE(e.find("ros-fisheye.yaml: distortion_model: 'equidistant' is not supported"),
-            std::string::npos)
-      << e;
-  std::string text = ros_file(c.right, "r");
-  text.replace(text.find("rows: 3\n  cols: 4"), 17, "rows: 3\n  cols: 3");
-  const auto wrong = write_temp("ros-wrong.yaml", text);
-  e = error_of([&] { import_ros_calibration(left, wrong); });
-  EXPECT_NE(e.find("ros-wrong.yaml: projection_matrix: expected 3x4"), std::string::npos) << e;
-  text = ros_file(c.right, "r");
-  text.replace(text.find("image_width: 640"), 16, "image_width: 320");
-  const auto smaller = write_temp("ros-small.yaml", text);
-  e = error_of([&] { import_ros_calibration(left, smaller); });
-  EXPECT_NE(e.find("image sizes differ"), std::string::npos) << e;
-  text = ros_file(c.right, "r");
-  text.erase(text.find("rectification_matrix"));
-  const auto missing = write_temp("ros-missing.yaml", text);
-  e = error_of([&] { import_ros_calibration(left, missing); });
-  EXPECT_NE(e.find("ros-missing.yaml: missing key 'rectification_matrix'"), std::string::npos) << e;
-  // A monocular camera_info (identity rectification, no baseline) is not a stereo pair.
-  CameraCalibration mono = c.right;
-  mono.rectification.setIdentity();
-  mono.projection(0, 3) = 0;
-  const auto mono_file = write_temp("ros-mono.yaml", ros_file(mono, "r"));
-  e = error_of([&] { import_ros_calibration(left, mono_file); });
-  EXPECT_FALSE(e.empty());
-}
-
 }  // namespace
-}  // namespace epipole::calib
+}  // namespace epipole::tools
