@@ -20,6 +20,10 @@ using protocol::Stage;
 
 namespace {
 
+// The stages that read only the rectified images and whose results no other stage reads:
+// with threads, they run beside the others (and the detections' depths join after both).
+constexpr StageMask kBeside = stage_bit(Stage::detect);
+
 // One corner detector per image, FAST or Harris as the board says.
 class CornerDetector {
  public:
@@ -90,16 +94,20 @@ struct Pipeline::Stages {
   }
 };
 
-// From OpenCV's XML of the same name in the data cache of scripts/fetch-data.sh when it is there.
-std::string cascade_compile_command(const std::filesystem::path& compiled) {
-  std::string xml = "CASCADE.xml";
+std::filesystem::path opencv_cascade_xml(const std::filesystem::path& compiled) {
   for (const char* family : {"haarcascades", "lbpcascades"}) {
     std::filesystem::path candidate = default_data_directory() / "cascades" / family;
     candidate /= compiled.stem().string() + ".xml";
     std::error_code ec;
-    if (std::filesystem::exists(candidate, ec)) xml = candidate.string();
+    if (std::filesystem::exists(candidate, ec)) return candidate;
   }
-  return cat("epipole cascade-compile ", xml, " ", compiled.string());
+  return {};
+}
+
+std::string cascade_compile_command(const std::filesystem::path& compiled) {
+  const std::filesystem::path xml = opencv_cascade_xml(compiled);
+  return cat("epipole cascade-compile ", xml.empty() ? "CASCADE.xml" : xml.string(), " ",
+             compiled.string());
 }
 
 namespace {
@@ -187,6 +195,8 @@ Pipeline::Pipeline(const BoardConfig& board,
           std::make_unique<DetectionDepthEstimator>(*triangulator_, stereo.max_disparity);
     }
     available_ |= stage_bit(Stage::detect);
+    // With more than one thread the cascade runs beside the other stages on a worker of its own.
+    if (board.threads.count >= 2) beside_ = std::make_unique<ThreadPool>(2);
   }
 }
 
@@ -219,21 +229,42 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   r = FrameResult{};
   r.frame = frame;
   r.trigger_ns = trigger_ns;
-  r.stages = stage_bit(Stage::capture);
   r.left_raw = r.left = left;
   r.right_raw = r.right = right;
-  // The stages in the order of protocol::kStages, each timed, each only when what it reads ran.
   const StageMask run = enabled & available_;
-  hal::Nanoseconds t = steady_now();
-  for (const protocol::StageInfo& s : protocol::kStages) {
-    if (s.kind != protocol::StageKind::switchable || !protocol::has_stage(run, s.id)) continue;
-    if ((r.stages & s.needs) != s.needs) continue;
-    run_stage(s.id, r);
-    const hal::Nanoseconds now = steady_now();
-    r.times[static_cast<std::size_t>(s.id)] = now - t;
-    r.stages |= stage_bit(s.id);
-    t = now;
+  // Runs the stages of `which` in the order of protocol::kStages, each timed, each only when
+  // what it reads ran; adds them to `done`. Touches only their own fields of r, so that the
+  // two groups below can run at once.
+  const auto run_stages = [&](StageMask which, StageMask& done) {
+    for (const protocol::StageInfo& s : protocol::kStages) {
+      if (s.kind != protocol::StageKind::switchable || !protocol::has_stage(run & which, s.id)) {
+        continue;
+      }
+      if ((done & s.needs) != s.needs) continue;
+      const hal::Nanoseconds start = steady_now();
+      run_stage(s.id, r);
+      r.times[static_cast<std::size_t>(s.id)] = steady_now() - start;
+      done |= stage_bit(s.id);
+    }
+  };
+  StageMask done = stage_bit(Stage::capture);
+  run_stages(stage_bit(Stage::rectify), done);
+  r.stages = done;  // what the stages below may read (match_sparse: was it rectified?)
+  StageMask beside_done = done;
+  if (beside_ && protocol::has_stage(run, Stage::detect)) {
+    beside_->run(2, [&](int task, int) {
+      if (task == 0) {
+        run_stages(~(stage_bit(Stage::rectify) | kBeside), done);
+      } else {
+        run_stages(kBeside, beside_done);
+      }
+    });
+  } else {
+    run_stages(~stage_bit(Stage::rectify) & ~kBeside, done);
+    run_stages(kBeside, beside_done);
   }
+  r.stages = done | beside_done;
+  if (protocol::has_stage(r.stages, Stage::detect)) attach_depths(r);
   return r;
 }
 
@@ -301,6 +332,9 @@ void Pipeline::match_sparse(FrameResult& r) {
 
 void Pipeline::detect(FrameResult& r) {
   r.detections = detector_->detect(r.left);
+}
+
+void Pipeline::attach_depths(FrameResult& r) {
   for (std::size_t i = 0; i < r.detections.size(); ++i) {
     depths_[i] = depth_estimator_ && !r.disparity.empty()
                      ? depth_estimator_->estimate(r.detections[i], r.disparity)

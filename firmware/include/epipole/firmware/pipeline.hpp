@@ -13,6 +13,7 @@
 #include "epipole/calib/triangulation.hpp"
 #include "epipole/core/image.hpp"
 #include "epipole/core/simd.hpp"
+#include "epipole/core/thread_pool.hpp"
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/detection_depth.hpp"
 #include "epipole/firmware/health_monitor.hpp"
@@ -58,7 +59,11 @@ struct FrameResult {
   StageTimes times{};
 };
 
-// The one command that makes a missing compiled cascade (epipole cascade-compile).
+// OpenCV's cascade XML that `compiled` is made from: the file of the same name in the data cache
+// of scripts/fetch-data.sh (haarcascades or lbpcascades), or empty when it is not there.
+std::filesystem::path opencv_cascade_xml(const std::filesystem::path& compiled);
+// The one command that makes a missing compiled cascade (epipole cascade-compile), from
+// opencv_cascade_xml() when it is there.
 std::string cascade_compile_command(const std::filesystem::path& compiled);
 
 // The vision stages of the frame loop, built once from the board configuration (and the rig's
@@ -96,6 +101,7 @@ class Pipeline {
   void match_dense(FrameResult& r);
   void match_sparse(FrameResult& r);
   void detect(FrameResult& r);
+  void attach_depths(FrameResult& r);
 
   struct Stages;
   std::unique_ptr<Stages> stages_;
@@ -105,6 +111,7 @@ class Pipeline {
   std::vector<std::uint32_t> point_order_;
   std::vector<calib::RectifiedMatch> rectified_matches_;
   std::unique_ptr<vision::CascadeDetector> detector_;
+  std::unique_ptr<ThreadPool> beside_;  // the detector's worker beside the other stages
   std::filesystem::path missing_cascade_;
   std::unique_ptr<DetectionDepthEstimator> depth_estimator_;
   std::vector<DetectionDepth> depths_;
