@@ -1,10 +1,19 @@
 #include "epipole/core/thread_pool.hpp"
 
+#include <sched.h>
+
+#include <algorithm>
 #include <exception>
 
 #include "epipole/core/error.hpp"
 
 namespace epipole {
+
+int usable_cpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  return sched_getaffinity(0, sizeof set, &set) == 0 ? std::max(1, CPU_COUNT(&set)) : 1;
+}
 
 ThreadPool::ThreadPool(int threads) {
   require(threads >= 1 && threads <= 64, "thread count ", threads, " is outside 1..64");

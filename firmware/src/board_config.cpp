@@ -8,6 +8,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/text_file.hpp"
+#include "epipole/core/thread_pool.hpp"
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/hal/registry.hpp"
@@ -412,7 +413,8 @@ class BoardReader {
   void read_threads(const YAML::Node& root, BoardConfig& c) {
     const YAML::Node n =
         section(root, "threads", {"count", "affinity", "realtime_priority", "lock_memory"});
-    integer(n, "threads", "count", c.threads.count, 1, 64);
+    int count = 0;  // not given: as many as the CPUs the firmware may run on
+    integer(n, "threads", "count", count, 1, 64);
     if (n.IsDefined()) {
       if (const YAML::Node a = f_.optional_child(n, "threads", "affinity"); a.IsDefined()) {
         for (const double cpu : f_.numbers(a, "threads.affinity")) {
@@ -425,6 +427,9 @@ class BoardReader {
     }
     integer(n, "threads", "realtime_priority", c.threads.realtime_priority, 0, 99);
     boolean(n, "threads", "lock_memory", c.threads.lock_memory);
+    const int cpus =
+        c.threads.affinity.empty() ? usable_cpus() : static_cast<int>(c.threads.affinity.size());
+    c.threads.count = count != 0 ? count : std::clamp(cpus, 1, 64);
   }
 
   void read_sim(const YAML::Node& root, BoardConfig& c) {

@@ -1,7 +1,5 @@
 // epipole bench: the firmware's stages on a board's configuration and images, timed per stage
 // and per pair for 1..N threads, beside OpenCV doing the same work, in one run.
-#include <sched.h>
-
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -16,6 +14,7 @@
 #include "commands.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
+#include "epipole/core/thread_pool.hpp"
 #include "epipole/firmware/board.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/firmware/pipeline.hpp"
@@ -41,12 +40,6 @@ struct BenchOptions {
   bool opencv = true;
   bool json = false;
 };
-
-int usable_cpus() {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  return sched_getaffinity(0, sizeof set, &set) == 0 ? std::max(1, CPU_COUNT(&set)) : 1;
-}
 
 struct BenchImages {
   std::vector<GrayImage> left, right;

@@ -1,5 +1,6 @@
 // The board file: every key read, every bad value an error naming the file and the key.
 #include <gtest/gtest.h>
+#include <sched.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -9,6 +10,7 @@
 
 #include "epipole/calib/calibration.hpp"
 #include "epipole/core/error.hpp"
+#include "epipole/core/thread_pool.hpp"
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "error_of.hpp"
@@ -73,6 +75,20 @@ TEST(BoardConfig, ReadsEveryKey) {
   EXPECT_EQ(c.snapshot_min_free_mb, 500.0);
   ASSERT_NE(c.sim_scene(), nullptr);
   EXPECT_EQ(c.sim_scene()->synthesize_disparity, 8);
+}
+
+// Without threads.count the vision stages get the CPUs the firmware may run on: those of
+// threads.affinity, else the process's (a service manager's CPUAffinity narrows them).
+TEST(BoardConfig, ThreadsDefaultToTheUsableCpus) {
+  SimRig rig;
+  EXPECT_EQ(rig.parse().threads.count, usable_cpus());
+  EXPECT_EQ(rig.parse("threads: {affinity: [0]}\n").threads.count, 1);
+  EXPECT_EQ(rig.parse("threads: {affinity: [0, 1, 2]}\n").threads.count, 3);
+  EXPECT_EQ(rig.parse("threads: {count: 1, affinity: [0, 1]}\n").threads.count, 1);
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  ASSERT_EQ(sched_getaffinity(0, sizeof set, &set), 0);
+  EXPECT_EQ(usable_cpus(), CPU_COUNT(&set));
 }
 
 TEST(BoardConfig, ExpandsEnvironmentVariablesInPaths) {

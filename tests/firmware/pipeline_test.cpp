@@ -34,7 +34,7 @@ bool same_image(ImageView<const std::int16_t> a, ImageView<const std::int16_t> b
 
 TEST(Pipeline, TheCascadeBesideTheOtherStagesGivesWhatOneThreadGives) {
   test::SimRig rig(160, 120, 8);
-  BoardConfig config = rig.parse();
+  BoardConfig config = rig.parse("threads: {count: 1}\n");
   config.stages |= stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);
   const auto calibration = load_board_calibration(config);

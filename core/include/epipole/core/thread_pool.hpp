@@ -12,6 +12,10 @@
 
 namespace epipole {
 
+// The CPUs this process may run on (its affinity mask, which a service manager may narrow), at
+// least 1: the default number of threads.
+int usable_cpus();
+
 // A non-owning reference to a callable of signature void(int task, int worker): no allocation,
 // valid only while the callable it refers to lives (the span of one ThreadPool::run call).
 class TaskRef {
