@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include <algorithm>
+#include <set>
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/text_file.hpp"
@@ -427,8 +428,8 @@ class BoardReader {
     }
     integer(n, "threads", "realtime_priority", c.threads.realtime_priority, 0, 99);
     boolean(n, "threads", "lock_memory", c.threads.lock_memory);
-    const int cpus =
-        c.threads.affinity.empty() ? usable_cpus() : static_cast<int>(c.threads.affinity.size());
+    const std::set<int> listed(c.threads.affinity.begin(), c.threads.affinity.end());
+    const int cpus = listed.empty() ? usable_cpus() : static_cast<int>(listed.size());
     c.threads.count = count != 0 ? count : std::clamp(cpus, 1, 64);
   }
 

@@ -163,8 +163,6 @@ Pipeline::Pipeline(const BoardConfig& board,
   vision::StereoConfig stereo = board.stereo;
   stereo.width = board.width();
   stereo.height = board.height();
-  stereo.threads = board.threads.count;
-  stages_->matcher = std::make_unique<vision::StereoMatcher>(stereo, path);
   if (calibration) {
     ObstacleConfig o;
     o.width = board.width();
@@ -195,9 +193,12 @@ Pipeline::Pipeline(const BoardConfig& board,
           std::make_unique<DetectionDepthEstimator>(*triangulator_, stereo.max_disparity);
     }
     available_ |= stage_bit(Stage::detect);
-    // With more than one thread the cascade runs beside the other stages on a worker of its own.
+    // With more than one thread the cascade runs beside the other stages on a worker of its own
+    // and the matcher's stripes take the others: threads.count threads in all, one per CPU.
     if (board.threads.count >= 2) beside_ = std::make_unique<ThreadPool>(2);
   }
+  stereo.threads = beside_ ? board.threads.count - 1 : board.threads.count;
+  stages_->matcher = std::make_unique<vision::StereoMatcher>(stereo, path);
 }
 
 Pipeline::~Pipeline() = default;

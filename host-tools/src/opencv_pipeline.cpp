@@ -80,11 +80,14 @@ OpenCvPipeline::Times OpenCvPipeline::process(const cv::Mat& left_raw, const cv:
     start = now;
   };
   const auto runs = [&](Stage s) { return protocol::has_stage(stages_, s); };
+  // The inputs are never written: rectified images go to buffers of their own.
   cv::Mat left = left_raw;
   cv::Mat right = right_raw;
   if (runs(Stage::rectify)) {
-    cv::remap(left_raw, left, map1_[0], map2_[0], cv::INTER_LINEAR);
-    cv::remap(right_raw, right, map1_[1], map2_[1], cv::INTER_LINEAR);
+    cv::remap(left_raw, rectified_[0], map1_[0], map2_[0], cv::INTER_LINEAR);
+    cv::remap(right_raw, rectified_[1], map1_[1], map2_[1], cv::INTER_LINEAR);
+    left = rectified_[0];
+    right = rectified_[1];
     lap(Stage::rectify);
   }
   if (runs(Stage::corners)) {

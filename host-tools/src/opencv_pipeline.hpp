@@ -40,6 +40,7 @@ class OpenCvPipeline {
   firmware::BoardConfig::Detector detector_;
   protocol::StageMask stages_ = 0;
   cv::Mat map1_[2], map2_[2];
+  cv::Mat rectified_[2];
   cv::Ptr<cv::StereoMatcher> matcher_;
   cv::CascadeClassifier cascade_;
 };

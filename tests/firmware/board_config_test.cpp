@@ -81,9 +81,10 @@ TEST(BoardConfig, ReadsEveryKey) {
 // threads.affinity, else the process's (a service manager's CPUAffinity narrows them).
 TEST(BoardConfig, ThreadsDefaultToTheUsableCpus) {
   SimRig rig;
-  EXPECT_EQ(rig.parse().threads.count, usable_cpus());
+  EXPECT_EQ(rig.parse("threads: {lock_memory: false}\n").threads.count, usable_cpus());
   EXPECT_EQ(rig.parse("threads: {affinity: [0]}\n").threads.count, 1);
   EXPECT_EQ(rig.parse("threads: {affinity: [0, 1, 2]}\n").threads.count, 3);
+  EXPECT_EQ(rig.parse("threads: {affinity: [1, 1]}\n").threads.count, 1) << "CPUs, not entries";
   EXPECT_EQ(rig.parse("threads: {count: 1, affinity: [0, 1]}\n").threads.count, 1);
   cpu_set_t set;
   CPU_ZERO(&set);

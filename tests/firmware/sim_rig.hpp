@@ -119,7 +119,10 @@ struct SimRig {
            "corners: {max_corners: 500}\n"
            "stages: {sparse: false, detect: false}\n"
            "sim: {charge_compute: false, scenes: {test: {synthesize: unused.png, disparity: " +
-           std::to_string(disparity) + "}}}\n" + extra;
+           std::to_string(disparity) + "}}}\n" +
+           // One thread unless the test says otherwise: the default, the CPUs of the machine
+           // running the test, would make results and memory depend on it.
+           (extra.find("threads:") == std::string::npos ? "threads: {count: 1}\n" : "") + extra;
   }
   firmware::BoardConfig parse(const std::string& extra = "") const {
     return firmware::parse_board_config(yaml(extra), dir.path() / "board.yaml");

@@ -68,6 +68,12 @@ TEST(BenchCli, EveryStageOfBothSidesForEachThreadCount) {
     EXPECT_GT(run["opencv"]["pairs_per_second"].get<double>(), 0.0);
   }
   EXPECT_NE(b["notes"].dump().find("sparse"), std::string::npos) << b["notes"];
+  // The same pairs give the same results at every thread count (and OpenCV's side, which ran
+  // between them, has not touched the images).
+  const auto& found = b["runs"][0]["epipole"]["found"];
+  EXPECT_GT(found["corners"].get<int>(), 0);
+  EXPECT_GT(found["matches"].get<int>(), 0);
+  EXPECT_EQ(b["runs"][1]["epipole"]["found"], found);
 }
 
 TEST(BenchCli, TableAndImagesForABoardWithoutScenes) {
@@ -93,8 +99,9 @@ TEST(BenchCli, TableAndImagesForABoardWithoutScenes) {
 }
 
 TEST(BenchCli, BadArgumentsAreUsageErrorsAndBadInputOneLine) {
-  for (const std::string& args : {std::string("--threads 0"), std::string("--threads 1,x"),
-                                  std::string("-n 0"), std::string("--left nowhere.png")}) {
+  for (const std::string& args :
+       {std::string("--threads 0"), std::string("--threads 1,x"), std::string("-n 0"),
+        std::string("--left nowhere.png"), std::string("--left nowhere.png --right nowhere.png")}) {
     const auto r = run_tool("bench " + board("sim") + " " + args);
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.out;
   }

@@ -139,7 +139,11 @@ TEST(OpenCvImport, BadInputNamesTheKeyAndFile) {
   e = only_in(dt);
   EXPECT_NE(e.find("single-channel"), std::string::npos) << e;
   e = only_in("%YAML:1.0\nR: [unclosed\n");
-  EXPECT_NE(e.find("malformed YAML"), std::string::npos) << e;
+  EXPECT_NE(e.find("cv-broken.yml: malformed YAML (line 2: "), std::string::npos) << e;
+  e = only_in("R: [1, 2, 3]\n");
+  EXPECT_NE(e.find("cv-broken.yml: not an OpenCV FileStorage file"), std::string::npos) << e;
+  e = only_in("");
+  EXPECT_NE(e.find("cv-broken.yml: the file is empty"), std::string::npos) << e;
   // A rotation that is not one, in OpenCV's names.
   std::string scaled = f.extrinsics;
   scaled.replace(scaled.find("data", scaled.find("R1: !!")) + 8, 22, "2.0");
@@ -181,21 +185,52 @@ TEST(OpenCvImport, MalformedXml) {
   const StereoCalibration c = test::sample_calibration();
   const OpenCvFiles f = opencv_xml(c);
   const auto in = write_temp("cv-in.xml", f.intrinsics);
-  for (const std::string& bad : {std::string("<?xml version=\"1.0\"?>\n<opencv_storage>\n<R>1 2 3"),
-                                 std::string("<opencv_storage><R></T></opencv_storage>"),
-                                 std::string("<opencv_storage><R a=1></R></opencv_storage>"),
-                                 std::string("<opencv_storage>&bogus;</opencv_storage>"),
-                                 std::string("<something_else/>")}) {
-    SCOPED_TRACE(bad);
-    const auto ex = write_temp("cv-bad.xml", bad);
+  const std::string header = "<?xml version=\"1.0\"?>\n";
+  const struct {
+    std::string text;
+    std::string error;
+  } cases[] = {
+      {header + "<opencv_storage>\n<R>1 2 3", "malformed XML (line 3: "},
+      {header + "<opencv_storage><R></T></opencv_storage>", "malformed XML (line 2: "},
+      {header + "<something_else/>", "malformed XML (line 2: <opencv_storage> tag is missing)"},
+      {header + "<opencv_storage><R>1 2 x</R></opencv_storage>", "R: "},
+      {"<opencv_storage><R>1</R></opencv_storage>", "not an OpenCV FileStorage file"},
+  };
+  for (const auto& bad : cases) {
+    SCOPED_TRACE(bad.text);
+    const auto ex = write_temp("cv-bad.xml", bad.text);
     const std::string e = error_of([&] { import_opencv_calibration(in, ex, 640, 480); });
-    EXPECT_NE(e.find("cv-bad.xml"), std::string::npos) << e;
+    EXPECT_NE(e.find("cv-bad.xml: " + bad.error), std::string::npos) << e;
   }
   // Entities and comments are fine.
   std::string commented = f.extrinsics;
   commented.insert(commented.find("<R type_id"), "<!-- a <comment> & more -->\n");
   const auto ex = write_temp("cv-commented.xml", commented);
   expect_geometry(import_opencv_calibration(in, ex, 640, 480), c, 0.0);
+}
+
+// FileStorage's third syntax: JSON, as cv::FileStorage writes it.
+template <typename Derived>
+std::string json_matrix(const char* name, const Eigen::MatrixBase<Derived>& m) {
+  return cat("\"", name, "\": {\"type_id\": \"opencv-matrix\", \"rows\": ", m.rows(),
+             ", \"cols\": ", m.cols(), ", \"dt\": \"d\", \"data\": [", numbers(m, ", "), "]}");
+}
+
+TEST(OpenCvImport, JsonGivesTheSameCalibration) {
+  const StereoCalibration c = test::sample_calibration();
+  const std::string json =
+      "{\n\"image_width\": 640, \"image_height\": 480,\n" +
+      json_matrix("M1", c.left.camera_matrix()) + ",\n" + json_matrix("D1", coefficients(c.left)) +
+      ",\n" + json_matrix("M2", c.right.camera_matrix()) + ",\n" +
+      json_matrix("D2", coefficients(c.right)) + ",\n" + json_matrix("R", c.R) + ",\n" +
+      json_matrix("T", c.T) + ",\n" + json_matrix("R1", c.left.rectification) + ",\n" +
+      json_matrix("R2", c.right.rectification) + ",\n" + json_matrix("P1", c.left.projection) +
+      ",\n" + json_matrix("P2", c.right.projection) + "\n}\n";
+  const auto file = write_temp("cv-all.json", json);
+  expect_geometry(import_opencv_calibration(file, file), c, 1e-12);
+  const auto broken = write_temp("cv-broken.json", json.substr(0, json.size() / 2));
+  const std::string e = error_of([&] { import_opencv_calibration(broken, broken); });
+  EXPECT_NE(e.find("cv-broken.json: malformed JSON (line "), std::string::npos) << e;
 }
 
 // `epipole calibrate --export-opencv`, then --from-opencv: every bit, so the same file.
