@@ -195,6 +195,10 @@ TEST(OpenCvImport, MalformedXml) {
       {header + "<something_else/>", "malformed XML (line 2: <opencv_storage> tag is missing)"},
       {header + "<opencv_storage><R>1 2 x</R></opencv_storage>", "R: "},
       {"<opencv_storage><R>1</R></opencv_storage>", "not an OpenCV FileStorage file"},
+      // OpenCV 4.6 crashes on these two; they are refused before it sees them.
+      {"<?xml version=", "malformed XML (line 1: "},
+      {header + std::string("<opencv_storage><R>1</R>\0</opencv_storage>", 42),
+       "not a text file (a NUL byte at offset 46)"},
   };
   for (const auto& bad : cases) {
     SCOPED_TRACE(bad.text);

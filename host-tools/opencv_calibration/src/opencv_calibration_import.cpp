@@ -1,11 +1,15 @@
 // OpenCV's stereo calibration files, read by cv::FileStorage (YAML, XML or JSON, told apart by
 // their first bytes as OpenCV does), checked here key by key so that every refusal names the
-// file and the key.
+// file and the key. Bytes OpenCV 4.6 cannot take without crashing are refused before it sees
+// them.
 #include <opencv2/core.hpp>
+#include <pugixml.hpp>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <exception>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -85,6 +89,11 @@ class StorageFile {
   explicit StorageFile(const std::filesystem::path& path) : name_(path.string()) {
     const std::string text = read_text_file(path);
     require(text.find_first_not_of(" \t\r\n") != std::string::npos, name_, ": the file is empty");
+    // OpenCV reads a file in memory as a C string: a NUL would end it early, the rest silently
+    // dropped. No YAML, XML or JSON file holds one.
+    const std::size_t nul = text.find('\0');
+    require(nul == std::string::npos, name_, ": not a text file (a NUL byte at offset ", nul, ")");
+    if (text[0] == '<') check_xml(text);
     try {
       storage_.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
     } catch (const cv::Exception& e) {
@@ -94,6 +103,10 @@ class StorageFile {
                         "<?xml, JSON with {)"));
       }
       throw Error(cat(name_, ": malformed ", syntax_of(text), " (", reason(e), ")"));
+    } catch (const std::exception& e) {
+      // OpenCV's parsers let some malformed input escape as standard exceptions (a string
+      // length_error from a garbled YAML key, found by calibration_fuzz).
+      throw Error(cat(name_, ": malformed ", syntax_of(text), " (", e.what(), ")"));
     }
     require(storage_.isOpened(), name_, ": OpenCV cannot read the file");
   }
@@ -137,6 +150,18 @@ class StorageFile {
   }
 
  private:
+  // OpenCV 4.6's XML parser crashes on some malformed files (`<?xml version=` alone, found by
+  // calibration_fuzz): pugixml, the XML library the host tool links for cascades, sees first
+  // that the file is well-formed.
+  void check_xml(const std::string& text) const {
+    pugi::xml_document document;
+    const pugi::xml_parse_result parsed = document.load_buffer(text.data(), text.size());
+    if (parsed) return;
+    const auto end = text.begin() + std::clamp<std::ptrdiff_t>(parsed.offset, 0, text.size());
+    throw Error(cat(name_, ": malformed XML (line ", 1 + std::count(text.begin(), end, '\n'), ": ",
+                    parsed.description(), ")"));
+  }
+
   // OpenCV's own complaints about a node, as an Error naming the file and the key.
   template <typename Read>
   auto guarded(const std::string& key, Read read) const -> decltype(read()) {
@@ -144,6 +169,10 @@ class StorageFile {
       return read();
     } catch (const cv::Exception& e) {
       throw Error(cat(name_, ": ", key, ": ", reason(e)));
+    } catch (const Error&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw Error(cat(name_, ": ", key, ": ", e.what()));
     }
   }
   cv::FileNode field(const cv::FileNode& matrix, const std::string& key, const char* name) const {
