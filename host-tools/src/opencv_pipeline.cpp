@@ -1,6 +1,5 @@
 #include "opencv_pipeline.hpp"
 
-#include <opencv2/core/eigen.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -8,6 +7,7 @@
 #include <vector>
 
 #include "epipole/core/error.hpp"
+#include "epipole/tools/opencv_matrices.hpp"
 
 namespace epipole::tools {
 
@@ -16,19 +16,13 @@ namespace {
 using protocol::Stage;
 using protocol::stage_bit;
 
-cv::Mat mat(const Eigen::MatrixXd& m) {
-  cv::Mat out;
-  cv::eigen2cv(m, out);
-  return out;
-}
-
 // The rectification maps OpenCV's users make: initUndistortRectifyMap, fixed point (CV_16SC2).
 void rectification_maps(const calib::StereoCalibration& c, const calib::CameraCalibration& camera,
                         cv::Mat& map1, cv::Mat& map2) {
-  const calib::Distortion& d = camera.camera.distortion;
-  const cv::Mat coefficients = (cv::Mat_<double>(1, 5) << d.k1, d.k2, d.p1, d.p2, d.k3);
-  cv::initUndistortRectifyMap(mat(camera.camera_matrix()), coefficients, mat(camera.rectification),
-                              mat(camera.projection), {c.width, c.height}, CV_16SC2, map1, map2);
+  cv::initUndistortRectifyMap(opencv_matrix(camera.camera_matrix()),
+                              opencv_coefficients(camera.camera.distortion),
+                              opencv_matrix(camera.rectification), opencv_matrix(camera.projection),
+                              {c.width, c.height}, CV_16SC2, map1, map2);
 }
 
 cv::Ptr<cv::StereoMatcher> stereo_matcher(const vision::StereoConfig& s) {

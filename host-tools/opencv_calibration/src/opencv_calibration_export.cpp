@@ -1,28 +1,17 @@
 // OpenCV's stereo calibration files written by cv::FileStorage, as the stereo_calib sample
 // writes them.
-#include <Eigen/Core>
 #include <opencv2/core.hpp>
-#include <opencv2/core/eigen.hpp>
 
 #include <string>
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/text_file.hpp"
 #include "epipole/tools/opencv_calibration.hpp"
+#include "epipole/tools/opencv_matrices.hpp"
 
 namespace epipole::tools {
 
 namespace {
-
-cv::Mat mat(const Eigen::MatrixXd& m) {
-  cv::Mat out;
-  cv::eigen2cv(m, out);
-  return out;
-}
-
-cv::Mat coefficients(const calib::Distortion& d) {
-  return (cv::Mat_<double>(1, 5) << d.k1, d.k2, d.p1, d.p2, d.k3);
-}
 
 // One YAML file's text, the keys written by `write` after the image size.
 template <typename Write>
@@ -46,19 +35,19 @@ void export_opencv_calibration(const calib::StereoCalibration& c,
   make_directories(directory);
   const std::filesystem::path intrinsics = directory / "intrinsics.yml";
   write_text_file_atomically(intrinsics, yaml_storage(c, intrinsics, [&](cv::FileStorage& s) {
-                               s << "M1" << mat(c.left.camera_matrix());
-                               s << "D1" << coefficients(c.left.camera.distortion);
-                               s << "M2" << mat(c.right.camera_matrix());
-                               s << "D2" << coefficients(c.right.camera.distortion);
+                               s << "M1" << opencv_matrix(c.left.camera_matrix());
+                               s << "D1" << opencv_coefficients(c.left.camera.distortion);
+                               s << "M2" << opencv_matrix(c.right.camera_matrix());
+                               s << "D2" << opencv_coefficients(c.right.camera.distortion);
                              }));
   const std::filesystem::path extrinsics = directory / "extrinsics.yml";
   write_text_file_atomically(extrinsics, yaml_storage(c, extrinsics, [&](cv::FileStorage& s) {
-                               s << "R" << mat(c.R) << "T" << mat(c.T);
-                               s << "R1" << mat(c.left.rectification);
-                               s << "R2" << mat(c.right.rectification);
-                               s << "P1" << mat(c.left.projection);
-                               s << "P2" << mat(c.right.projection);
-                               s << "Q" << mat(c.Q);
+                               s << "R" << opencv_matrix(c.R) << "T" << opencv_matrix(c.T);
+                               s << "R1" << opencv_matrix(c.left.rectification);
+                               s << "R2" << opencv_matrix(c.right.rectification);
+                               s << "P1" << opencv_matrix(c.left.projection);
+                               s << "P2" << opencv_matrix(c.right.projection);
+                               s << "Q" << opencv_matrix(c.Q);
                              }));
 }
 
