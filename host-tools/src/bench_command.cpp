@@ -20,6 +20,7 @@
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/hal/sim_scene.hpp"
+#include "opencv_mat.hpp"
 #include "opencv_pipeline.hpp"
 #include "progress.hpp"
 #include "timing_summary.hpp"
@@ -151,7 +152,7 @@ class Bench {
     }
     if (options_.opencv && !opencv_pipeline_) make_opencv_pipeline(pipeline);
     SideTimes times;
-    times.stages = board_.stages & pipeline.available() & switchable_stages();
+    times.stages = board_.stages & pipeline.available() & protocol::kSwitchableStages;
     for (int i = -options_.warmup; i < options_.pairs; ++i) {
       const std::size_t k = static_cast<std::size_t>(i + options_.warmup) % images_.left.size();
       const auto start = std::chrono::steady_clock::now();
@@ -177,8 +178,8 @@ class Bench {
     times.stages = opencv_pipeline_->stages();
     std::vector<cv::Mat> left, right;
     for (std::size_t k = 0; k < images_.left.size(); ++k) {
-      left.push_back(as_mat(images_.left[k]));
-      right.push_back(as_mat(images_.right[k]));
+      left.push_back(mat_of(images_.left[k].view()));
+      right.push_back(mat_of(images_.right[k].view()));
     }
     for (int i = -options_.warmup; i < options_.pairs; ++i) {
       const std::size_t k = static_cast<std::size_t>(i + options_.warmup) % left.size();
@@ -204,19 +205,6 @@ class Bench {
     }
     opencv_pipeline_.emplace(board_, calibration_, xml);
     notes_.push_back("opencv has no sparse matching: its pair is without that stage");
-  }
-
-  static protocol::StageMask switchable_stages() {
-    protocol::StageMask m = 0;
-    for (const protocol::StageInfo& s : protocol::kStages) {
-      if (s.kind == protocol::StageKind::switchable) m |= protocol::stage_bit(s.id);
-    }
-    return m;
-  }
-
-  static cv::Mat as_mat(const GrayImage& image) {
-    return {image.height(), image.width(), CV_8UC1, const_cast<std::uint8_t*>(image.view().data()),
-            static_cast<std::size_t>(image.stride())};
   }
 
   void show(int threads, const char* side, int i) {

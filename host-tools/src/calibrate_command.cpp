@@ -24,6 +24,7 @@
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"
 #include "epipole/tools/opencv_calibration.hpp"
+#include "opencv_mat.hpp"
 #include "progress.hpp"
 #include "stereo_preview.hpp"
 
@@ -102,15 +103,8 @@ std::vector<std::string> expand(const std::string& pattern, const char* option) 
   return files;
 }
 
-cv::Mat mat_of(const GrayImage& image) {
-  // A const view of our pixels; OpenCV only reads it.
-  return {image.height(), image.width(), CV_8UC1,
-          const_cast<std::uint8_t*>(image.view().data()),  // NOLINT
-          static_cast<std::size_t>(image.stride())};
-}
-
 std::vector<cv::Point2f> find_board(const GrayImage& image, Board board, bool* found) {
-  const cv::Mat mat = mat_of(image);
+  const cv::Mat mat = mat_of(image.view());
   std::vector<cv::Point2f> corners;
   *found = cv::findChessboardCorners(mat, {board.columns, board.rows}, corners,
                                      cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);

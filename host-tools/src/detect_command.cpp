@@ -73,7 +73,7 @@ void run_detect(const DetectOptions& options, const GlobalOptions& global) {
 
   if (!options.draw.empty()) {
     RgbImage picture = rgb_picture(image.view());
-    cv::Mat drawing = canvas(picture.view());
+    cv::Mat drawing = mat_of(picture.view());
     for (const vision::Detection& d : detections) {
       cv::rectangle(drawing, cv::Rect(d.x, d.y, d.width, d.height), {0, 255, 0}, 2);
     }

@@ -108,7 +108,7 @@ void run_features(const FeaturesOptions& options, const GlobalOptions& global) {
 
   if (!options.draw.empty()) {
     RgbImage picture = rgb_picture(image.view());
-    cv::Mat drawing = canvas(picture.view());
+    cv::Mat drawing = mat_of(picture.view());
     for (const vision::Corner& c : corners) {
       cv::circle(drawing, {c.x, c.y}, 3, {0, 255, 0}, 1, cv::LINE_AA);
     }

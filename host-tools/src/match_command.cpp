@@ -75,10 +75,8 @@ Corners detect(const MatchOptions& options, GrayView left, GrayView right, SimdP
 RgbImage match_picture(GrayView left, GrayView right, std::span<const vision::SparseMatch> matches,
                        int max_disparity) {
   const int w = left.width();
-  RgbImage picture(2 * w, left.height());
-  cv::Mat drawing = canvas(picture.view());
-  canvas(rgb_picture(left).view()).copyTo(drawing.colRange(0, w));
-  canvas(rgb_picture(right).view()).copyTo(drawing.colRange(w, 2 * w));
+  RgbImage picture = side_by_side(left, right);
+  cv::Mat drawing = mat_of(picture.view());
   for (const vision::SparseMatch& m : matches) {
     const cv::Scalar colour = colour_of(static_cast<double>(m.disparity) / max_disparity);
     const cv::Point l(static_cast<int>(std::lround(m.xl)), static_cast<int>(std::lround(m.yl)));

@@ -7,13 +7,12 @@
 #include <cmath>
 #include <string>
 
+#include "epipole/core/error.hpp"
 #include "epipole/vision/stereo.hpp"
 
 namespace epipole::tools {
 
 namespace {
-
-static_assert(sizeof(Rgb8) == 3, "RGB pixels are packed: OpenCV sees them as CV_8UC3");
 
 constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
 constexpr double kFontScale = 0.45;
@@ -47,17 +46,22 @@ void draw_text(cv::Mat& picture, cv::Point top_left, const std::string& text, cv
 
 }  // namespace
 
-cv::Mat canvas(ImageView<Rgb8> image) {
-  return {image.height(), image.width(), CV_8UC3, image.data(),
-          static_cast<std::size_t>(image.stride()) * sizeof(Rgb8)};
-}
-
 RgbImage rgb_picture(GrayView gray) {
   RgbImage picture(gray.width(), gray.height());
-  const cv::Mat in(gray.height(), gray.width(), CV_8UC1, const_cast<std::uint8_t*>(gray.data()),
-                   static_cast<std::size_t>(gray.stride()));
-  cv::Mat out = canvas(picture.view());
-  cv::cvtColor(in, out, cv::COLOR_GRAY2RGB);
+  cv::Mat out = mat_of(picture.view());
+  cv::cvtColor(mat_of(gray), out, cv::COLOR_GRAY2RGB);
+  return picture;
+}
+
+RgbImage side_by_side(GrayView left, GrayView right) {
+  require(left.height() == right.height(), "side by side: heights ", left.height(), " and ",
+          right.height(), " differ");
+  RgbImage picture(left.width() + right.width(), left.height());
+  const cv::Mat all = mat_of(picture.view());
+  cv::Mat left_part = all.colRange(0, left.width());  // cvtColor writes into these
+  cv::Mat right_part = all.colRange(left.width(), all.cols);
+  cv::cvtColor(mat_of(left), left_part, cv::COLOR_GRAY2RGB);
+  cv::cvtColor(mat_of(right), right_part, cv::COLOR_GRAY2RGB);
   return picture;
 }
 
@@ -68,7 +72,8 @@ cv::Scalar colour_of(double t) {
 }
 
 int label_height() {
-  return text_size("0").height + text_size("0").height / 2 + 2 * kLabelPadding;
+  const int text = text_size("0").height;
+  return text + text / 2 + 2 * kLabelPadding;
 }
 
 void draw_label(cv::Mat& picture, cv::Point top_left, const std::string& text, cv::Scalar colour) {
@@ -85,12 +90,11 @@ RgbImage disparity_picture(ImageView<const std::int16_t> disparity, int max_disp
   const int width = disparity.width();
   const int height = disparity.height();
   RgbImage picture(width, height + kLegendHeight);
-  cv::Mat all = canvas(picture.view());
+  cv::Mat all = mat_of(picture.view());
   all.setTo(cv::Scalar::all(0));
 
   // The map: disparity 0..max_disparity onto TURBO's 256 colours; invalid pixels stay black.
-  const cv::Mat d16(height, width, CV_16SC1, const_cast<std::int16_t*>(disparity.data()),
-                    static_cast<std::size_t>(disparity.stride()) * sizeof(std::int16_t));
+  const cv::Mat d16 = mat_of(disparity);
   cv::Mat index;
   d16.convertTo(index, CV_8U, 255.0 / (16.0 * max_disparity));
   cv::Mat bgr;

@@ -9,14 +9,14 @@
 #include <string>
 
 #include "epipole/core/image.hpp"
+#include "opencv_mat.hpp"
 
 namespace epipole::tools {
 
-// An OpenCV header over the image's pixels, to draw on (no copy).
-cv::Mat canvas(ImageView<Rgb8> image);
-
-// A gray image in colour, to draw on.
+// A gray image in colour, to draw on (mat_of(picture.view())).
 RgbImage rgb_picture(GrayView gray);
+// Two gray images of one height side by side (left | right), in colour.
+RgbImage side_by_side(GrayView left, GrayView right);
 
 // The colour of t in [0, 1] on OpenCV's perceptual TURBO map: dark blue (0: far, small
 // disparities) through green and yellow to dark red (1: near).

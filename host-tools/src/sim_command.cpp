@@ -104,7 +104,7 @@ class LinkRecorder {
 // The rectified left image with each detection's box and, when known, its distance.
 RgbImage detections_picture(const firmware::FrameResult& r) {
   RgbImage picture = rgb_picture(r.left);
-  cv::Mat drawing = canvas(picture.view());
+  cv::Mat drawing = mat_of(picture.view());
   const cv::Scalar green{0, 255, 0};
   for (std::size_t i = 0; i < r.detections.size(); ++i) {
     const vision::Detection& d = r.detections[i];
@@ -144,7 +144,7 @@ class PictureWriter final : public firmware::FrameObserver {
     save_image(file("rectified-pair.png"), side_by_side_preview(r.left, r.right).view());
     if (!r.corners_left.empty() || (r.stages & firmware::stage_bit(protocol::Stage::corners))) {
       RgbImage corners = rgb_picture(r.left);
-      cv::Mat drawing = canvas(corners.view());
+      cv::Mat drawing = mat_of(corners.view());
       for (const vision::Corner& c : r.corners_left) {
         cv::circle(drawing, {c.x, c.y}, 3, {0, 255, 0}, 1, cv::LINE_AA);
       }
