@@ -21,18 +21,27 @@ void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* r
         _mm256_shuffle_epi8(table, _mm256_and_si256(v, low)),
         _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(v, 4), low)));
   };
+  // The plane pointers in registers: read through `left` and `right` in the loop, they were
+  // reloaded and the splats went through the stack, which took half of this kernel's time.
+  const std::uint8_t* const l0 = left[0];
+  const std::uint8_t* const l1 = left[1];
+  const std::uint8_t* const l2 = left[2];
+  const std::uint8_t* const l3 = left[3];
+  const std::uint8_t* const r0 = right[0];
+  const std::uint8_t* const r1 = right[1];
+  const std::uint8_t* const r2 = right[2];
+  const std::uint8_t* const r3 = right[3];
   for (int x = 0; x < width; ++x) {
-    __m256i l[kCensusPlanes];
-    for (int p = 0; p < kCensusPlanes; ++p) {
-      l[p] = _mm256_set1_epi8(static_cast<char>(left[p][x]));
-    }
+    const __m256i l[kCensusPlanes] = {
+        _mm256_set1_epi8(static_cast<char>(l0[x])), _mm256_set1_epi8(static_cast<char>(l1[x])),
+        _mm256_set1_epi8(static_cast<char>(l2[x])), _mm256_set1_epi8(static_cast<char>(l3[x]))};
     const std::ptrdiff_t k = width - 1 - x;
     std::uint8_t* out = cost + static_cast<std::ptrdiff_t>(x) * disparities;
     int d = 0;
     for (; d + 32 <= disparities; d += 32) {
-      const __m256i sum = _mm256_add_epi8(
-          _mm256_add_epi8(count(l[0], right[0] + k + d), count(l[1], right[1] + k + d)),
-          _mm256_add_epi8(count(l[2], right[2] + k + d), count(l[3], right[3] + k + d)));
+      const __m256i sum =
+          _mm256_add_epi8(_mm256_add_epi8(count(l[0], r0 + k + d), count(l[1], r1 + k + d)),
+                          _mm256_add_epi8(count(l[2], r2 + k + d), count(l[3], r3 + k + d)));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + d), sum);
     }
     if (d < disparities) {  // 16 left
