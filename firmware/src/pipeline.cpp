@@ -20,10 +20,6 @@ using protocol::Stage;
 
 namespace {
 
-// The stages that read only the rectified images and whose results no other stage reads:
-// with threads, they run beside the others (and the detections' depths join after both).
-constexpr StageMask kBeside = stage_bit(Stage::detect);
-
 // One corner detector per image, FAST or Harris as the board says.
 class CornerDetector {
  public:
@@ -134,6 +130,7 @@ vision::CascadeConfig cascade_config(const BoardConfig& board) {
   c.min_object_width = c.min_object_height = board.detector.min_size;
   c.max_object_width = c.max_object_height = board.detector.max_size;
   c.max_detections = protocol::kMaxDetections;
+  c.workers = board.threads.count;
   return c;
 }
 
@@ -143,6 +140,7 @@ Pipeline::Pipeline(const BoardConfig& board,
                    const std::optional<calib::StereoCalibration>& calibration, SimdPath path,
                    const vision::CascadeModel* cascade)
     : stages_(std::make_unique<Stages>(board, path)),
+      pool_(std::make_unique<ThreadPool>(board.threads.count)),
       calibration_health_(board.sparse.max_matches) {
   available_ = stage_bit(Stage::capture) | stage_bit(Stage::publish) | stage_bit(Stage::corners) |
                stage_bit(Stage::disparity) | stage_bit(Stage::sparse);
@@ -193,12 +191,11 @@ Pipeline::Pipeline(const BoardConfig& board,
           std::make_unique<DetectionDepthEstimator>(*triangulator_, stereo.max_disparity);
     }
     available_ |= stage_bit(Stage::detect);
-    // With more than one thread the cascade runs beside the other stages on a worker of its own
-    // and the matcher's stripes take the others: threads.count threads in all, one per CPU.
-    if (board.threads.count >= 2) beside_ = std::make_unique<ThreadPool>(2);
   }
-  stereo.threads = beside_ ? board.threads.count - 1 : board.threads.count;
-  stages_->matcher = std::make_unique<vision::StereoMatcher>(stereo, path);
+  // One pool for every stage: threads.count workers, one per CPU, the disparity in as many
+  // stripes.
+  stereo.threads = board.threads.count;
+  stages_->matcher = std::make_unique<vision::StereoMatcher>(stereo, path, pool_.get());
 }
 
 Pipeline::~Pipeline() = default;
@@ -224,6 +221,11 @@ void Pipeline::add_memory(MemoryReport& report) const {
   }
 }
 
+// The stages of a pair on the one pool: the rectification of both images first (every other
+// stage reads it), then one batch of tasks in the order they should start: the corners of both
+// images, the disparity's stripes, the sparse matching (once the corners are there), the
+// disparity's end (speckles, obstacles), the cascade's pyramid levels (largest first, so the
+// small ones fill the workers' last gaps). The detections' depths join after all.
 const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_t frame,
                                      hal::Nanoseconds trigger_ns, StageMask enabled) {
   FrameResult& r = result_;
@@ -232,68 +234,77 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   r.trigger_ns = trigger_ns;
   r.left_raw = r.left = left;
   r.right_raw = r.right = right;
-  const StageMask run = enabled & available_;
-  // Runs the stages of `which` in the order of protocol::kStages, each timed, each only when
-  // what it reads ran; adds them to `done`. Touches only their own fields of r, so that the
-  // two groups below can run at once.
-  const auto run_stages = [&](StageMask which, StageMask& done) {
-    for (const protocol::StageInfo& s : protocol::kStages) {
-      if (s.kind != protocol::StageKind::switchable || !protocol::has_stage(run & which, s.id)) {
-        continue;
-      }
-      if ((done & s.needs) != s.needs) continue;
-      const hal::Nanoseconds start = steady_now();
-      run_stage(s.id, r);
-      r.times[static_cast<std::size_t>(s.id)] = steady_now() - start;
-      done |= stage_bit(s.id);
-    }
+  // A stage runs when it is on, possible here, and what it reads runs.
+  StageMask run = stage_bit(Stage::capture);
+  for (const protocol::StageInfo& s : protocol::kStages) {
+    const bool wanted = s.kind == protocol::StageKind::switchable &&
+                        protocol::has_stage(enabled & available_, s.id);
+    if (wanted && (run & s.needs) == s.needs) run |= stage_bit(s.id);
+  }
+  const auto time_of = [&r](Stage s) -> hal::Nanoseconds& {
+    return r.times[static_cast<std::size_t>(s)];
   };
-  StageMask done = stage_bit(Stage::capture);
-  run_stages(stage_bit(Stage::rectify), done);
-  r.stages = done;  // what the stages below may read (match_sparse: was it rectified?)
-  StageMask beside_done = done;
-  if (beside_ && protocol::has_stage(run, Stage::detect)) {
-    beside_->run(2, [&](int task, int) {
-      if (task == 0) {
-        run_stages(~(stage_bit(Stage::rectify) | kBeside), done);
+
+  if (protocol::has_stage(run, Stage::rectify)) {
+    const hal::Nanoseconds start = steady_now();
+    StereoRectifiers& rectifiers = *stages_->rectifiers;
+    pool_->run(2, [&](int image, int) {
+      if (image == 0) {
+        r.left = rectifiers.left.rectify(r.left_raw);
       } else {
-        run_stages(kBeside, beside_done);
+        r.right = rectifiers.right.rectify(r.right_raw);
       }
     });
-  } else {
-    run_stages(~stage_bit(Stage::rectify) & ~kBeside, done);
-    run_stages(kBeside, beside_done);
+    time_of(Stage::rectify) = steady_now() - start;
   }
-  r.stages = done | beside_done;
-  if (protocol::has_stage(r.stages, Stage::detect)) attach_depths(r);
+  r.stages = run & (stage_bit(Stage::capture) | stage_bit(Stage::rectify));
+
+  auto corners = [&](int image, int) {
+    if (image == 0) {
+      r.corners_left = stages_->corners_left.detect(r.left);
+    } else {
+      r.corners_right = stages_->corners_right.detect(r.right);
+    }
+  };
+  auto stripe = [&](int i, int worker) { stages_->matcher->run_stripe(i, worker); };
+  auto disparity_end = [&](int, int) { finish_dense(r); };
+  auto sparse = [&](int, int) { match_sparse(r); };
+  auto level = [&](int i, int worker) { detector_->search_level(i, worker); };
+  TaskBatch& batch = batch_;
+  int corners_part = TaskBatch::kNoPart;
+  int stripes_part = TaskBatch::kNoPart;
+  int disparity_end_part = TaskBatch::kNoPart;
+  int sparse_part = TaskBatch::kNoPart;
+  int levels_part = TaskBatch::kNoPart;
+  if (protocol::has_stage(run, Stage::corners)) corners_part = batch.add(2, corners);
+  if (protocol::has_stage(run, Stage::disparity)) {
+    stripes_part = batch.add(stages_->matcher->start(r.left, r.right), stripe);
+  }
+  if (protocol::has_stage(run, Stage::sparse)) sparse_part = batch.add(1, sparse, corners_part);
+  if (protocol::has_stage(run, Stage::disparity)) {
+    disparity_end_part = batch.add(1, disparity_end, stripes_part);
+  }
+  if (protocol::has_stage(run, Stage::detect)) {
+    levels_part = batch.add(detector_->start(r.left), level);
+  }
+  batch.run(*pool_);
+  time_of(Stage::corners) = batch.span_ns(corners_part, corners_part);
+  // (The sparse matching may run between the stripes and their end.)
+  time_of(Stage::disparity) = batch.span_ns(stripes_part, stripes_part) +
+                              batch.span_ns(disparity_end_part, disparity_end_part);
+  time_of(Stage::sparse) = batch.span_ns(sparse_part, sparse_part);
+  if (protocol::has_stage(run, Stage::detect)) {
+    const hal::Nanoseconds start = steady_now();
+    r.detections = detector_->finish();
+    attach_depths(r);
+    time_of(Stage::detect) = batch.span_ns(levels_part, levels_part) + (steady_now() - start);
+  }
+  r.stages = run;
   return r;
 }
 
-void Pipeline::run_stage(Stage stage, FrameResult& r) {
-  switch (stage) {
-    case Stage::rectify:
-      r.left = stages_->rectifiers->left.rectify(r.left_raw);
-      r.right = stages_->rectifiers->right.rectify(r.right_raw);
-      return;
-    case Stage::corners:
-      r.corners_left = stages_->corners_left.detect(r.left);
-      r.corners_right = stages_->corners_right.detect(r.right);
-      return;
-    case Stage::disparity:
-      return match_dense(r);
-    case Stage::sparse:
-      return match_sparse(r);
-    case Stage::detect:
-      return detect(r);
-    case Stage::capture:
-    case Stage::publish:
-    case Stage::total:
-      return;  // the frame loop's
-  }
-}
-
-void Pipeline::match_dense(FrameResult& r) {
-  r.disparity = stages_->matcher->compute(r.left, r.right);
+void Pipeline::finish_dense(FrameResult& r) {
+  r.disparity = stages_->matcher->finish();
   std::uint64_t valid = 0;
   for (int y = 0; y < r.disparity.height(); ++y) {
     const std::int16_t* row = r.disparity.row(y);
@@ -329,10 +340,6 @@ void Pipeline::match_sparse(FrameResult& r) {
     r.calibration_health =
         calibration_health_.measure({rectified_matches_.data(), r.matches.size()});
   }
-}
-
-void Pipeline::detect(FrameResult& r) {
-  r.detections = detector_->detect(r.left);
 }
 
 void Pipeline::attach_depths(FrameResult& r) {

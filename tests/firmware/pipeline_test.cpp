@@ -1,7 +1,7 @@
-// The vision stages of one pair: with threads the cascade runs beside the other stages, and the
-// results are those of one thread, to the bit (the disparity: that of the matcher alone at the
-// same thread count, whose row stripes differ from one thread's near their borders,
-// docs/vision.md).
+// The vision stages of one pair on one pool: with threads, every stage's tasks share the
+// workers, and the results are those of one thread, to the bit (the disparity: that of the
+// matcher alone at the same thread count, whose row stripes differ from one thread's near their
+// borders, docs/vision.md).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -39,10 +39,9 @@ bool same_depths(std::span<const DetectionDepth> a, std::span<const DetectionDep
          });
 }
 
-// Two threads: the cascade on its worker, the matcher on one stripe, so every result is one
-// thread's. Three: the matcher on two stripes (its own documented difference near the stripe
-// border); everything else still one thread's, and the depths those of its disparity.
-TEST(Pipeline, TheCascadeBesideTheOtherStagesGivesWhatOneThreadGives) {
+// Two and three threads: the matcher on two and three stripes (its own documented difference
+// near the stripe borders); everything else one thread's, and the depths those of the disparity.
+TEST(Pipeline, StagesSharingThePoolGiveWhatOneThreadGives) {
   test::SimRig rig(160, 120, 8);
   BoardConfig config = rig.parse("threads: {count: 1}\n");
   config.stages |= stage_bit(protocol::Stage::sparse);
@@ -61,6 +60,8 @@ TEST(Pipeline, TheCascadeBesideTheOtherStagesGivesWhatOneThreadGives) {
   stereo.height = rig.height;
   stereo.threads = 2;
   vision::StereoMatcher two_stripes(stereo);
+  stereo.threads = 3;
+  vision::StereoMatcher three_stripes(stereo);
   const calib::Triangulator triangulator(calibration->Q, 1, 1);
   DetectionDepthEstimator depth(triangulator, stereo.max_disparity);
   const SceneImages images = rig.images(3);
@@ -95,17 +96,16 @@ TEST(Pipeline, TheCascadeBesideTheOtherStagesGivesWhatOneThreadGives) {
         EXPECT_EQ(a.calibration_health->median_px, r->calibration_health->median_px);
         EXPECT_TRUE(same(a.detections, r->detections));
       }
-      EXPECT_TRUE(same_image(a.disparity, b.disparity));
-      EXPECT_EQ(a.valid_disparity_permille, b.valid_disparity_permille);
-      ASSERT_TRUE(a.obstacles != nullptr && b.obstacles != nullptr);
-      EXPECT_EQ(*a.obstacles, *b.obstacles);
-      EXPECT_TRUE(same_depths(a.detection_depths, b.detection_depths));
-      EXPECT_TRUE(same_image(two_stripes.compute(c.left, c.right), c.disparity));
-      ASSERT_EQ(c.detection_depths.size(), c.detections.size());
-      for (std::size_t k = 0; k < c.detections.size(); ++k) {
-        const DetectionDepth want = depth.estimate(c.detections[k], c.disparity);
-        EXPECT_TRUE(same_depths({&want, 1}, {&c.detection_depths[k], 1}));
-        with_depth += want.valid ? 1 : 0;
+      EXPECT_TRUE(same_image(two_stripes.compute(b.left, b.right), b.disparity));
+      EXPECT_TRUE(same_image(three_stripes.compute(c.left, c.right), c.disparity));
+      for (const FrameResult* r : {&a, &b, &c}) {
+        ASSERT_TRUE(r->obstacles != nullptr);
+        ASSERT_EQ(r->detection_depths.size(), r->detections.size());
+        for (std::size_t k = 0; k < r->detections.size(); ++k) {
+          const DetectionDepth want = depth.estimate(r->detections[k], r->disparity);
+          EXPECT_TRUE(same_depths({&want, 1}, {&r->detection_depths[k], 1}));
+          with_depth += want.valid ? 1 : 0;
+        }
       }
       detections += static_cast<int>(a.detections.size());
     }

@@ -69,7 +69,7 @@ TEST(BenchCli, EveryStageOfBothSidesForEachThreadCount) {
     expect_timing(run["epipole"]["pair"], "epipole pair");
     expect_timing(run["opencv"]["pair"], "opencv pair");
     // A pair takes at least as long as its longest stage; on one thread, as all of them (with
-    // more, the cascade runs beside the others).
+    // more, the stages share the threads).
     double sum = 0;
     double longest = 0;
     for (const auto& [name, t] : run["epipole"]["stages"].items()) {

@@ -12,6 +12,7 @@
 #include "cascade_kernels.hpp"
 #include "cascade_test_models.hpp"
 #include "epipole/core/error.hpp"
+#include "epipole/core/thread_pool.hpp"
 #include "epipole/vision/cascade.hpp"
 #include "random_image.hpp"
 
@@ -212,6 +213,7 @@ class CascadeDetection : public ::testing::TestWithParam<DetectionCase> {};
 TEST_P(CascadeDetection, EveryPathFindsTheSameWindows) {
   const DetectionCase& c = GetParam();
   const CascadeModel model(test::random_cascade(c.shape, 21), c.name);
+  ThreadPool pool(3);
   std::size_t total_hits = 0;
   for (const test::Pattern pattern : {test::Pattern::blobs, test::Pattern::noise}) {
     test::BufferImage image(c.width, c.height, c.width + 3, 1);
@@ -241,6 +243,28 @@ TEST_P(CascadeDetection, EveryPathFindsTheSameWindows) {
         const auto boxes = grouping.detect(image.cview());
         EXPECT_EQ(std::vector<Detection>(boxes.begin(), boxes.end()), expected_grouped)
             << c.name << " " << to_string(path);
+        // The levels searched by three workers at once: the same hits in the same order, the
+        // same boxes; and with a bound on the raw hits that cuts them, the same cut.
+        for (const int bound : {config.max_raw_hits, static_cast<int>(expected.size() / 2)}) {
+          if (bound < 1) continue;
+          CascadeConfig pooled_config = config;
+          pooled_config.workers = 3;
+          pooled_config.max_raw_hits = bound;
+          CascadeDetector pooled(model, pooled_config, path);
+          const int levels = pooled.start(image.cview());
+          pool.run(levels, [&](int level, int worker) { pooled.search_level(level, worker); });
+          const auto pooled_boxes = pooled.finish();
+          const std::size_t kept = std::min(expected.size(), static_cast<std::size_t>(bound));
+          EXPECT_EQ(std::vector<Detection>(pooled.raw_hits().begin(), pooled.raw_hits().end()),
+                    std::vector<Detection>(expected.begin(),
+                                           expected.begin() + static_cast<std::ptrdiff_t>(kept)))
+              << c.name << " " << to_string(path) << " bound " << bound;
+          EXPECT_EQ(pooled.truncated(), kept < expected.size());
+          if (kept == expected.size()) {
+            EXPECT_EQ(std::vector<Detection>(pooled_boxes.begin(), pooled_boxes.end()),
+                      expected_grouped);
+          }
+        }
       }
     }
   }

@@ -113,10 +113,63 @@ CascadeConfig checked(const CascadeConfig& c) {
           "cascade object sizes must not be negative");
   require(c.max_raw_hits >= 1 && c.max_detections >= 1, "cascade bounds max_raw_hits ",
           c.max_raw_hits, " and max_detections ", c.max_detections, " must be positive");
+  require(c.workers >= 1 && c.workers <= 64, "cascade workers ", c.workers, " (1 to 64 allowed)");
   return c;
 }
 
 }  // namespace
+
+// What one worker needs to search a pyramid level: the level image, its integral planes and
+// their scratch rows, the resize coefficients, and the raw hits of the levels it searched.
+struct CascadeWorker {
+  CascadeWorker(const CascadeConfig& c, std::ptrdiff_t stride, std::ptrdiff_t plane_entries,
+                int plane_count, bool tilted)
+      : level(c.max_width, c.max_height) {
+    const auto w = static_cast<std::size_t>(c.max_width);
+    const auto h = static_cast<std::size_t>(c.max_height);
+    planes = std::make_unique<std::uint32_t[]>(static_cast<std::size_t>(plane_count) *
+                                               static_cast<std::size_t>(plane_entries));
+    if (tilted) {
+      prefix = std::make_unique<std::uint32_t[]>(w + 2);
+      for (auto& r : tilted_rows) r = std::make_unique<std::uint32_t[]>(w + 2);
+    }
+    // Split levels: two rows of sums and squares (by row parity), and one tilted row.
+    for (auto& r : scratch)
+      r = std::make_unique<std::uint32_t[]>(2 * static_cast<std::size_t>(stride));
+    column_offsets = std::make_unique<std::int32_t[]>(w);
+    column_weights = std::make_unique<std::uint16_t[]>(2 * w);
+    row_offsets = std::make_unique<std::int32_t[]>(h);
+    row_weights = std::make_unique<std::uint16_t[]>(2 * h);
+    for (auto& r : resized_rows) r = std::make_unique<std::uint16_t[]>(w);
+    row_hits = std::make_unique<std::int32_t[]>(w + 1);
+    hits = std::make_unique<Detection[]>(static_cast<std::size_t>(c.max_raw_hits));
+  }
+
+  static std::size_t bytes(const CascadeConfig& c, std::ptrdiff_t stride,
+                           std::ptrdiff_t plane_entries, int plane_count, bool tilted) {
+    const auto w = static_cast<std::size_t>(c.max_width);
+    const auto h = static_cast<std::size_t>(c.max_height);
+    return w * h + static_cast<std::size_t>(plane_count * plane_entries) * 4 +
+           (tilted ? 5 * (w + 2) * 4 : 0) + 3 * 2 * static_cast<std::size_t>(stride) * 4 +
+           w * (4 + 2 * 2 + 2 * 2 + 4) + h * (4 + 2 * 2) + 4 +
+           static_cast<std::size_t>(c.max_raw_hits) * sizeof(Detection);
+  }
+
+  GrayImage level;
+  std::unique_ptr<std::uint32_t[]> planes;
+  std::unique_ptr<std::uint32_t[]> prefix;
+  std::unique_ptr<std::uint32_t[]> tilted_rows[4];
+  std::unique_ptr<std::uint32_t[]> scratch[3];
+  std::unique_ptr<std::int32_t[]> column_offsets;
+  std::unique_ptr<std::uint16_t[]> column_weights;
+  std::unique_ptr<std::int32_t[]> row_offsets;
+  std::unique_ptr<std::uint16_t[]> row_weights;
+  std::unique_ptr<std::uint16_t[]> resized_rows[2];
+  std::unique_ptr<std::int32_t[]> row_hits;
+  std::unique_ptr<Detection[]> hits;  // the raw hits of this image's levels searched here
+  int hit_count = 0;
+  bool truncated = false;  // a hit did not fit in `hits`
+};
 
 struct CascadeDetector::State {
   State(const CascadeModel& model, const CascadeConfig& c, SimdPath p)
@@ -127,8 +180,7 @@ struct CascadeDetector::State {
         programs{kernels::CascadeProgram(model, {stride, 0}, plane, 2 * plane),
                  kernels::CascadeProgram(model, {stride / 2, plane / 2}, plane, 2 * plane)},
         tilted(model.has_tilted_features()),
-        squares(model.feature_type() == CascadeFeatureType::haar),
-        level(c.max_width, c.max_height) {
+        squares(model.feature_type() == CascadeFeatureType::haar) {
     windows = kernels::cascade_row_ref;
     if (programs[0].fixed_point_exact && path != SimdPath::reference) {
       static constexpr KernelSet<kernels::CascadeRowKernel> kKernels{
@@ -144,22 +196,10 @@ struct CascadeDetector::State {
         KernelSet<kernels::SplitRowKernel>{kernels::split_row_ref, kernels::split_row_neon, nullptr}
             .pick(path);
 
-    const auto w = static_cast<std::size_t>(c.max_width);
-    const auto h = static_cast<std::size_t>(c.max_height);
-    planes = std::make_unique<std::uint32_t[]>(static_cast<std::size_t>(plane_count() * plane));
-    if (tilted) {
-      prefix = std::make_unique<std::uint32_t[]>(w + 2);
-      for (auto& r : tilted_rows) r = std::make_unique<std::uint32_t[]>(w + 2);
+    for (int i = 0; i < config.workers; ++i) {
+      workers.push_back(
+          std::make_unique<CascadeWorker>(config, stride, plane, plane_count(), tilted));
     }
-    // Split levels: two rows of sums and squares (by row parity), and one tilted row.
-    for (auto& r : scratch)
-      r = std::make_unique<std::uint32_t[]>(2 * static_cast<std::size_t>(stride));
-    column_offsets = std::make_unique<std::int32_t[]>(w);
-    column_weights = std::make_unique<std::uint16_t[]>(2 * w);
-    row_offsets = std::make_unique<std::int32_t[]>(h);
-    row_weights = std::make_unique<std::uint16_t[]>(2 * h);
-    for (auto& r : resized_rows) r = std::make_unique<std::uint16_t[]>(w);
-    row_hits = std::make_unique<std::int32_t[]>(w + 1);
     // The scales of the largest image: smaller images and object limits only drop some.
     for (double factor = 1;; factor *= c.scale_factor) {
       if (round_even(model.window_width() * factor) > c.max_width ||
@@ -168,7 +208,9 @@ struct CascadeDetector::State {
       }
       ++max_levels;
     }
-    scales = std::make_unique<float[]>(static_cast<std::size_t>(std::max(max_levels, 1)));
+    const auto levels = static_cast<std::size_t>(std::max(max_levels, 1));
+    scales = std::make_unique<float[]>(levels);
+    level_hits = std::make_unique<LevelHits[]>(levels);
     const auto hits = static_cast<std::size_t>(c.max_raw_hits);
     raw = std::make_unique<Detection[]>(hits);
     parent = std::make_unique<int[]>(hits);
@@ -179,21 +221,21 @@ struct CascadeDetector::State {
   }
 
   std::size_t working_set_bytes() const {
-    const auto w = static_cast<std::size_t>(config.max_width);
-    const auto h = static_cast<std::size_t>(config.max_height);
     const auto hits = static_cast<std::size_t>(config.max_raw_hits);
-    return programs[0].bytes() + programs[1].bytes() + level.size_bytes() +
-           static_cast<std::size_t>(plane_count() * plane) * 4 + (tilted ? 5 * (w + 2) * 4 : 0) +
-           3 * 2 * static_cast<std::size_t>(stride) * 4 + w * (4 + 4 + 2 * 2 + 4) + h * (4 + 4) +
-           static_cast<std::size_t>(max_levels) * 4 + hits * (2 * sizeof(Detection) + 3 * 4) +
+    return programs[0].bytes() + programs[1].bytes() +
+           workers.size() * CascadeWorker::bytes(config, stride, plane, plane_count(), tilted) +
+           static_cast<std::size_t>(max_levels) * (4 + sizeof(LevelHits)) +
+           hits * (2 * sizeof(Detection) + 3 * 4) +
            static_cast<std::size_t>(config.max_detections) * sizeof(Detection);
   }
 
   // Sums, then squares (Haar), then tilted sums (when the cascade has tilted features).
-  std::ptrdiff_t plane_count() const { return tilted ? 3 : squares ? 2 : 1; }
-  void resize_level(GrayView image, int width, int height);
-  void integrate(GrayView image, bool split);
-  void scan(GrayView image);
+  int plane_count() const { return tilted ? 3 : squares ? 2 : 1; }
+  int plan(GrayView image);
+  void search_level(int index, CascadeWorker& w);
+  void resize_level(CascadeWorker& w, int width, int height);
+  void integrate(CascadeWorker& w, GrayView level, bool split);
+  void gather_hits();
   void group(int image_width, int image_height);
   int cluster();
   void emit(Detection d, int image_width, int image_height);
@@ -212,19 +254,18 @@ struct CascadeDetector::State {
   kernels::ResizeRowsKernel* resize_rows = nullptr;
   kernels::SplitRowKernel* split_row = nullptr;
 
-  GrayImage level;
-  std::unique_ptr<std::uint32_t[]> planes;
-  std::unique_ptr<std::uint32_t[]> prefix;
-  std::unique_ptr<std::uint32_t[]> tilted_rows[4];
-  std::unique_ptr<std::uint32_t[]> scratch[3];
-  std::unique_ptr<std::int32_t[]> column_offsets;
-  std::unique_ptr<std::uint16_t[]> column_weights;
-  std::unique_ptr<std::int32_t[]> row_offsets;
-  std::unique_ptr<std::uint16_t[]> row_weights;
-  std::unique_ptr<std::uint16_t[]> resized_rows[2];
-  std::unique_ptr<std::int32_t[]> row_hits;
+  std::vector<std::unique_ptr<CascadeWorker>> workers;
   int max_levels = 0;
   std::unique_ptr<float[]> scales;
+  // Where each level of this image left its hits: which worker searched it, and the range.
+  struct LevelHits {
+    int worker = 0;
+    int begin = 0;
+    int end = 0;
+  };
+  std::unique_ptr<LevelHits[]> level_hits;
+  GrayView image;  // the image of the search in progress (start() .. finish())
+  int stripes = 0;
   std::unique_ptr<Detection[]> raw;
   std::unique_ptr<int[]> parent;
   std::unique_ptr<int[]> rank;
@@ -239,13 +280,14 @@ struct CascadeDetector::State {
 
 // cv::resize(image, level, size, INTER_LINEAR_EXACT): each destination row from two source rows'
 // horizontal passes (cached: consecutive rows share one).
-void CascadeDetector::State::resize_level(GrayView image, int width, int height) {
-  kernels::resize_coefficients(image.width(), width, column_offsets.get(), column_weights.get());
-  kernels::resize_coefficients(image.height(), height, row_offsets.get(), row_weights.get());
+void CascadeDetector::State::resize_level(CascadeWorker& w, int width, int height) {
+  kernels::resize_coefficients(image.width(), width, w.column_offsets.get(),
+                               w.column_weights.get());
+  kernels::resize_coefficients(image.height(), height, w.row_offsets.get(), w.row_weights.get());
   int cached[2] = {-1, -1};
   const int last = image.height() - 1;
   for (int y = 0; y < height; ++y) {
-    const int rows[2] = {row_offsets[y], std::min(row_offsets[y] + 1, last)};
+    const int rows[2] = {w.row_offsets[y], std::min(w.row_offsets[y] + 1, last)};
     const std::uint16_t* pass[2] = {nullptr, nullptr};
     for (int k = 0; k < 2; ++k) {
       int slot = cached[0] == rows[k] ? 0 : cached[1] == rows[k] ? 1 : -1;
@@ -254,27 +296,27 @@ void CascadeDetector::State::resize_level(GrayView image, int width, int height)
         if (k == 0) {
           slot = cached[0] == rows[1] ? 1 : 0;
         } else {
-          slot = pass[0] == resized_rows[0].get() ? 1 : 0;
+          slot = pass[0] == w.resized_rows[0].get() ? 1 : 0;
         }
-        resize_columns(image.row(rows[k]), image.width(), column_offsets.get(),
-                       column_weights.get(), width, resized_rows[slot].get());
+        resize_columns(image.row(rows[k]), image.width(), w.column_offsets.get(),
+                       w.column_weights.get(), width, w.resized_rows[slot].get());
         cached[slot] = rows[k];
       }
-      pass[k] = resized_rows[slot].get();
+      pass[k] = w.resized_rows[slot].get();
     }
-    resize_rows(pass[0], pass[1], row_weights[2 * y], row_weights[2 * y + 1], width,
-                level.view().row(y));
+    resize_rows(pass[0], pass[1], w.row_weights[2 * y], w.row_weights[2 * y + 1], width,
+                w.level.view().row(y));
   }
 }
 
-// The integral images of one level into the planes: row 0 is zero, row Y + 1 holds the sums
-// over image rows 0..Y. With `split`, rows are computed in the scratch rows and stored with
+// The integral images of one level into the worker's planes: row 0 is zero, row Y + 1 holds the
+// sums over image rows 0..Y. With `split`, rows are computed in the scratch rows and stored with
 // their even and odd columns apart (programs[1]'s layout).
-void CascadeDetector::State::integrate(GrayView image, bool split) {
-  const int width = image.width();
+void CascadeDetector::State::integrate(CascadeWorker& w, GrayView level, bool split) {
+  const int width = level.width();
   const int entries = width + 1;
   const std::ptrdiff_t row_stride = split ? stride / 2 : stride;
-  std::uint32_t* sum = planes.get();
+  std::uint32_t* sum = w.planes.get();
   std::uint32_t* square = squares ? sum + plane : nullptr;
   std::uint32_t* tilted_plane = tilted ? sum + 2 * plane : nullptr;
   const auto clear = [](std::uint32_t* row, std::size_t n) { std::memset(row, 0, n * 4); };
@@ -284,44 +326,46 @@ void CascadeDetector::State::integrate(GrayView image, bool split) {
     if (split) clear(p + plane / 2, static_cast<std::size_t>(entries));
   }
   if (tilted) {
-    for (int k = 0; k < 2; ++k) clear(tilted_rows[k].get(), static_cast<std::size_t>(width) + 2);
+    for (int k = 0; k < 2; ++k) clear(w.tilted_rows[k].get(), static_cast<std::size_t>(width) + 2);
   }
   if (split) {
-    for (int k = 0; k < 2; ++k) clear(scratch[k].get(), static_cast<std::size_t>(entries));
+    for (int k = 0; k < 2; ++k) clear(w.scratch[k].get(), static_cast<std::size_t>(entries));
   }
-  for (int y = 0; y < image.height(); ++y) {
+  for (int y = 0; y < level.height(); ++y) {
     const std::ptrdiff_t above = y * row_stride;
     const std::ptrdiff_t here = above + row_stride;
-    std::uint32_t* prefix_row = tilted ? prefix.get() : nullptr;
+    std::uint32_t* prefix_row = tilted ? w.prefix.get() : nullptr;
     if (split) {
       // Scratch rows: sums at 0 / 1 and squares at 2 / 3 by row parity; the tilted row at 4.
-      std::uint32_t* sums_above = scratch[y & 1].get();
-      std::uint32_t* sums = scratch[1 - (y & 1)].get();
+      std::uint32_t* sums_above = w.scratch[y & 1].get();
+      std::uint32_t* sums = w.scratch[1 - (y & 1)].get();
       std::uint32_t* squares_above = squares ? sums_above + stride : nullptr;
       std::uint32_t* square_row = squares ? sums + stride : nullptr;
-      integral_row(image.row(y), width, sums_above, squares_above, sums, square_row, prefix_row);
+      integral_row(level.row(y), width, sums_above, squares_above, sums, square_row, prefix_row);
       split_row(sums, entries, sum + here, sum + plane / 2 + here);
       if (squares) split_row(square_row, entries, square + here, square + plane / 2 + here);
     } else {
-      integral_row(image.row(y), width, sum + above, squares ? square + above : nullptr, sum + here,
+      integral_row(level.row(y), width, sum + above, squares ? square + above : nullptr, sum + here,
                    squares ? square + here : nullptr, prefix_row);
     }
     if (tilted) {
       const int from = (y & 1) * 2;
       const int to = 2 - from;
-      std::uint32_t* out = split ? scratch[2].get() : tilted_plane + here;
-      tilted_row(prefix.get(), width, tilted_rows[from].get(), tilted_rows[from + 1].get(),
-                 tilted_rows[to].get(), tilted_rows[to + 1].get(), out);
+      std::uint32_t* out = split ? w.scratch[2].get() : tilted_plane + here;
+      tilted_row(w.prefix.get(), width, w.tilted_rows[from].get(), w.tilted_rows[from + 1].get(),
+                 w.tilted_rows[to].get(), w.tilted_rows[to + 1].get(), out);
       if (split) split_row(out, entries, tilted_plane + here, tilted_plane + plane / 2 + here);
     }
   }
 }
 
-void CascadeDetector::State::scan(GrayView image) {
+// The scales of `image`: factor 1, scale_factor, scale_factor^2, ... (in double, as OpenCV)
+// while the window fits the image and the maximum size; those below the minimum size are
+// skipped. Returns how many levels there are to search.
+int CascadeDetector::State::plan(GrayView searched) {
+  image = searched;
   const int window_width = programs[0].window_width;
   const int window_height = programs[0].window_height;
-  // The scales: factor 1, scale_factor, scale_factor^2, ... (in double, as OpenCV) while the
-  // window fits the image and the maximum size; those below the minimum size are skipped.
   int max_w = config.max_object_width;
   int max_h = config.max_object_height;
   if (max_w == 0 || max_h == 0) max_w = image.width(), max_h = image.height();
@@ -335,52 +379,76 @@ void CascadeDetector::State::scan(GrayView image) {
     scales[count++] = static_cast<float>(factor);
   }
   level_count = count;
-  if (count == 0) return;
-
   // OpenCV's stripes: their number comes from the first level's width, and their height
   // (rounded to the step) can leave the last rows of a level unsearched.
-  const auto working = [&](float scale, int& w, int& h) {
-    w = std::max(round_even(static_cast<float>(image.width()) / scale) + 1 - window_width, 0);
-    h = std::max(round_even(static_cast<float>(image.height()) / scale) + 1 - window_height, 0);
-  };
-  int first_w = 0;
-  int first_h = 0;
-  working(scales[0], first_w, first_h);
-  const int stripes = static_cast<int>(std::ceil(first_w / 32.0));
-  for (int i = 0; i < count; ++i) {
-    const float scale = scales[i];
-    const int width = round_even(static_cast<float>(image.width()) / scale);
-    const int height = round_even(static_cast<float>(image.height()) / scale);
-    const int step = scale >= 2 ? 1 : 2;
-    int work_w = 0;
-    int work_h = 0;
-    working(scale, work_w, work_h);
-    if (stripes <= 0) continue;
-    const int stripe = std::max((work_h / step + stripes - 1) / stripes, 1) * step;
-    const int rows_end = std::min(stripes * stripe, work_h);
-    const int hit_width = round_even(static_cast<float>(window_width) * scale);
-    const int hit_height = round_even(static_cast<float>(window_height) * scale);
+  stripes = 0;
+  if (count > 0) {
+    const int first_w =
+        std::max(round_even(static_cast<float>(image.width()) / scales[0]) + 1 - window_width, 0);
+    stripes = static_cast<int>(std::ceil(first_w / 32.0));
+  }
+  for (auto& w : workers) {
+    w->hit_count = 0;
+    w->truncated = false;
+  }
+  return count;
+}
 
-    GrayView level_view = image;
-    if (width != image.width() || height != image.height()) {
-      resize_level(image, width, height);
-      level_view = GrayView(level.view().data(), width, height, level.stride());
-    }
-    const kernels::CascadeProgram& program = programs[step == 2 ? 1 : 0];
-    integrate(level_view, program.layout.split());
-    const int positions = (work_w + step - 1) / step;
-    for (int y = 0; y < rows_end; y += step) {
-      const int hits =
-          windows(program, planes.get() + y * program.layout.row_stride, positions, row_hits.get());
-      for (int k = 0; k < hits; ++k) {
-        if (raw_count == config.max_raw_hits) {
-          truncated = true;
-          break;
-        }
-        raw[raw_count++] = {round_even(static_cast<float>(row_hits[k]) * scale),
-                            round_even(static_cast<float>(y) * scale), hit_width, hit_height, 1};
+// One pyramid level, searched by worker `w`; its raw hits go to the worker's list.
+void CascadeDetector::State::search_level(int index, CascadeWorker& w) {
+  const int window_width = programs[0].window_width;
+  const int window_height = programs[0].window_height;
+  const float scale = scales[index];
+  LevelHits& where = level_hits[index];
+  where.begin = where.end = w.hit_count;
+  if (stripes <= 0) return;
+  const int width = round_even(static_cast<float>(image.width()) / scale);
+  const int height = round_even(static_cast<float>(image.height()) / scale);
+  const int step = scale >= 2 ? 1 : 2;
+  const int work_w = std::max(width + 1 - window_width, 0);
+  const int work_h = std::max(height + 1 - window_height, 0);
+  const int stripe = std::max((work_h / step + stripes - 1) / stripes, 1) * step;
+  const int rows_end = std::min(stripes * stripe, work_h);
+  const int hit_width = round_even(static_cast<float>(window_width) * scale);
+  const int hit_height = round_even(static_cast<float>(window_height) * scale);
+
+  GrayView level_view = image;
+  if (width != image.width() || height != image.height()) {
+    resize_level(w, width, height);
+    level_view = GrayView(w.level.view().data(), width, height, w.level.stride());
+  }
+  const kernels::CascadeProgram& program = programs[step == 2 ? 1 : 0];
+  integrate(w, level_view, program.layout.split());
+  const int positions = (work_w + step - 1) / step;
+  for (int y = 0; y < rows_end; y += step) {
+    const int hits = windows(program, w.planes.get() + y * program.layout.row_stride, positions,
+                             w.row_hits.get());
+    for (int k = 0; k < hits; ++k) {
+      if (w.hit_count == config.max_raw_hits) {
+        w.truncated = true;
+        break;
       }
+      w.hits[w.hit_count++] = {round_even(static_cast<float>(w.row_hits[k]) * scale),
+                               round_even(static_cast<float>(y) * scale), hit_width, hit_height, 1};
     }
+  }
+  where.end = w.hit_count;
+}
+
+// The levels' hits in level order (OpenCV's), at most max_raw_hits of them. A worker whose own
+// list overflowed had more than max_raw_hits hits in all, so the list kept is the same.
+void CascadeDetector::State::gather_hits() {
+  raw_count = 0;
+  truncated = false;
+  for (const auto& w : workers) truncated = truncated || w->truncated;
+  for (int i = 0; i < level_count; ++i) {
+    const LevelHits& where = level_hits[i];
+    const Detection* hits = workers[static_cast<std::size_t>(where.worker)]->hits.get();
+    const int n = where.end - where.begin;
+    const int kept = std::min(n, config.max_raw_hits - raw_count);
+    std::copy_n(hits + where.begin, kept, raw.get() + raw_count);
+    raw_count += kept;
+    truncated = truncated || kept < n;
   }
 }
 
@@ -493,6 +561,12 @@ CascadeDetector::CascadeDetector(CascadeDetector&&) noexcept = default;
 CascadeDetector& CascadeDetector::operator=(CascadeDetector&&) noexcept = default;
 
 std::span<const Detection> CascadeDetector::detect(GrayView image) {
+  const int levels = start(image);
+  for (int i = 0; i < levels; ++i) search_level(i, 0);
+  return finish();
+}
+
+int CascadeDetector::start(GrayView image) {
   State& s = *state_;
   require(image.width() <= s.config.max_width && image.height() <= s.config.max_height,
           "cascade detector configured for images up to ", s.config.max_width, "x",
@@ -501,9 +575,24 @@ std::span<const Detection> CascadeDetector::detect(GrayView image) {
   s.output_count = 0;
   s.level_count = 0;
   s.truncated = false;
-  if (image.empty()) return {};
-  s.scan(image);
-  s.group(image.width(), image.height());
+  if (image.empty()) {
+    s.image = image;
+    return 0;
+  }
+  return s.plan(image);
+}
+
+void CascadeDetector::search_level(int level, int worker) {
+  State& s = *state_;
+  s.level_hits[level].worker = worker;
+  s.search_level(level, *s.workers[static_cast<std::size_t>(worker)]);
+}
+
+std::span<const Detection> CascadeDetector::finish() {
+  State& s = *state_;
+  if (s.image.empty()) return {};
+  s.gather_hits();
+  s.group(s.image.width(), s.image.height());
   return {s.output.get(), static_cast<std::size_t>(s.output_count)};
 }
 

@@ -228,8 +228,8 @@ struct StereoMatcher::Worker {
   void cost_row(GrayView left, GrayView right, int y, int disparities, std::uint8_t* cost_out);
 };
 
-StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path)
-    : config_(config), path_(path), pool_(config.threads) {
+StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPool* pool)
+    : config_(config), path_(path), pool_(pool) {
   const int W = config.width;
   const int H = config.height;
   const int D = config.max_disparity;
@@ -249,13 +249,22 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path)
           "speckle size and range must not be negative");
   require(simd_path_available(path), "kernel path ", to_string(path),
           " is not available on this CPU");
+  require(config.threads >= 1 && config.threads <= 64, "stereo threads ", config.threads,
+          " is outside 1..64");
+  require(pool == nullptr || pool->threads() <= config.threads, "the stereo matcher's pool has ",
+          pool == nullptr ? 0 : pool->threads(), " workers, more than its ", config.threads,
+          " threads");
+  if (pool_ == nullptr) {
+    own_pool_ = std::make_unique<ThreadPool>(config.threads);
+    pool_ = own_pool_.get();
+  }
 
   const std::size_t wd = static_cast<std::size_t>(W) * static_cast<std::size_t>(D);
   const std::size_t stride = static_cast<std::size_t>(D) + 32;
   const std::size_t uw = static_cast<std::size_t>(W);
   const std::size_t ud = static_cast<std::size_t>(D);
   constexpr std::size_t kPlanes = kernels::kCensusPlanes;
-  for (int t = 0; t < pool_.threads(); ++t) {
+  for (int t = 0; t < config.threads; ++t) {
     auto w = std::make_unique<Worker>();
     w->kernels = kernels::stereo_kernels(path);
     w->left_census.assign(kPlanes * uw, 0);
@@ -304,13 +313,23 @@ std::size_t StereoMatcher::working_set_bytes() const {
 }
 
 ImageView<const std::int16_t> StereoMatcher::compute(GrayView left, GrayView right) {
+  const int stripes = start(left, right);
+  pool_->run(stripes, [&](int stripe, int worker) { run_stripe(stripe, worker); });
+  return finish();
+}
+
+int StereoMatcher::start(GrayView left, GrayView right) {
   require(same_size(left, right), "left image ", left.width(), "x", left.height(),
           " and right image ", right.width(), "x", right.height(), " differ in size");
   require(left.width() == config_.width && left.height() == config_.height, "images are ",
           left.width(), "x", left.height(), " but the matcher is configured for ", config_.width,
           "x", config_.height);
-  const int stripes = pool_.threads();
-  pool_.run(stripes, [&](int stripe, int worker) { run_stripe(stripe, worker, left, right); });
+  left_ = left;
+  right_ = right;
+  return config_.threads;
+}
+
+ImageView<const std::int16_t> StereoMatcher::finish() {
   if (config_.speckle_size > 0) remove_speckles();
   return disparity_;
 }
@@ -364,15 +383,15 @@ void check_row(const StereoConfig& config, const StereoMatcher::Worker& w, std::
 
 }  // namespace
 
-void StereoMatcher::run_stripe(int stripe, int worker, GrayView left, GrayView right) {
+void StereoMatcher::run_stripe(int stripe, int worker) {
   Worker& w = *workers_[static_cast<std::size_t>(worker)];
-  const int stripes = pool_.threads();
+  const int stripes = config_.threads;
   const int y0 = stripe * config_.height / stripes;
   const int y1 = (stripe + 1) * config_.height / stripes;
   if (config_.method == StereoMethod::sgm) {
-    sgm_stripe(w, y0, y1, left, right);
+    sgm_stripe(w, y0, y1, left_, right_);
   } else {
-    bm_stripe(w, y0, y1, left, right);
+    bm_stripe(w, y0, y1, left_, right_);
   }
 }
 

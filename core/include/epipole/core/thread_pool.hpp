@@ -48,8 +48,9 @@ class ThreadPool {
 
   int threads() const { return static_cast<int>(workers_.size()) + 1; }
 
-  // Runs task(i, worker) for i in [0, count). An exception thrown by a task is rethrown here
-  // (the first one; the other tasks still run).
+  // Runs task(i, worker) for i in [0, count). Tasks start in index order (a worker takes the
+  // next one when it is free; TaskBatch relies on this). An exception thrown by a task is
+  // rethrown here (the first one; the other tasks still run).
   void run(int count, TaskRef task);
   template <typename Callable>
   void run(int count, Callable&& callable) {

@@ -92,8 +92,8 @@ struct BoardConfig {
   } obstacles;
 
   struct Threads {
-    // Stereo row stripes; from 2 also the cascade beside the other stages. Not given: the CPUs
-    // the firmware may run on (affinity's, else the process's).
+    // The vision stages' pool (and the disparity's row stripes). Not given: the CPUs the
+    // firmware may run on (affinity's, else the process's).
     int count = 1;
     std::vector<int> affinity;  // CPUs for the frame loop and its workers; empty: any
     int realtime_priority = 0;  // SCHED_FIFO priority 1..99; 0: normal scheduling

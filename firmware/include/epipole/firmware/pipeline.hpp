@@ -13,6 +13,7 @@
 #include "epipole/calib/triangulation.hpp"
 #include "epipole/core/image.hpp"
 #include "epipole/core/simd.hpp"
+#include "epipole/core/task_batch.hpp"
 #include "epipole/core/thread_pool.hpp"
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/detection_depth.hpp"
@@ -97,21 +98,20 @@ class Pipeline {
   void add_memory(MemoryReport& report) const;
 
  private:
-  void run_stage(protocol::Stage stage, FrameResult& r);
-  void match_dense(FrameResult& r);
+  void finish_dense(FrameResult& r);
   void match_sparse(FrameResult& r);
-  void detect(FrameResult& r);
   void attach_depths(FrameResult& r);
 
   struct Stages;
   std::unique_ptr<Stages> stages_;
+  std::unique_ptr<ThreadPool> pool_;  // every stage's tasks: threads.count workers
+  TaskBatch batch_;
   std::unique_ptr<calib::Triangulator> triangulator_;
   std::unique_ptr<ObstacleSectors> obstacles_;
   std::vector<SparsePoint> points_;
   std::vector<std::uint32_t> point_order_;
   std::vector<calib::RectifiedMatch> rectified_matches_;
   std::unique_ptr<vision::CascadeDetector> detector_;
-  std::unique_ptr<ThreadPool> beside_;  // the detector's worker beside the other stages
   std::filesystem::path missing_cascade_;
   std::unique_ptr<DetectionDepthEstimator> depth_estimator_;
   std::vector<DetectionDepth> depths_;

@@ -27,6 +27,9 @@ struct CascadeConfig {
   int max_object_height = 0;
   int max_raw_hits = 5'000;  // bounds: hits beyond them are dropped and truncated() says so
   int max_detections = 1'000;
+  // Workers that may search levels at once (search_level's `worker`): each has its own level
+  // image and integral planes.
+  int workers = 1;
 };
 
 struct Detection {
@@ -38,9 +41,9 @@ struct Detection {
   friend bool operator==(const Detection&, const Detection&) = default;
 };
 
-// Fixed memory: the constructor allocates the pyramid level, the integral images (upright, of
-// squares, and tilted when the cascade has tilted features), the evaluation tables, the raw
-// hit list and the grouping scratch; detect() never allocates.
+// Fixed memory: the constructor allocates the evaluation tables, the grouping scratch and, for
+// each worker, a pyramid level, the integral images (upright, of squares, and tilted when the
+// cascade has tilted features) and a raw hit list; detect() never allocates.
 class CascadeDetector {
  public:
   // Throws Error for a bad configuration (sizes, scale factor, bounds).
@@ -53,6 +56,14 @@ class CascadeDetector {
   // The grouped detections of an 8-bit gray image no larger than the configured size, clipped
   // to the image, in OpenCV's order. The span stays valid until the next call.
   std::span<const Detection> detect(GrayView image);
+
+  // detect() cut into tasks for a thread pool: start() returns the number of pyramid levels
+  // (largest first); search_level(i, worker) for each of them, on any workers below
+  // config().workers, at once when the workers differ; then finish() gives what detect() would.
+  // `image` must stay unchanged until finish().
+  int start(GrayView image);
+  void search_level(int level, int worker);
+  std::span<const Detection> finish();
 
   // The last image's raw hits (windows that passed every stage), before grouping, in OpenCV's
   // order (level by level, row by row).

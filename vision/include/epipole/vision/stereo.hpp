@@ -33,7 +33,7 @@ struct StereoConfig {
   int lr_max_diff = 1;     // left-right check tolerance in pixels; < 0 switches it off
   int speckle_size = 100;  // connected regions smaller than this are invalidated; 0: off
   int speckle_range = 1;   // in pixels: neighbours closer than this belong to one region
-  int threads = 1;         // row stripes on a fixed pool created by the constructor
+  int threads = 1;         // row stripes, and the workers that may run them at once
 };
 
 // Dense disparity of a rectified pair (left image is the reference; a left pixel x matches the
@@ -46,7 +46,10 @@ struct StereoConfig {
 // working_set_bytes() and docs/vision.md for the formula.
 class StereoMatcher {
  public:
-  explicit StereoMatcher(const StereoConfig& config, SimdPath path = best_simd_path());
+  // `pool`: the pool compute() runs the stripes on (it must outlive the matcher; its workers
+  // must number at most config.threads); null: a pool of config.threads made here.
+  explicit StereoMatcher(const StereoConfig& config, SimdPath path = best_simd_path(),
+                         ThreadPool* pool = nullptr);
   ~StereoMatcher();
   StereoMatcher(const StereoMatcher&) = delete;
   StereoMatcher& operator=(const StereoMatcher&) = delete;
@@ -55,6 +58,14 @@ class StereoMatcher {
   // until the next call. Throws Error if either image differs from the configured size.
   ImageView<const std::int16_t> compute(GrayView left, GrayView right);
 
+  // compute() cut into tasks for a pool that runs other work beside: start() checks the images
+  // and returns the number of stripes; run_stripe(i, worker) for each (at once on different
+  // workers below config().threads); then finish() gives what compute() would. The images must
+  // stay unchanged until finish().
+  int start(GrayView left, GrayView right);
+  void run_stripe(int stripe, int worker);
+  ImageView<const std::int16_t> finish();
+
   std::size_t working_set_bytes() const;
   const StereoConfig& config() const { return config_; }
   SimdPath simd_path() const { return path_; }
@@ -62,7 +73,6 @@ class StereoMatcher {
   struct Worker;  // per-thread row buffers (stereo.cpp)
 
  private:
-  void run_stripe(int stripe, int worker, GrayView left, GrayView right);
   void sgm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right);
   void bm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right);
 
@@ -70,7 +80,9 @@ class StereoMatcher {
 
   StereoConfig config_;
   SimdPath path_;
-  ThreadPool pool_;
+  std::unique_ptr<ThreadPool> own_pool_;  // when the constructor was given none
+  ThreadPool* pool_;
+  GrayView left_, right_;  // the pair of the stripes in progress (start() .. finish())
   std::vector<std::unique_ptr<Worker>> workers_;
   std::vector<std::int16_t> padded_;   // the output with a border of one invalid pixel
   ImageView<std::int16_t> disparity_;  // the output: padded_ without its border
