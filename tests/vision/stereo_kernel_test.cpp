@@ -133,8 +133,8 @@ void expect_same_wta(const WtaOut& out, const WtaOut& ref, const std::string& wh
 // Three rows of aggregation: path state carried from row to row must agree too, and so must
 // each row's winners.
 TEST(StereoKernels, SgmEqualsReference) {
-  for (const int width : {17, 33}) {
-    for (const int D : {16, 48}) {
+  for (const int width : {17, 33, 70}) {
+    for (const int D : {16, 32, 48, 64}) {
       const auto n = static_cast<std::size_t>(width);
       const std::size_t stride = static_cast<std::size_t>(D) + 32;
       struct State {
@@ -313,8 +313,8 @@ TEST(StereoMatcher, PathsAndThreadsAgree) {
     }
   }
   for (const StereoMethod method : {StereoMethod::sgm, StereoMethod::bm}) {
-    for (const int threads : {1, 2}) {
-      StereoConfig config{.width = width, .height = height, .max_disparity = 16};
+    for (const auto& [threads, D] : {std::pair{1, 16}, std::pair{2, 16}, std::pair{1, 32}}) {
+      StereoConfig config{.width = width, .height = height, .max_disparity = D};
       config.method = method;
       config.threads = threads;
       config.speckle_size = 4;
@@ -328,7 +328,7 @@ TEST(StereoMatcher, PathsAndThreadsAgree) {
         return d >= 5 * kDisparityScale - 8 && d <= 7 * kDisparityScale + 8;
       });
       EXPECT_GT(found, static_cast<long>(ref.size()) / 3) << "threads " << threads;
-      if (method == StereoMethod::bm && threads == 2) {
+      if (method == StereoMethod::bm && threads == 2) {  // D 16
         config.threads = 1;
         EXPECT_EQ(disparities(config, SimdPath::reference, left.cview(), right.cview()), ref)
             << "block matching does not depend on the stripes";

@@ -1,6 +1,6 @@
 // The stereo kernels with AVX2, 16 disparities at a time (bytes in SSE registers, 16-bit sums
-// in AVX registers): the generic kernels of stereo_simd.hpp; the cost row 32 disparities at a
-// time in AVX registers (x86 hosts only).
+// in AVX registers): the generic kernels of stereo_simd.hpp; the cost row and SGM's first pass
+// 32 disparities at a time in AVX registers (x86 hosts only).
 #include "simd/avx2.hpp"
 #include "stereo_simd.hpp"
 
@@ -56,10 +56,106 @@ void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* r
   }
 }
 
+__m256i load32(const std::uint8_t* p) {
+  return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+}
+void store32(void* p, __m256i v) {
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), v);
+}
+
+// sgm_step (stereo_simd.hpp) for 32 disparities.
+__m256i sgm_step32(__m256i c, const std::uint8_t* p, __m256i p1, __m256i min_p2, __m256i min_prev) {
+  const __m256i best =
+      _mm256_min_epu8(_mm256_min_epu8(load32(p), min_p2),
+                      _mm256_adds_epu8(_mm256_min_epu8(load32(p - 1), load32(p + 1)), p1));
+  return _mm256_add_epi8(_mm256_sub_epi8(best, min_prev), c);
+}
+
+std::uint8_t hmin32(__m256i v) {
+  return simd::Avx2x16::hminb(
+      _mm_min_epu8(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1)));
+}
+
+// sgm_first_pass_simd for a range that is a multiple of 32: the same steps, 32 lanes at a time.
+// The four paths' bytes are added in 16 bits two at a time: interleaved, then multiplied by 1
+// and added pairwise (maddubs), which leaves disparities 0..7 and 16..23 in one register and
+// 8..15 and 24..31 in the other until the halves are swapped back.
+void sgm_first_pass_avx2(const SgmRow& r) {
+  const int D = r.disparities;
+  const std::ptrdiff_t stride = D + 32;
+  const __m256i p1 = _mm256_set1_epi8(static_cast<char>(r.p1));
+  const __m256i ones = _mm256_set1_epi8(1);
+  const auto splat = [](int v) { return _mm256_set1_epi8(static_cast<char>(v)); };
+  std::uint8_t* h[2] = {r.scratch + 16, r.scratch + stride + 16};
+  for (std::uint8_t* e : h) {
+    e[-1] = kSgmPad;
+    e[D] = kSgmPad;
+  }
+  constexpr int kDx[3] = {0, -1, 1};
+  std::fill_n(h[0], D, std::uint8_t{0});
+  int h_min = 0;
+  for (int x = r.width - 1; x >= 0; --x) {
+    const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
+    const std::uint8_t* p[3];
+    __m256i min_prev[3];
+    __m256i min_p2[3];
+    std::uint8_t* q[3];
+    __m256i mins[4];
+    for (int k = 0; k < 3; ++k) {
+      p[k] = r.prev[k] + (x + kDx[k] + 1) * stride + 16;
+      const int m = r.prev_min[k][x + kDx[k] + 1];
+      min_prev[k] = splat(m);
+      min_p2[k] = splat(sgm_plus_p2(m, r.p2));
+      q[k] = r.cur[k] + (x + 1) * stride + 16;
+      mins[k] = splat(0xFF);
+    }
+    mins[3] = splat(0xFF);
+    const __m256i h_prev = splat(h_min);
+    const __m256i h_p2 = splat(sgm_plus_p2(h_min, r.p2));
+    std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
+    for (int d = 0; d < D; d += 32) {
+      const __m256i cost = load32(c + d);
+      const __m256i rl = sgm_step32(cost, h[0] + d, p1, h_p2, h_prev);
+      store32(h[1] + d, rl);
+      mins[3] = _mm256_min_epu8(mins[3], rl);
+      __m256i v[3];
+#pragma GCC unroll 3
+      for (int k = 0; k < 3; ++k) {
+        v[k] = sgm_step32(cost, p[k] + d, p1, min_p2[k], min_prev[k]);
+        store32(q[k] + d, v[k]);
+        mins[k] = _mm256_min_epu8(mins[k], v[k]);
+      }
+      const auto pair_sums = [&](__m256i a, __m256i b, __m256i& low, __m256i& high) {
+        low = _mm256_maddubs_epi16(_mm256_unpacklo_epi8(a, b), ones);
+        high = _mm256_maddubs_epi16(_mm256_unpackhi_epi8(a, b), ones);
+      };
+      __m256i low_a, high_a, low_b, high_b;
+      pair_sums(rl, v[0], low_a, high_a);
+      pair_sums(v[1], v[2], low_b, high_b);
+      const __m256i low = _mm256_add_epi16(low_a, low_b);     // 0..7, 16..23
+      const __m256i high = _mm256_add_epi16(high_a, high_b);  // 8..15, 24..31
+      store32(s + d, _mm256_permute2x128_si256(low, high, 0x20));
+      store32(s + d + 16, _mm256_permute2x128_si256(low, high, 0x31));
+    }
+    for (int k = 0; k < 3; ++k) r.cur_min[k][x + 1] = hmin32(mins[k]);
+    h_min = hmin32(mins[3]);
+    std::swap(h[0], h[1]);
+  }
+}
+
+void sgm_row_avx2(const SgmRow& r) {
+  if (r.disparities % 32 == 0) {
+    sgm_first_pass_avx2(r);
+  } else {
+    sgm_first_pass_simd<simd::Avx2x16>(r);
+  }
+  sgm_second_pass_simd<simd::Avx2x16>(r);
+}
+
 }  // namespace
 
 StereoKernels stereo_kernels_avx2() {
-  return {census_row_simd<simd::Avx2x16>, cost_row_avx2, sgm_row_simd<simd::Avx2x16>,
+  return {census_row_simd<simd::Avx2x16>, cost_row_avx2, sgm_row_avx2,
           box_columns_simd<simd::Avx2x16>, bm_row_simd<simd::Avx2x16>};
 }
 

@@ -175,6 +175,11 @@ class WtaPixels {
   std::uint16_t* disp_;
 };
 
+// min_prev + P2 as the path steps use it, saturated to a byte.
+inline std::uint8_t sgm_plus_p2(int min_prev, int p2) {
+  return static_cast<std::uint8_t>(std::min(min_prev + p2, 255));
+}
+
 // One path step for 16 disparities at d: c + min(p[d], p[d-1] + P1, p[d+1] + P1,
 // min_prev + P2) - min_prev, in bytes. The saturating adds are exact where it matters: a sum
 // that saturates is above p[d] <= 255 and cannot be the minimum; the result is at most
@@ -187,22 +192,21 @@ inline typename V::B sgm_step(typename V::B c, const std::uint8_t* p, typename V
   return V::addb(V::subb(best, min_prev), c);
 }
 
+// The first of an SGM row's two passes: right to left, with the three paths from the previous
+// row, the sums of four paths into r.sums.
 template <typename V>
-void sgm_row_simd(const SgmRow& r) {
+void sgm_first_pass_simd(const SgmRow& r) {
   using B = typename V::B;
   using H = typename V::H;
   const int D = r.disparities;
   const std::ptrdiff_t stride = D + 32;
   const B p1 = V::splatb(static_cast<std::uint8_t>(r.p1));
-  const auto plus_p2 = [&](int m) { return static_cast<std::uint8_t>(std::min(m + r.p2, 255)); };
   std::uint8_t* h[2] = {r.scratch + 16, r.scratch + stride + 16};
   for (std::uint8_t* e : h) {
     e[-1] = kSgmPad;
     e[D] = kSgmPad;
   }
   constexpr int kDx[3] = {0, -1, 1};
-
-  // Right to left, with the three paths from the previous row: the sums of four paths.
   std::fill_n(h[0], D, std::uint8_t{0});
   int h_min = 0;
   for (int x = r.width - 1; x >= 0; --x) {
@@ -216,13 +220,13 @@ void sgm_row_simd(const SgmRow& r) {
       p[k] = r.prev[k] + (x + kDx[k] + 1) * stride + 16;
       const int m = r.prev_min[k][x + kDx[k] + 1];
       min_prev[k] = V::splatb(static_cast<std::uint8_t>(m));
-      min_p2[k] = V::splatb(plus_p2(m));
+      min_p2[k] = V::splatb(sgm_plus_p2(m, r.p2));
       q[k] = r.cur[k] + (x + 1) * stride + 16;
       mins[k] = V::splatb(0xFF);
     }
     mins[3] = V::splatb(0xFF);
     const B h_prev = V::splatb(static_cast<std::uint8_t>(h_min));
-    const B h_p2 = V::splatb(plus_p2(h_min));
+    const B h_p2 = V::splatb(sgm_plus_p2(h_min, r.p2));
     std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
     for (int d = 0; d < D; d += 16) {
       const B cost = V::loadb(c + d);
@@ -243,16 +247,30 @@ void sgm_row_simd(const SgmRow& r) {
     h_min = V::hminb(mins[3]);
     std::swap(h[0], h[1]);
   }
+}
 
-  // Left to right: the fifth path, then the winner of each pixel.
+// The second pass: left to right, the fifth path added to the sums, then the winner of each
+// pixel.
+template <typename V>
+void sgm_second_pass_simd(const SgmRow& r) {
+  using B = typename V::B;
+  using H = typename V::H;
+  const int D = r.disparities;
+  const std::ptrdiff_t stride = D + 32;
+  const B p1 = V::splatb(static_cast<std::uint8_t>(r.p1));
+  std::uint8_t* h[2] = {r.scratch + 16, r.scratch + stride + 16};
+  for (std::uint8_t* e : h) {
+    e[-1] = kSgmPad;
+    e[D] = kSgmPad;
+  }
   WtaPixels<V> wta(r.wta, D);
   std::fill_n(h[0], D, std::uint8_t{0});
-  h_min = 0;
+  int h_min = 0;
   for (int x = 0; x < r.width; ++x) {
     const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
     std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
     const B h_prev = V::splatb(static_cast<std::uint8_t>(h_min));
-    const B h_p2 = V::splatb(plus_p2(h_min));
+    const B h_p2 = V::splatb(sgm_plus_p2(h_min, r.p2));
     B m = V::splatb(0xFF);
     wta.pixel(x, s, [&](int d) {
       const B lr = sgm_step<V>(V::loadb(c + d), h[0] + d, p1, h_p2, h_prev);
@@ -266,6 +284,12 @@ void sgm_row_simd(const SgmRow& r) {
     std::swap(h[0], h[1]);
   }
   wta.finish(r.width);
+}
+
+template <typename V>
+void sgm_row_simd(const SgmRow& r) {
+  sgm_first_pass_simd<V>(r);
+  sgm_second_pass_simd<V>(r);
 }
 
 template <typename V>
