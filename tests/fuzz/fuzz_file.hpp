@@ -1,7 +1,9 @@
 #pragma once
 
 // For fuzz targets whose parser reads files: the input written to a file of a folder made once
-// per process (under $TMPDIR), so each run reads what libFuzzer gave it.
+// per process, so each run reads what libFuzzer gave it. The folder is under $TMPDIR when it is
+// set, else in /dev/shm (memory) when there is one, else /tmp: a disk that stalls (a busy
+// machine writing an image) must not stall a run of millions of tiny files.
 #include <unistd.h>
 
 #include <cstdint>
@@ -10,18 +12,32 @@
 #include <fstream>
 #include <span>
 #include <string>
+#include <system_error>
 
 namespace epipole::fuzz {
 
-inline const std::filesystem::path& folder() {
-  static const std::filesystem::path dir = [] {
+// Made on first use, removed when the process exits normally.
+struct FuzzFolder {
+  FuzzFolder() {
     const char* tmp = std::getenv("TMPDIR");
-    std::string pattern =
-        std::string(tmp != nullptr && *tmp != '\0' ? tmp : "/tmp") + "/epipole-fuzz-XXXXXX";
+    std::string base = tmp != nullptr && *tmp != '\0' ? tmp : "";
+    if (base.empty()) base = ::access("/dev/shm", W_OK | X_OK) == 0 ? "/dev/shm" : "/tmp";
+    std::string pattern = base + "/epipole-fuzz-XXXXXX";
     if (::mkdtemp(pattern.data()) == nullptr) std::abort();
-    return std::filesystem::path(pattern);
-  }();
-  return dir;
+    path = pattern;
+  }
+  ~FuzzFolder() {
+    std::error_code ignored;
+    std::filesystem::remove_all(path, ignored);
+  }
+  FuzzFolder(const FuzzFolder&) = delete;
+  FuzzFolder& operator=(const FuzzFolder&) = delete;
+  std::filesystem::path path;
+};
+
+inline const std::filesystem::path& folder() {
+  static const FuzzFolder made;
+  return made.path;
 }
 
 inline std::filesystem::path write_file(const std::string& name,
