@@ -28,12 +28,14 @@ void raise_to(std::atomic<std::int64_t>& value, std::int64_t candidate) {
 
 }  // namespace
 
+void TaskBatch::clear() {
+  size_ = 0;
+  tasks_ = 0;
+  ran_ = false;
+}
+
 int TaskBatch::add(int count, TaskRef task, int after) {
-  if (ran_) {
-    size_ = 0;
-    tasks_ = 0;
-    ran_ = false;
-  }
+  if (ran_) clear();
   require(size_ < kMaxParts, "a task batch holds at most ", kMaxParts, " parts");
   require(count >= 0, "a part of ", count, " tasks");
   require(after == kNoPart || (after >= 0 && after < size_),

@@ -1,6 +1,7 @@
 #include "epipole/firmware/pipeline.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <variant>
 
@@ -221,9 +222,9 @@ void Pipeline::add_memory(MemoryReport& report) const {
   }
 }
 
-// The stages of a pair on the one pool: the rectification of both images first (every other
-// stage reads it), then one batch of tasks in the order they should start: the corners of both
-// images, the disparity's stripes, the sparse matching (once the corners are there), the
+// The stages of a pair on the one pool: the rectification of both images first, in row bands
+// (every other stage reads it), then one batch of tasks in the order they should start: the corners
+// of both images, the disparity's stripes, the sparse matching (once the corners are there), the
 // disparity's end (speckles, obstacles), the cascade's pyramid levels (largest first, so the
 // small ones fill the workers' last gaps). The detections' depths join after all.
 const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_t frame,
@@ -247,18 +248,30 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
 
   if (protocol::has_stage(run, Stage::rectify)) {
     const hal::Nanoseconds start = steady_now();
+    // Both images in as many row bands as there are workers.
     StereoRectifiers& rectifiers = *stages_->rectifiers;
-    pool_->run(2, [&](int image, int) {
-      if (image == 0) {
-        r.left = rectifiers.left.rectify(r.left_raw);
+    const int bands = pool_->threads();
+    const int height = rectifiers.left.config().height;
+    pool_->run(2 * bands, [&](int task, int) {
+      const int band = task / 2;
+      const int first = band * height / bands;
+      const int end = (band + 1) * height / bands;
+      if (task % 2 == 0) {
+        const GrayView rectified = rectifiers.left.rectify_rows(r.left_raw, first, end);
+        if (band == 0) r.left = rectified;
       } else {
-        r.right = rectifiers.right.rectify(r.right_raw);
+        const GrayView rectified = rectifiers.right.rectify_rows(r.right_raw, first, end);
+        if (band == 0) r.right = rectified;
       }
     });
     time_of(Stage::rectify) = steady_now() - start;
   }
   r.stages = run & (stage_bit(Stage::capture) | stage_bit(Stage::rectify));
 
+  // What cannot start (an image of the wrong size) throws here, before a task is queued.
+  const int stripes =
+      protocol::has_stage(run, Stage::disparity) ? stages_->matcher->start(r.left, r.right) : 0;
+  const int levels = protocol::has_stage(run, Stage::detect) ? detector_->start(r.left) : 0;
   auto corners = [&](int image, int) {
     if (image == 0) {
       r.corners_left = stages_->corners_left.detect(r.left);
@@ -266,32 +279,27 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
       r.corners_right = stages_->corners_right.detect(r.right);
     }
   };
-  auto stripe = [&](int i, int worker) { stages_->matcher->run_stripe(i, worker); };
-  auto disparity_end = [&](int, int) { finish_dense(r); };
+  // The stripe that ends last ends the disparity too (speckles, obstacles): no worker waits.
+  std::atomic<int> stripes_left{stripes};
+  auto stripe = [&](int i, int worker) {
+    stages_->matcher->run_stripe(i, worker);
+    if (stripes_left.fetch_sub(1, std::memory_order_acq_rel) == 1) finish_dense(r);
+  };
   auto sparse = [&](int, int) { match_sparse(r); };
   auto level = [&](int i, int worker) { detector_->search_level(i, worker); };
   TaskBatch& batch = batch_;
+  batch.clear();
   int corners_part = TaskBatch::kNoPart;
   int stripes_part = TaskBatch::kNoPart;
-  int disparity_end_part = TaskBatch::kNoPart;
   int sparse_part = TaskBatch::kNoPart;
   int levels_part = TaskBatch::kNoPart;
   if (protocol::has_stage(run, Stage::corners)) corners_part = batch.add(2, corners);
-  if (protocol::has_stage(run, Stage::disparity)) {
-    stripes_part = batch.add(stages_->matcher->start(r.left, r.right), stripe);
-  }
+  if (protocol::has_stage(run, Stage::disparity)) stripes_part = batch.add(stripes, stripe);
   if (protocol::has_stage(run, Stage::sparse)) sparse_part = batch.add(1, sparse, corners_part);
-  if (protocol::has_stage(run, Stage::disparity)) {
-    disparity_end_part = batch.add(1, disparity_end, stripes_part);
-  }
-  if (protocol::has_stage(run, Stage::detect)) {
-    levels_part = batch.add(detector_->start(r.left), level);
-  }
+  if (protocol::has_stage(run, Stage::detect)) levels_part = batch.add(levels, level);
   batch.run(*pool_);
   time_of(Stage::corners) = batch.span_ns(corners_part, corners_part);
-  // (The sparse matching may run between the stripes and their end.)
-  time_of(Stage::disparity) = batch.span_ns(stripes_part, stripes_part) +
-                              batch.span_ns(disparity_end_part, disparity_end_part);
+  time_of(Stage::disparity) = batch.span_ns(stripes_part, stripes_part);
   time_of(Stage::sparse) = batch.span_ns(sparse_part, sparse_part);
   if (protocol::has_stage(run, Stage::detect)) {
     const hal::Nanoseconds start = steady_now();

@@ -118,6 +118,14 @@ TEST(TaskBatch, BadPartsAreErrors) {
   EXPECT_THROW(batch.add(-1, nothing), Error);
   for (int i = 0; i < TaskBatch::kMaxParts; ++i) batch.add(1, nothing);
   EXPECT_THROW(batch.add(1, nothing), Error);
+  // Parts forgotten by clear() (an error between add() and run(), say) do not run.
+  batch.clear();
+  int ran = 0;
+  auto count = [&](int, int) { ++ran; };
+  batch.add(2, count);
+  ThreadPool pool(1);
+  batch.run(pool);
+  EXPECT_EQ(ran, 2);
 }
 
 }  // namespace

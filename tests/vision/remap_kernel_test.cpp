@@ -225,6 +225,29 @@ TEST(Rectifier, MatchesTheKernelsOnAMixedMap) {
     }
 }
 
+// Row bands rectified on their own, in any order, make the whole image; rows outside are an
+// error.
+TEST(Rectifier, RowBandsMakeTheWholeImage) {
+  test::BufferImage image(100, 60, 107, 3);
+  test::fill(image.view(), test::Pattern::blobs, 6);
+  const RemapMap map = mixed_map(90, 70, 100, 60, 9);
+  const RectifierConfig config{
+      .source_width = 100, .source_height = 60, .width = 90, .height = 70, .border = 9};
+  Rectifier whole(config, map.clone());
+  Rectifier banded(config, map.clone());
+  const GrayView expected = whole.rectify(image.cview());
+  GrayView out;
+  for (const auto& [first, end] : {std::pair{47, 70}, std::pair{0, 23}, std::pair{23, 47}}) {
+    out = banded.rectify_rows(image.cview(), first, end);
+  }
+  for (int y = 0; y < 70; ++y) {
+    for (int x = 0; x < 90; ++x) ASSERT_EQ(out(x, y), expected(x, y)) << x << "," << y;
+  }
+  EXPECT_THROW(banded.rectify_rows(image.cview(), 60, 71), Error);
+  EXPECT_THROW(banded.rectify_rows(image.cview(), 30, 20), Error);
+  EXPECT_THROW(banded.rectify_rows(image.cview(), -1, 5), Error);
+}
+
 TEST(Rectifier, StatesItsWorkingSet) {
   Rectifier rectifier({.source_width = 640, .source_height = 480, .width = 640, .height = 480},
                       RemapMap(640, 480));

@@ -584,6 +584,9 @@ int CascadeDetector::start(GrayView image) {
 
 void CascadeDetector::search_level(int level, int worker) {
   State& s = *state_;
+  require(level >= 0 && level < s.level_count && worker >= 0 && worker < s.config.workers,
+          "cascade level ", level, " of ", s.level_count, " on worker ", worker, " of ",
+          s.config.workers);
   s.level_hits[level].worker = worker;
   s.search_level(level, *s.workers[static_cast<std::size_t>(worker)]);
 }

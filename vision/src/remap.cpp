@@ -174,10 +174,25 @@ void Rectifier::rectify(GrayView source, MutableGrayView destination) {
   require(!before(destination_begin, source_end) || !before(source.data(), destination_end),
           "rectifier output overlaps its source");
 
+  remap_rows(source, destination, 0, config_.height);
+}
+
+GrayView Rectifier::rectify_rows(GrayView source, int first_row, int end_row) {
+  require(source.width() == config_.source_width && source.height() == config_.source_height,
+          "rectifier configured for ", config_.source_width, "x", config_.source_height,
+          " sources was given a ", source.width(), "x", source.height(), " image");
+  require(0 <= first_row && first_row <= end_row && end_row <= config_.height, "rows ", first_row,
+          "..", end_row, " are not within the rectified image's ", config_.height);
+  remap_rows(source, output_.view(), first_row, end_row);
+  return output_.view();
+}
+
+void Rectifier::remap_rows(GrayView source, MutableGrayView destination, int first_row,
+                           int end_row) const {
   kernels::RemapRowKernel* const row_kernel = kernels::remap_row_kernel(path_);
   const ImageView<const std::int16_t> xy = map_.xy();
   const ImageView<const std::uint16_t> fractions = map_.fractions();
-  for (int y = 0; y < config_.height; ++y) {
+  for (int y = first_row; y < end_row; ++y) {
     row_kernel(source, xy.row(y), fractions.row(y), config_.width, config_.border,
                destination.row(y));
   }

@@ -21,6 +21,7 @@ void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* r
         _mm256_shuffle_epi8(table, _mm256_and_si256(v, low)),
         _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(v, 4), low)));
   };
+  static_assert(kCensusPlanes == 4);
   // The plane pointers in registers: read through `left` and `right` in the loop, they were
   // reloaded and the splats went through the stack, which took half of this kernel's time.
   const std::uint8_t* const l0 = left[0];

@@ -25,6 +25,8 @@ class TaskBatch {
   // Adds `count` tasks calling task(i, worker) for i in [0, count) (worker as ThreadPool::run
   // gives it). `task` must outlive run(). Returns the part's index, for `after` and span_ns().
   int add(int count, TaskRef task, int after = kNoPart);
+  // Forgets the parts added so far (after an error between add() and run(), say).
+  void clear();
   // Runs every part's tasks on `pool` and forgets the parts (their times stay until the next
   // add()). Rethrows the first exception a task threw.
   void run(ThreadPool& pool);

@@ -95,6 +95,10 @@ class Rectifier {
   // Rectifies into a caller's image of the configured (destination) size, which must not
   // overlap the source. Throws Error on a size mismatch or overlap.
   void rectify(GrayView source, MutableGrayView destination);
+  // Rectifies rows [first_row, end_row) of the rectifier's own image only (row bands of one
+  // image on several threads at once: the bands must not overlap); returns the whole image.
+  // Throws Error on a size mismatch or rows outside the image.
+  GrayView rectify_rows(GrayView source, int first_row, int end_row);
 
   std::size_t working_set_bytes() const;
   const RectifierConfig& config() const { return config_; }
@@ -102,6 +106,8 @@ class Rectifier {
   SimdPath simd_path() const { return path_; }
 
  private:
+  void remap_rows(GrayView source, MutableGrayView destination, int first_row, int end_row) const;
+
   RectifierConfig config_;
   SimdPath path_;
   RemapMap map_;
