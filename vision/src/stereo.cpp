@@ -85,13 +85,8 @@ int sgm_step(int c, const std::uint8_t* p, int d, int p1, int p2, int min_prev) 
 // One horizontal path over the row (dx = +1: left to right), its values added to sums.
 void sgm_horizontal_ref(const SgmRow& r, int dx) {
   const int D = r.disparities;
-  const std::ptrdiff_t stride = D + 32;
-  std::uint8_t* h[2] = {r.scratch + 16, r.scratch + stride + 16};
-  for (std::uint8_t* e : h) {
-    e[-1] = kSgmPad;
-    e[D] = kSgmPad;
-  }
-  for (int d = 0; d < D; ++d) h[0][d] = 0;
+  std::uint8_t* h[2];
+  sgm_horizontal_rows(r, h);
   int h_min = 0;
   for (int i = 0; i < r.width; ++i) {
     const int x = dx > 0 ? i : r.width - 1 - i;
@@ -112,16 +107,15 @@ void sgm_horizontal_ref(const SgmRow& r, int dx) {
 
 void sgm_row_ref(const SgmRow& r) {
   const int D = r.disparities;
-  const std::ptrdiff_t stride = D + 32;
-  constexpr int kDx[3] = {0, -1, 1};
   for (int x = 0; x < r.width; ++x) {
     const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
     std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
     for (int d = 0; d < D; ++d) s[d] = 0;
+    const SgmDownPaths paths(r, x);
     for (int k = 0; k < 3; ++k) {
-      const std::uint8_t* p = r.prev[k] + (x + kDx[k] + 1) * stride + 16;
-      const int min_prev = r.prev_min[k][x + kDx[k] + 1];
-      std::uint8_t* q = r.cur[k] + (x + 1) * stride + 16;
+      const std::uint8_t* p = paths.prev[k];
+      const int min_prev = paths.prev_min[k];
+      std::uint8_t* q = paths.cur[k];
       int m = 0xFF;
       for (int d = 0; d < D; ++d) {
         const int v = sgm_step(c[d], p, d, r.p1, r.p2, min_prev);

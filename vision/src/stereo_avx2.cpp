@@ -83,31 +83,23 @@ std::uint8_t hmin32(__m256i v) {
 // 8..15 and 24..31 in the other until the halves are swapped back.
 void sgm_first_pass_avx2(const SgmRow& r) {
   const int D = r.disparities;
-  const std::ptrdiff_t stride = D + 32;
   const __m256i p1 = _mm256_set1_epi8(static_cast<char>(r.p1));
   const __m256i ones = _mm256_set1_epi8(1);
   const auto splat = [](int v) { return _mm256_set1_epi8(static_cast<char>(v)); };
-  std::uint8_t* h[2] = {r.scratch + 16, r.scratch + stride + 16};
-  for (std::uint8_t* e : h) {
-    e[-1] = kSgmPad;
-    e[D] = kSgmPad;
-  }
-  constexpr int kDx[3] = {0, -1, 1};
-  std::fill_n(h[0], D, std::uint8_t{0});
+  std::uint8_t* h[2];
+  sgm_horizontal_rows(r, h);
   int h_min = 0;
   for (int x = r.width - 1; x >= 0; --x) {
     const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
-    const std::uint8_t* p[3];
+    const SgmDownPaths paths(r, x);
+    const std::uint8_t* const* p = paths.prev;
+    std::uint8_t* const* q = paths.cur;
     __m256i min_prev[3];
     __m256i min_p2[3];
-    std::uint8_t* q[3];
     __m256i mins[4];
     for (int k = 0; k < 3; ++k) {
-      p[k] = r.prev[k] + (x + kDx[k] + 1) * stride + 16;
-      const int m = r.prev_min[k][x + kDx[k] + 1];
-      min_prev[k] = splat(m);
-      min_p2[k] = splat(sgm_plus_p2(m, r.p2));
-      q[k] = r.cur[k] + (x + 1) * stride + 16;
+      min_prev[k] = splat(paths.prev_min[k]);
+      min_p2[k] = splat(sgm_plus_p2(paths.prev_min[k], r.p2));
       mins[k] = splat(0xFF);
     }
     mins[3] = splat(0xFF);

@@ -3,6 +3,7 @@
 // The stereo stage's kernel interfaces: the scalar *_ref that defines each result and its SIMD
 // variants. Internal to vision: its sources and the tests and benchmarks that check every path
 // against the reference (target epipole_vision_kernels) include it.
+#include <cstddef>
 #include <cstdint>
 
 #include "epipole/vision/stereo.hpp"
@@ -60,6 +61,36 @@ struct SgmRow {
   WtaRow wta;
 };
 using SgmRowKernel = void(const SgmRow& row);
+
+// Where pixel x's three downward paths read the previous row (values and minimum) and write
+// the current one (values; its minimum goes to cur_min[k][x + 1]): every SGM kernel's layout.
+struct SgmDownPaths {
+  SgmDownPaths(const SgmRow& r, int x) {
+    constexpr int kDx[3] = {0, -1, 1};
+    const std::ptrdiff_t stride = r.disparities + 32;
+    for (int k = 0; k < 3; ++k) {
+      prev[k] = r.prev[k] + (x + kDx[k] + 1) * stride + 16;
+      prev_min[k] = r.prev_min[k][x + kDx[k] + 1];
+      cur[k] = r.cur[k] + (x + 1) * stride + 16;
+    }
+  }
+  const std::uint8_t* prev[3];
+  int prev_min[3];
+  std::uint8_t* cur[3];
+};
+
+// The horizontal path's two rows in r.scratch (previous, current), with their pads and the
+// previous row zero: where a horizontal pass starts.
+inline void sgm_horizontal_rows(const SgmRow& r, std::uint8_t* (&rows)[2]) {
+  const int D = r.disparities;
+  rows[0] = r.scratch + 16;
+  rows[1] = r.scratch + (D + 32) + 16;
+  for (std::uint8_t* e : rows) {
+    e[-1] = kSgmPad;
+    e[D] = kSgmPad;
+  }
+  for (int d = 0; d < D; ++d) rows[0][d] = 0;
+}
 
 // Box filter step (fast mode): sums[i] += add[i] - sub[i] over n values (add or sub may be
 // null).

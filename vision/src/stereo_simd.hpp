@@ -199,29 +199,21 @@ void sgm_first_pass_simd(const SgmRow& r) {
   using B = typename V::B;
   using H = typename V::H;
   const int D = r.disparities;
-  const std::ptrdiff_t stride = D + 32;
   const B p1 = V::splatb(static_cast<std::uint8_t>(r.p1));
-  std::uint8_t* h[2] = {r.scratch + 16, r.scratch + stride + 16};
-  for (std::uint8_t* e : h) {
-    e[-1] = kSgmPad;
-    e[D] = kSgmPad;
-  }
-  constexpr int kDx[3] = {0, -1, 1};
-  std::fill_n(h[0], D, std::uint8_t{0});
+  std::uint8_t* h[2];
+  sgm_horizontal_rows(r, h);
   int h_min = 0;
   for (int x = r.width - 1; x >= 0; --x) {
     const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
-    const std::uint8_t* p[3];
+    const SgmDownPaths paths(r, x);
+    const std::uint8_t* const* p = paths.prev;
+    std::uint8_t* const* q = paths.cur;
     B min_prev[3];
     B min_p2[3];
-    std::uint8_t* q[3];
     B mins[4];
     for (int k = 0; k < 3; ++k) {
-      p[k] = r.prev[k] + (x + kDx[k] + 1) * stride + 16;
-      const int m = r.prev_min[k][x + kDx[k] + 1];
-      min_prev[k] = V::splatb(static_cast<std::uint8_t>(m));
-      min_p2[k] = V::splatb(sgm_plus_p2(m, r.p2));
-      q[k] = r.cur[k] + (x + 1) * stride + 16;
+      min_prev[k] = V::splatb(static_cast<std::uint8_t>(paths.prev_min[k]));
+      min_p2[k] = V::splatb(sgm_plus_p2(paths.prev_min[k], r.p2));
       mins[k] = V::splatb(0xFF);
     }
     mins[3] = V::splatb(0xFF);
@@ -256,15 +248,10 @@ void sgm_second_pass_simd(const SgmRow& r) {
   using B = typename V::B;
   using H = typename V::H;
   const int D = r.disparities;
-  const std::ptrdiff_t stride = D + 32;
   const B p1 = V::splatb(static_cast<std::uint8_t>(r.p1));
-  std::uint8_t* h[2] = {r.scratch + 16, r.scratch + stride + 16};
-  for (std::uint8_t* e : h) {
-    e[-1] = kSgmPad;
-    e[D] = kSgmPad;
-  }
+  std::uint8_t* h[2];
+  sgm_horizontal_rows(r, h);
   WtaPixels<V> wta(r.wta, D);
-  std::fill_n(h[0], D, std::uint8_t{0});
   int h_min = 0;
   for (int x = 0; x < r.width; ++x) {
     const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
