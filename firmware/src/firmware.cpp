@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/temporary_folder.hpp"
 #include "epipole/hal/registry.hpp"
 
 namespace epipole::firmware {
@@ -139,28 +140,6 @@ SceneImages stand_in_for_devices(BoardConfig& config) {
   return images;
 }
 
-// A temporary folder, removed with everything in it when this goes.
-class TemporaryFolder {
- public:
-  TemporaryFolder() {
-    std::string pattern =
-        (std::filesystem::temp_directory_path() / "epipole-check-XXXXXX").string();
-    require(::mkdtemp(pattern.data()) != nullptr, "a temporary folder in ",
-            std::filesystem::temp_directory_path().string(), ": ", std::strerror(errno));
-    path_ = pattern;
-  }
-  ~TemporaryFolder() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  TemporaryFolder(const TemporaryFolder&) = delete;
-  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
-
 }  // namespace
 
 MemoryReport check_memory(BoardConfig config) {
@@ -169,7 +148,7 @@ MemoryReport check_memory(BoardConfig config) {
   config.serial.backend = std::string(hal::kNoBackend);  // the link's queue is made all the same
   std::optional<TemporaryFolder> snapshots;
   if (!config.snapshot_directory.empty()) {
-    snapshots.emplace();
+    snapshots.emplace("epipole-check");
     config.snapshot_directory = snapshots->path();
   }
   const std::string board = config.name;

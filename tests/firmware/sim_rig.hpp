@@ -14,6 +14,7 @@
 
 #include "cascade_test_models.hpp"
 #include "epipole/calib/calibration.hpp"
+#include "epipole/core/temporary_folder.hpp"
 #include "epipole/firmware/board.hpp"
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/hal/sim_scene.hpp"
@@ -23,23 +24,9 @@
 namespace epipole::test {
 
 // A temporary folder, removed with everything in it when the object goes.
-class TempDir {
+class TempDir : public TemporaryFolder {
  public:
-  TempDir() {
-    std::string pattern = (std::filesystem::temp_directory_path() / "epipole-test-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
+  TempDir() : TemporaryFolder("epipole-test") {}
 };
 
 // An ideal rectified rig: focal length f pixels, baseline b metres, centred principal points.

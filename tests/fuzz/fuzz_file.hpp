@@ -12,32 +12,24 @@
 #include <fstream>
 #include <span>
 #include <string>
-#include <system_error>
+
+#include "epipole/core/temporary_folder.hpp"
 
 namespace epipole::fuzz {
 
-// Made on first use, removed when the process exits normally.
-struct FuzzFolder {
-  FuzzFolder() {
-    const char* tmp = std::getenv("TMPDIR");
-    std::string base = tmp != nullptr && *tmp != '\0' ? tmp : "";
-    if (base.empty()) base = ::access("/dev/shm", W_OK | X_OK) == 0 ? "/dev/shm" : "/tmp";
-    std::string pattern = base + "/epipole-fuzz-XXXXXX";
-    if (::mkdtemp(pattern.data()) == nullptr) std::abort();
-    path = pattern;
-  }
-  ~FuzzFolder() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path, ignored);
-  }
-  FuzzFolder(const FuzzFolder&) = delete;
-  FuzzFolder& operator=(const FuzzFolder&) = delete;
-  std::filesystem::path path;
-};
-
+// Made on first use, removed when the process exits normally; a run that cannot make it stops.
 inline const std::filesystem::path& folder() {
-  static const FuzzFolder made;
-  return made.path;
+  static const TemporaryFolder made = [] {
+    const char* tmp = std::getenv("TMPDIR");
+    std::filesystem::path parent = tmp != nullptr && *tmp != '\0' ? tmp : "";
+    if (parent.empty()) parent = ::access("/dev/shm", W_OK | X_OK) == 0 ? "/dev/shm" : "/tmp";
+    try {
+      return TemporaryFolder("epipole-fuzz", parent);
+    } catch (...) {
+      std::abort();
+    }
+  }();
+  return made.path();
 }
 
 inline std::filesystem::path write_file(const std::string& name,
