@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Unpacks the board-side libraries Epipole links (Debian's :arm64 and :armhf packages of
-# yaml-cpp and libgpiod, linked statically, and libcamera with the libraries it needs at run
-# time) into a cache folder that the cross toolchain files add to their search path (and the
+# yaml-cpp and libgpiod, linked statically, libcamera, libpng and libjpeg with the libraries
+# they need at run time, and for the board's epipole-bench Debian's OpenCV with the libraries it
+# loads) into a cache folder that the cross toolchain files add to their search path (and the
 # cross-built tests' library path under qemu), and writes a dpkg database of them beside
 # (dpkg/), from which scripts/package-depends.sh computes the board package's dependencies. The database also holds Debian's C and C++
 # runtime packages of the target (libc6, libstdc++6, libgcc-s1), their files mapped onto the
@@ -14,6 +15,16 @@
 set -euo pipefail
 
 packages=(libyaml-cpp-dev libyaml-cpp0.7 libgpiod-dev libgpiod2)
+# Image files: the firmware replays a simulated board's scenes on a board too.
+images=(libpng-dev libpng16-16 libjpeg62-turbo-dev libjpeg62-turbo zlib1g-dev)
+# epipole-bench's OpenCV pipeline: the headers and libraries of the modules it uses and of those
+# they load (objdetect loads dnn; core loads BLAS/LAPACK, TBB and GLX), without the rest of
+# libopencv-dev's closure (Qt, GDAL, FFmpeg, Mesa).
+opencv=(libopencv-{core,imgproc,features2d,flann,calib3d,objdetect,dnn}{-dev,406}
+  libblas3 liblapack3 libgfortran5 libtbb12 libprotobuf32 zlib1g
+  libglx0 libglvnd0 libx11-6 libxcb1 libxau6 libxdmcp6 libbsd0 libmd0)
+# Header-only libraries of the bench's command line and JSON (Architecture: all).
+headers=(libcli11-dev nlohmann-json3-dev)
 runtime=(libc6 libstdc++6 libgcc-s1 gcc-12-base)
 parent=${EPIPOLE_TARGET_LIBS_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/epipole}
 sudo=""
@@ -45,7 +56,8 @@ for arch in "$@"; do
       ;;
   esac
   root="$parent/target-libs-$arch"
-  stamp="$root/.complete-v3"
+  stamp_name=.complete-v6
+  stamp="$root/$stamp_name"
   triple=$(dpkg-architecture -a"$arch" -qDEB_HOST_MULTIARCH 2>/dev/null)
   if [[ -f $stamp ]]; then
     if database_answers; then
@@ -70,9 +82,10 @@ for arch in "$@"; do
   work=$(mktemp -d)
   (
     cd "$work"
-    wanted=("${packages[@]/%/:$arch}" "${runtime[@]/%/:$arch}")
+    listed=("${packages[@]}" "${images[@]}" "${opencv[@]}" "${runtime[@]}")
+    wanted=("${listed[@]/%/:$arch}" "${headers[@]}")
     for p in $camera; do
-      [[ " ${packages[*]} ${runtime[*]} " == *" $p "* ]] || wanted+=("$p:$arch")
+      [[ " ${listed[*]} " == *" $p "* ]] || wanted+=("$p:$arch")
     done
     if ! apt-get download -q "${wanted[@]}" >/dev/null 2>&1; then
       refresh_lists
@@ -101,9 +114,19 @@ for arch in "$@"; do
         dpkg-deb -x "$deb" "$root.partial"
         # Where the files are here, so that the libraries found in this folder are the package's.
         dpkg-deb -c "$deb" | awk '$6 !~ /\/$/ {print $6}' | sed "s|^\.|$root|" >"$db/info/$name.list"
-        dpkg-deb -f "$deb" Package Version Architecture | paste -sd' ' >>"$root.partial/.complete-v3"
+        dpkg-deb -f "$deb" Package Version Architecture | paste -sd' ' >>"$root.partial/$stamp_name"
       fi
       { dpkg-deb -f "$deb" | grep -v '^Status:'; echo "Status: install ok installed"; echo; } >>"$db/status"
+    done
+    # What update-alternatives makes when the packages are installed: libblas.so.3 and
+    # liblapack.so.3 beside the other libraries, where the linker and the loader look.
+    for lib in blas lapack; do
+      ln -sf "$lib/lib$lib.so.3" "$root.partial/usr/lib/$triple/lib$lib.so.3"
+    done
+    # Links to absolute paths (zlib1g-dev's libz.so -> /lib/<triple>/libz.so.1.2.13) would name
+    # the host's files: they are made relative, to the same file in this folder.
+    find "$root.partial" -type l -lname '/*' | while read -r link; do
+      ln -sfn "$(realpath -m --relative-to="$(dirname "$link")" "$root.partial$(readlink "$link")")" "$link"
     done
   )
   rm -rf "$work" "$root"

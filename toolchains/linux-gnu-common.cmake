@@ -32,6 +32,10 @@ if(IS_DIRECTORY ${EPIPOLE_TARGET_LIBS})
   list(APPEND CMAKE_FIND_ROOT_PATH ${EPIPOLE_TARGET_LIBS})
 endif()
 # Always, so that a build configured before the libraries were fetched links once they are.
+# The architecture's own headers (jconfig.h, OpenCV's cvconfig.h) are where a multiarch
+# compiler looks for them, which the cross compiler does not know of.
+string(APPEND CMAKE_C_FLAGS_INIT " -isystem ${EPIPOLE_TARGET_LIBS}/usr/include/${EPIPOLE_CROSS_TRIPLE}")
+string(APPEND CMAKE_CXX_FLAGS_INIT " -isystem ${EPIPOLE_TARGET_LIBS}/usr/include/${EPIPOLE_CROSS_TRIPLE}")
 foreach(_dir ${_target_lib_dirs})
   string(APPEND CMAKE_EXE_LINKER_FLAGS_INIT " -Wl,-rpath-link,${_dir}")
   string(APPEND CMAKE_SHARED_LINKER_FLAGS_INIT " -Wl,-rpath-link,${_dir}")

@@ -173,8 +173,10 @@ struct JpegReader {
   }
 };
 
+// The reader's errors come through client_data (jpeg_create_decompress keeps it), not by a cast
+// of info->err to the struct that holds it, which would ask for a stricter alignment on armhf.
 [[noreturn]] void on_jpeg_error(j_common_ptr info) {
-  auto* errors = reinterpret_cast<JpegErrors*>(info->err);
+  auto* errors = static_cast<JpegErrors*>(info->client_data);
   (*info->err->format_message)(info, errors->message);
   std::longjmp(errors->jump, 1);
 }
@@ -183,6 +185,7 @@ void on_jpeg_message(j_common_ptr, int) {}
 
 bool jpeg_read_header_gray(JpegReader& r, std::FILE* f) {
   r.info.err = jpeg_std_error(&r.errors.manager);
+  r.info.client_data = &r.errors;
   r.errors.manager.error_exit = on_jpeg_error;
   r.errors.manager.emit_message = on_jpeg_message;
   if (setjmp(r.errors.jump)) return false;

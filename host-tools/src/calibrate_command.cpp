@@ -24,8 +24,8 @@
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"
 #include "epipole/tools/opencv_calibration.hpp"
-#include "opencv_mat.hpp"
-#include "progress.hpp"
+#include "epipole/tools/opencv_mat.hpp"
+#include "epipole/tools/progress.hpp"
 #include "stereo_preview.hpp"
 
 namespace epipole::tools {

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "epipole/core/image.hpp"
-#include "opencv_mat.hpp"
+#include "epipole/tools/opencv_mat.hpp"
 
 namespace epipole::tools {
 

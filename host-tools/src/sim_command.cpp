@@ -24,9 +24,9 @@
 #include "epipole/hal/registry.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "epipole/tools/cascade_xml.hpp"
+#include "epipole/tools/progress.hpp"
 #include "message_json.hpp"
 #include "pictures.hpp"
-#include "progress.hpp"
 #include "stereo_preview.hpp"
 
 namespace epipole::tools {

@@ -1,0 +1,313 @@
+#include "epipole/tools/bench.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "epipole/core/error.hpp"
+#include "epipole/core/image_io.hpp"
+#include "epipole/core/thread_pool.hpp"
+#include "epipole/firmware/board.hpp"
+#include "epipole/firmware/firmware.hpp"
+#include "epipole/firmware/pipeline.hpp"
+#include "epipole/hal/sim_scene.hpp"
+#include "epipole/tools/opencv_mat.hpp"
+#include "epipole/tools/progress.hpp"
+#include "opencv_pipeline.hpp"
+#include "timing_summary.hpp"
+
+namespace epipole::tools {
+
+namespace {
+
+using protocol::Stage;
+
+struct BenchImages {
+  std::vector<GrayImage> left, right;
+  std::string source;
+};
+
+BenchImages bench_images(const BenchOptions& options, const firmware::BoardConfig& board) {
+  BenchImages images;
+  if (!options.left.empty()) {
+    const GrayImage left = load_gray(options.left);
+    const GrayImage right = load_gray(options.right);
+    require(same_size(left.view(), right.view()), options.right, " is ", right.width(), "x",
+            right.height(), " but ", options.left, " is ", left.width(), "x", left.height());
+    images.left.push_back(hal::letterbox(left.view(), board.width(), board.height()));
+    images.right.push_back(hal::letterbox(right.view(), board.width(), board.height()));
+    images.source = options.left + " and " + options.right;
+    return images;
+  }
+  require(!board.sim.scenes.empty(), "board ", board.name,
+          " has no simulated scenes to take images from: give --left and --right");
+  if (board.sim_scene() == nullptr) {
+    std::string names;
+    for (const auto& s : board.sim.scenes) names += (names.empty() ? "" : ", ") + s.name;
+    throw Error(
+        cat("board ", board.name, " has no scene '", board.sim.scene, "' (it has ", names, ")"));
+  }
+  firmware::SceneImages scene = firmware::load_scene_images(board);
+  images.left = std::move(scene.left);
+  images.right = std::move(scene.right);
+  images.source = "scene " + board.sim.scene;
+  return images;
+}
+
+// The stages' and the pairs' times of one side (Epipole or OpenCV) at one thread count.
+struct SideTimes {
+  protocol::StageMask stages = 0;
+  // What the measured pairs found (Epipole's side): the same at every thread count.
+  std::uint64_t corners = 0, matches = 0, detections = 0;
+  std::array<std::vector<double>, protocol::kStageCount> stage_ms;
+  std::vector<double> pair_ms;
+  double seconds = 0;  // the measured pairs, back to back
+
+  void add(const std::array<double, protocol::kStageCount>& ms, double pair) {
+    for (const protocol::StageInfo& s : protocol::kStages) {
+      if (protocol::has_stage(stages, s.id)) {
+        stage_ms[static_cast<std::size_t>(s.id)].push_back(ms[static_cast<std::size_t>(s.id)]);
+      }
+    }
+    pair_ms.push_back(pair);
+    seconds += pair / 1000.0;
+  }
+  double pairs_per_second() const {
+    return seconds > 0 ? static_cast<double>(pair_ms.size()) / seconds : 0;
+  }
+};
+
+double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+class Bench {
+ public:
+  Bench(const BenchOptions& options, SimdPath path)
+      : options_(options), board_(firmware::load_board_config(options.board)), path_(path) {
+    if (!options.scene.empty()) board_.sim.scene = options.scene;
+    images_ = bench_images(options, board_);
+    calibration_ = firmware::load_board_calibration(board_);
+  }
+
+  nlohmann::json run() {
+    nlohmann::json runs = nlohmann::json::array();
+    for (const int threads : options_.threads) {
+      const SideTimes ours = epipole(threads);
+      nlohmann::json run = {{"threads", threads}, {"epipole", summary(ours)}};
+      run["epipole"]["found"] = {
+          {"corners", ours.corners}, {"matches", ours.matches}, {"detections", ours.detections}};
+      if (options_.opencv && opencv_pipeline_) {
+        run["opencv"] = summary(opencv(threads));
+      }
+      runs.push_back(run);
+    }
+    progress_.done();
+    return {{"board", board_.name},
+            {"images", images_.source},
+            {"width", board_.width()},
+            {"height", board_.height()},
+            {"max_disparity", board_.stereo.max_disparity},
+            {"method", board_.stereo.method == vision::StereoMethod::sgm ? "sgm" : "bm"},
+            {"kernels", std::string(to_string(path_))},
+            {"pairs", options_.pairs},
+            {"warmup", options_.warmup},
+            {"notes", notes_},
+            {"runs", runs}};
+  }
+
+ private:
+  SideTimes epipole(int threads) {
+    firmware::BoardConfig config = board_;
+    config.threads.count = threads;
+    firmware::Pipeline pipeline(config, calibration_, path_);
+    if (!pipeline.missing_cascade().empty() && !noted_missing_cascade_) {
+      notes_.push_back("detect: off, no compiled cascade (" +
+                       firmware::cascade_compile_command(pipeline.missing_cascade()) + ")");
+      noted_missing_cascade_ = true;
+    }
+    if (options_.opencv && !opencv_pipeline_) make_opencv_pipeline(pipeline);
+    SideTimes times;
+    times.stages = board_.stages & pipeline.available() & protocol::kSwitchableStages;
+    for (int i = -options_.warmup; i < options_.pairs; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i + options_.warmup) % images_.left.size();
+      const auto start = std::chrono::steady_clock::now();
+      const firmware::FrameResult& r =
+          pipeline.process(images_.left[k].view(), images_.right[k].view(),
+                           static_cast<std::uint32_t>(i + options_.warmup), 0, board_.stages);
+      const double pair = ms_since(start);
+      show(threads, "epipole", i);
+      if (i < 0) continue;
+      std::array<double, protocol::kStageCount> ms{};
+      for (std::size_t s = 0; s < ms.size(); ++s) ms[s] = static_cast<double>(r.times[s]) / 1e6;
+      times.add(ms, pair);
+      times.corners += r.corners_left.size() + r.corners_right.size();
+      times.matches += r.matches.size();
+      times.detections += r.detections.size();
+    }
+    return times;
+  }
+
+  SideTimes opencv(int threads) {
+    cv::setNumThreads(threads);
+    SideTimes times;
+    times.stages = opencv_pipeline_->stages();
+    std::vector<cv::Mat> left, right;
+    for (std::size_t k = 0; k < images_.left.size(); ++k) {
+      left.push_back(mat_of(images_.left[k].view()));
+      right.push_back(mat_of(images_.right[k].view()));
+    }
+    for (int i = -options_.warmup; i < options_.pairs; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i + options_.warmup) % left.size();
+      const auto start = std::chrono::steady_clock::now();
+      const OpenCvPipeline::Times ms = opencv_pipeline_->process(left[k], right[k]);
+      const double pair = ms_since(start);
+      show(threads, "opencv", i);
+      if (i >= 0) times.add(ms, pair);
+    }
+    return times;
+  }
+
+  // OpenCV does the stages the firmware does, where it has them (no sparse matching); detection
+  // with the XML the board's compiled cascade was made from.
+  void make_opencv_pipeline(const firmware::Pipeline& pipeline) {
+    std::filesystem::path xml;
+    if (protocol::has_stage(pipeline.available() & board_.stages, Stage::detect)) {
+      xml = firmware::opencv_cascade_xml(board_.detector.cascade);
+      if (xml.empty()) {
+        notes_.push_back("opencv detect: off, no OpenCV XML for " +
+                         board_.detector.cascade.string() + " in the data cache");
+      }
+    }
+    opencv_pipeline_.emplace(board_, calibration_, xml);
+    notes_.push_back("opencv has no sparse matching: its pair is without that stage");
+  }
+
+  void show(int threads, const char* side, int i) {
+    const int total = options_.warmup + options_.pairs;
+    const int done = i + options_.warmup + 1;
+    progress_.show(cat("bench: ", threads, threads == 1 ? " thread: " : " threads: ", side,
+                       " pair ", done, " of ", total),
+                   done == total);
+  }
+
+  static nlohmann::json summary(const SideTimes& t) {
+    const auto json = [](const TimingSummary& s) {
+      return nlohmann::json{{"p50_ms", s.p50_ms}, {"p99_ms", s.p99_ms}, {"mean_ms", s.mean_ms}};
+    };
+    nlohmann::json stages = nlohmann::json::object();
+    for (const protocol::StageInfo& s : protocol::kStages) {
+      if (!protocol::has_stage(t.stages, s.id)) continue;
+      stages[std::string(s.name)] = json(summarize(t.stage_ms[static_cast<std::size_t>(s.id)]));
+    }
+    return {{"stages", stages},
+            {"pair", json(summarize(t.pair_ms))},
+            {"pairs_per_second", t.pairs_per_second()}};
+  }
+
+  BenchOptions options_;
+  firmware::BoardConfig board_;
+  SimdPath path_;
+  BenchImages images_;
+  std::optional<calib::StereoCalibration> calibration_;
+  std::optional<OpenCvPipeline> opencv_pipeline_;
+  std::vector<std::string> notes_;
+  bool noted_missing_cascade_ = false;
+  Progress progress_;
+};
+
+void print_table(const nlohmann::json& b) {
+  std::printf(
+      "epipole bench: board %s, %dx%d, %d disparities (%s), %s, kernels %s; %d pairs "
+      "after %d warm-up\n",
+      b["board"].get<std::string>().c_str(), b["width"].get<int>(), b["height"].get<int>(),
+      b["max_disparity"].get<int>(), b["method"].get<std::string>().c_str(),
+      b["images"].get<std::string>().c_str(), b["kernels"].get<std::string>().c_str(),
+      b["pairs"].get<int>(), b["warmup"].get<int>());
+  for (const auto& note : b["notes"]) std::printf("  note: %s\n", note.get<std::string>().c_str());
+  for (const auto& run : b["runs"]) {
+    const int threads = run["threads"].get<int>();
+    const bool opencv = run.contains("opencv");
+    std::printf("\n%d %-8s   epipole p50    p99 ms%s\n", threads,
+                threads == 1 ? "thread" : "threads",
+                opencv ? "   opencv p50    p99 ms   opencv/epipole" : "");
+    const auto row = [&](const std::string& name, const nlohmann::json& ours,
+                         const nlohmann::json* theirs) {
+      std::printf("  %-12s %10.2f %8.2f", name.c_str(), ours["p50_ms"].get<double>(),
+                  ours["p99_ms"].get<double>());
+      if (theirs != nullptr) {
+        std::printf("  %10.2f %8.2f   %6.1fx", (*theirs)["p50_ms"].get<double>(),
+                    (*theirs)["p99_ms"].get<double>(),
+                    (*theirs)["p50_ms"].get<double>() / ours["p50_ms"].get<double>());
+      } else if (opencv) {
+        std::printf("  %10s %8s", "-", "-");
+      }
+      std::printf("\n");
+    };
+    for (const protocol::StageInfo& s : protocol::kStages) {  // in the order they run
+      const std::string name(s.name);
+      if (!run["epipole"]["stages"].contains(name)) continue;
+      const bool both = opencv && run["opencv"]["stages"].contains(name);
+      row(name, run["epipole"]["stages"][name], both ? &run["opencv"]["stages"][name] : nullptr);
+    }
+    row("pair", run["epipole"]["pair"], opencv ? &run["opencv"]["pair"] : nullptr);
+    const double ours = run["epipole"]["pairs_per_second"].get<double>();
+    std::printf("  %-12s %10.1f %8s", "pairs/s", ours, "");
+    if (opencv) {
+      const double theirs = run["opencv"]["pairs_per_second"].get<double>();
+      std::printf("  %10.1f %8s   %6.1fx", theirs, "", ours / theirs);
+    }
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+
+void run_bench(BenchOptions options, SimdPath path) {
+  if (options.threads.empty()) {
+    for (int n = 1; n <= std::min(usable_cpus(), 64); ++n) options.threads.push_back(n);
+  }
+  Bench bench(options, path);
+  const nlohmann::json result = bench.run();
+  if (options.json) {
+    std::cout << result.dump(2) << "\n";
+  } else {
+    print_table(result);
+  }
+}
+
+void add_bench_options(CLI::App& command, BenchOptions& options) {
+  CLI::App* cmd = &command;
+  cmd->add_option("--board", options.board, "The board's folder or file")->capture_default_str();
+  cmd->add_option("--scene", options.scene,
+                  "The simulated scene to take images from (default: the board's)");
+  auto* left = cmd->add_option("--left", options.left, "Left image instead of a scene")
+                   ->check(CLI::ExistingFile);
+  auto* right = cmd->add_option("--right", options.right, "Right image instead of a scene")
+                    ->check(CLI::ExistingFile);
+  left->needs(right);
+  right->needs(left);
+  cmd->add_option("--threads", options.threads,
+                  "Thread counts to measure, e.g. 1,2,4 (default: 1 to the CPUs usable)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 64));
+  cmd->add_option("--pairs,-n", options.pairs, "Pairs measured per thread count and side")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  cmd->add_option("--warmup", options.warmup, "Pairs run first and not measured")
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  cmd->add_flag("--no-opencv{false}", options.opencv, "Time the firmware's stages only");
+  cmd->add_flag("--json", options.json, "Print the figures as JSON");
+}
+
+}  // namespace epipole::tools

@@ -1,0 +1,64 @@
+# epipole-bench as a board runs it (under qemu-user in a cross build): the simulated board's Aloe
+# pair through every stage of both sides at 1 and 2 threads, as JSON, checked; then a board that
+# does not exist and an unknown option, each with its exit status. Timings are only checked to
+# be there, never against a bound.
+#
+#   cmake -DBENCH=path [-DEMULATOR=a|b|c] -DBOARD=folder [-DKERNELS=neon] -P this file
+string(REPLACE "|" ";" emulator "${EMULATOR}")
+
+function(run_bench)
+  execute_process(COMMAND ${emulator} ${BENCH} ${ARGN} RESULT_VARIABLE status
+                  OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  set(status ${status} PARENT_SCOPE)
+  set(out "${out}" PARENT_SCOPE)
+  set(err "${err}" PARENT_SCOPE)
+endfunction()
+
+# expect(WHAT condition...): fails with WHAT and the bench's output unless the condition holds.
+function(expect what)
+  if(NOT (${ARGN}))
+    message(FATAL_ERROR "epipole-bench: ${what}\n${out}\n${err}")
+  endif()
+endfunction()
+
+run_bench(--board ${BOARD} --scene aloe -n 1 --warmup 0 --threads 1,2 --json)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "epipole-bench exited with ${status}\n${out}\n${err}")
+endif()
+string(JSON width GET "${out}" width)
+string(JSON kernels GET "${out}" kernels)
+string(JSON runs LENGTH "${out}" runs)
+expect("width ${width}, expected 640" width EQUAL 640)
+if(KERNELS)
+  expect("kernels ${kernels}, expected ${KERNELS}" kernels STREQUAL KERNELS)
+endif()
+expect("${runs} runs, expected 2 (1 and 2 threads)" runs EQUAL 2)
+foreach(run 0 1)
+  math(EXPR threads "${run} + 1")
+  string(JSON got GET "${out}" runs ${run} threads)
+  expect("run ${run} is for ${got} threads" got EQUAL threads)
+  foreach(side epipole opencv)
+    string(JSON rate GET "${out}" runs ${run} ${side} pairs_per_second)
+    expect("${side} at ${threads} threads: ${rate} pairs/s" rate GREATER 0)
+    set(stages rectify corners disparity detect)
+    if(side STREQUAL "epipole")
+      list(APPEND stages sparse)
+    endif()
+    foreach(stage ${stages})
+      string(JSON p50 ERROR_VARIABLE missing GET "${out}" runs ${run} ${side} stages ${stage} p50_ms)
+      expect("${side} has no ${stage} stage at ${threads} threads" NOT missing)
+      expect("${side} ${stage}: ${p50} ms" p50 GREATER 0)
+    endforeach()
+  endforeach()
+  # What the firmware found on Aloe (a rich scene: corners and matches by the hundred).
+  string(JSON corners GET "${out}" runs ${run} epipole found corners)
+  string(JSON matches GET "${out}" runs ${run} epipole found matches)
+  expect("${corners} corners at ${threads} threads" corners GREATER 1000)
+  expect("${matches} sparse matches at ${threads} threads" matches GREATER 100)
+endforeach()
+
+run_bench(--board ${BOARD}/no-such-board -n 1)
+expect("a board that does not exist: exit ${status}, expected 1" status EQUAL 1)
+expect("a board that does not exist: '${err}'" err MATCHES "^epipole-bench: .*no-such-board")
+run_bench(--pairs 0)
+expect("--pairs 0: exit ${status}, expected 2 (usage)" status EQUAL 2)
