@@ -29,7 +29,7 @@ EPIPOLE_VBOARD_KVER=$(vboard_kernel_version arm64)
 export EPIPOLE_VBOARD_KVER
 kver=$EPIPOLE_VBOARD_KVER
 out=$(deploy_rootfs_dir "$kver")
-stamp="$out/.complete-v1"
+stamp="$out/.complete-v2"  # v2: the init waits for its console to open
 if [[ -f $stamp ]]; then
   echo "make-rootfs: $out is complete"
   exit 0

@@ -54,12 +54,15 @@ wanted=$(apt-get -s -q -o Dir::State::status="$unpacked/status" -o APT::Architec
   awk '$1 == "Inst" && $2 != "epipole" {gsub(/[()]/, "", $3); print $2 ":arm64=" $3}') || true
 debs=$(deploy_cache)/debs
 mkdir -p "$debs"
+# A downloaded file's name has the version's epoch as %3a (libjpeg62-turbo_1%3a2.1.5-2_arm64.deb).
+downloaded() { ls "$debs/${name}_${package_version/:/%3a}_"*.deb 2>/dev/null | head -1 || true; }
 for package in $wanted; do
   name=${package%%:*} package_version=${package#*=}
-  file=$(ls "$debs/${name}_${package_version#*:}_"*.deb 2>/dev/null | head -1 || true)
+  file=$(downloaded)
   if [[ -z $file ]]; then
     (cd "$debs" && vboard_download "$package")
-    file=$(ls "$debs/${name}_${package_version#*:}_"*.deb | head -1)
+    file=$(downloaded)
+    [[ -n $file ]] || { echo "prepare: $package was not downloaded into $debs" >&2; exit 1; }
   fi
   cp "$file" "$payload/repo/"
 done
