@@ -411,6 +411,11 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   hal::Clock& clock = board_.clock();
   const TriggerTime trigger = trigger_time(pair);
   const hal::Nanoseconds captured = clock.now() - trigger.ns;
+  // How long the pair waited for the loop: since the later of its two frames (0 when their
+  // timestamps are on another clock than the board's).
+  const bool same_clock = pair.left.clock == clock.id() && pair.right.clock == clock.id();
+  const hal::Nanoseconds waited =
+      same_clock ? clock.now() - std::max(pair.left.timestamp, pair.right.timestamp) : 0;
   const hal::Nanoseconds t0 = steady_now();
   const FrameResult& r =
       pipeline_.process(pair.left.gray, pair.right.gray, pair.left.sequence, trigger.ns, stages_);
@@ -423,7 +428,7 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   times[static_cast<std::size_t>(Stage::capture)] = captured;
   times[static_cast<std::size_t>(Stage::publish)] = t2 - t1;
   times[static_cast<std::size_t>(Stage::total)] = t2 - t0;
-  health_.record(clock.now() - trigger.ns, times);
+  health_.record(clock.now() - trigger.ns, times, waited);
   grabber_.pairer().ledger().published(pair.left.sequence);
   if (snapshot_pending_) {
     snapshot_pending_ = false;

@@ -16,6 +16,13 @@ namespace {
 std::uint32_t wrapped(std::uint64_t total) {
   return static_cast<std::uint32_t>(total);
 }
+
+// The nearest-rank percentile of the first `count` values (reordered), in microseconds.
+std::uint32_t percentile_us(hal::Nanoseconds* values, int count, int percent) {
+  const int k = std::max(0, (count * percent + 99) / 100 - 1);
+  std::nth_element(values, values + k, values + count);
+  return to_us(values[k]);
+}
 }  // namespace
 
 HealthMonitor::HealthMonitor(hal::Nanoseconds start, int max_frames_per_window,
@@ -24,10 +31,16 @@ HealthMonitor::HealthMonitor(hal::Nanoseconds start, int max_frames_per_window,
   require(max_frames_per_window >= 1, "health: room for at least one frame per window is needed");
   require(window > 0, "health: the window must be positive");
   latencies_ = std::make_unique<hal::Nanoseconds[]>(static_cast<std::size_t>(capacity_));
+  waits_ = std::make_unique<hal::Nanoseconds[]>(static_cast<std::size_t>(capacity_));
 }
 
-void HealthMonitor::record(hal::Nanoseconds latency, const StageTimes& stages) {
-  if (count_ < capacity_) latencies_[static_cast<std::size_t>(count_++)] = latency;
+void HealthMonitor::record(hal::Nanoseconds latency, const StageTimes& stages,
+                           hal::Nanoseconds wait) {
+  if (count_ < capacity_) {
+    latencies_[static_cast<std::size_t>(count_)] = latency;
+    waits_[static_cast<std::size_t>(count_)] = std::max<hal::Nanoseconds>(wait, 0);
+    ++count_;
+  }
   for (std::size_t i = 0; i < stages.size(); ++i) stage_sums_[i] += stages[i];
   ++window_frames_;
   ++frames_;
@@ -46,20 +59,21 @@ std::optional<protocol::Health> HealthMonitor::due(hal::Nanoseconds now, const F
   // Frames per second over the window's nominal length (the window is checked when a frame
   // arrives, a little after it ended), or over the real time after a stall.
   const bool stalled = now - window_start_ >= 2 * window_;
-  const double seconds = static_cast<double>(stalled ? now - window_start_ : window_) * 1e-9;
+  const hal::Nanoseconds length = stalled ? now - window_start_ : window_;
+  const double seconds = static_cast<double>(length) * 1e-9;
   h.fps_centi = saturate<std::uint16_t>(
       static_cast<std::uint64_t>(static_cast<double>(window_frames_) * 100.0 / seconds + 0.5));
   if (count_ > 0) {
-    // Nearest-rank percentiles of the window's latencies.
-    hal::Nanoseconds* first = latencies_.get();
-    const auto rank = [&](int percent) {
-      const int k = std::max(0, (count_ * percent + 99) / 100 - 1);
-      std::nth_element(first, first + k, first + count_);
-      return first[k];
-    };
-    h.latency_p50_us = to_us(rank(50));
-    h.latency_p99_us = to_us(rank(99));
+    h.latency_p50_us = percentile_us(latencies_.get(), count_, 50);
+    h.latency_p99_us = percentile_us(latencies_.get(), count_, 99);
+    h.wait_p50_us = percentile_us(waits_.get(), count_, 50);
+    h.wait_p99_us = percentile_us(waits_.get(), count_, 99);
   }
+  // Busy: the pairs' total (processing and publishing) over the window; a pair that began in the
+  // window before counts here, so a saturated loop can exceed the window by a little.
+  const hal::Nanoseconds busy = stage_sums_[static_cast<std::size_t>(protocol::Stage::total)];
+  h.busy_permille = static_cast<std::uint16_t>(std::min<hal::Nanoseconds>(
+      1000, std::max<hal::Nanoseconds>(busy, 0) * 1000 / std::max<hal::Nanoseconds>(length, 1)));
   if (window_frames_ > 0) {
     for (std::size_t i = 0; i < stage_sums_.size(); ++i) {
       h.stage_us[i] = to_us(stage_sums_[i] / window_frames_);

@@ -272,7 +272,8 @@ void print_scene(const nlohmann::json& s) {
               << h["latency_p99_us"].get<int>() / 1000.0 << " ms, rectify "
               << h["rectify_us"].get<int>() / 1000.0 << " ms, corners "
               << h["corners_us"].get<int>() / 1000.0 << " ms, disparity "
-              << h["disparity_us"].get<int>() / 1000.0 << " ms";
+              << h["disparity_us"].get<int>() / 1000.0 << " ms, busy "
+              << h["busy_permille"].get<int>() / 10.0 << " %";
   }
   std::cout << "\n";
 }

@@ -107,6 +107,12 @@ TEST(FrameLoop, RunsEveryStageOnEveryPairAndPublishesIt) {
   // Without charging compute time to the virtual clock, latency is the cameras' own: exposure
   // delay + readout of the simulated sensor (5 + 2 ms).
   EXPECT_EQ(health[0].latency_p50_us, 7000u);
+  // The simulated sensor stamps a frame at the end of its exposure: a pair the loop takes at once
+  // has waited its readout.
+  EXPECT_EQ(health[0].wait_p50_us, 2000u);
+  EXPECT_EQ(health[0].wait_p99_us, 2000u);
+  // The busy share compares the host's time with the virtual clock's (compute not charged).
+  EXPECT_LE(health[0].busy_permille, 1000);
   EXPECT_GT(health[0].stage_us[static_cast<std::size_t>(Stage::disparity)], 0u);
   EXPECT_EQ(health[0].flags, 0) << "calibrated";
   EXPECT_EQ(s.health_messages, health.size());
@@ -288,6 +294,30 @@ TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
   EXPECT_EQ(t.published + t.dropped(), recorder.frames.back().frame + 1u);
   for (std::size_t i = 1; i < recorder.frames.size(); ++i) {
     EXPECT_GT(recorder.frames[i].frame, recorder.frames[i - 1].frame);
+  }
+}
+
+TEST(FrameLoop, HealthSaysHowBusyTheLoopIsAndHowLongPairsWaitedForIt) {
+  // The trigger outruns the loop, the compute time charged to the virtual clock. The busy share
+  // is the window's pairs times their mean total; a pair waits at least its readout. (How long
+  // beyond that is the simulation's: its cameras catch up with a clock that jumped by a pair's
+  // compute time only after the jump, so the loop sometimes takes a pair that is not the
+  // freshest one a real camera would have by then.)
+  test::SimRig rig(320, 240, 8, "");
+  Firmware fw(outrun_by_the_trigger(rig), rig.images());
+  Recorder recorder;
+  fw.frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  fw.run(400, stop);
+  const auto health = recorder.all<protocol::Health>();
+  ASSERT_GE(health.size(), 1u);
+  for (const protocol::Health& h : health) {
+    const double total_us = h.stage_us[static_cast<std::size_t>(Stage::total)];
+    const double busy = h.fps_centi / 100.0 * total_us / 1000.0;
+    EXPECT_GT(h.busy_permille, 0);
+    EXPECT_NEAR(h.busy_permille, std::min(busy, 1000.0), 2.0) << h.fps_centi << " " << total_us;
+    EXPECT_GE(h.wait_p50_us, 2000u) << "the simulated sensor's readout";
+    EXPECT_GE(h.wait_p99_us, h.wait_p50_us);
   }
 }
 

@@ -16,7 +16,7 @@ TEST(HealthMonitor, ReportsRatesPercentilesAndStageMeansOncePerWindow) {
   for (int i = 0; i < 100; ++i) {
     stages[static_cast<std::size_t>(protocol::Stage::rectify)] = 2 * kMs;
     stages[static_cast<std::size_t>(protocol::Stage::total)] = 10 * kMs;
-    monitor.record(((i * 37) % 100 + 1) * kMs, stages);
+    monitor.record(((i * 37) % 100 + 1) * kMs, stages, ((i * 53) % 100) * kMs / 10);
   }
   EXPECT_FALSE(monitor.due(999 * kMs, {})) << "the window is not over yet";
   FaultCounts faults;
@@ -38,6 +38,10 @@ TEST(HealthMonitor, ReportsRatesPercentilesAndStageMeansOncePerWindow) {
   EXPECT_EQ(h->stage_us[static_cast<std::size_t>(protocol::Stage::rectify)], 2000u);
   EXPECT_EQ(h->stage_us[static_cast<std::size_t>(protocol::Stage::total)], 10'000u);
   EXPECT_EQ(h->stage_us[static_cast<std::size_t>(protocol::Stage::detect)], 0u);
+  // Waits 0, 0.1, .., 9.9 ms; 100 pairs of 10 ms in the second: the loop was busy all of it.
+  EXPECT_EQ(h->wait_p50_us, 4900u);
+  EXPECT_EQ(h->wait_p99_us, 9800u);
+  EXPECT_EQ(h->busy_permille, 1000);
   EXPECT_EQ(h->camera_timeouts, 3u);
   EXPECT_EQ(h->unpaired_frames, 70'000u) << "modulo 2^32: it goes on, never stops";
   EXPECT_EQ(h->messages_dropped, 5u);
@@ -56,10 +60,13 @@ TEST(HealthMonitor, ReportsRatesPercentilesAndStageMeansOncePerWindow) {
   EXPECT_EQ(h2->fps_centi, 100);
   EXPECT_EQ(h2->latency_p50_us, 7000u);
   EXPECT_EQ(h2->latency_p99_us, 7000u);
+  EXPECT_EQ(h2->wait_p99_us, 0u) << "recorded without a wait";
+  EXPECT_EQ(h2->busy_permille, 10) << "one pair of 10 ms in the second";
   const auto h3 = monitor.due(3000 * kMs, {});
   ASSERT_TRUE(h3);
   EXPECT_EQ(h3->fps_centi, 0);
   EXPECT_EQ(h3->latency_p99_us, 0u);
+  EXPECT_EQ(h3->busy_permille, 0);
 }
 
 TEST(HealthMonitor, MoreFramesThanRoomStillCount) {

@@ -90,6 +90,9 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
   health.messages_dropped = rng();
   health.snapshot_failures = rng();
   health.flags = u16();
+  health.wait_p50_us = rng();
+  health.wait_p99_us = rng();
+  health.busy_permille = u16();
   FrameSummary summary{rng(), (std::uint64_t{rng()} << 32) | rng(), rng(), u16(), u16(), 999, 3,
                        u16()};
   Detections detections;
@@ -333,8 +336,9 @@ TEST(Protocol, OverlongAndUnknownFramesAreCounted) {
   EXPECT_EQ(decoder.stats().bad_version, 2u);
 }
 
-// Version 2's flags: the last field of health (u16) and of frame (u8), as docs/protocol.md says.
-TEST(Protocol, FlagsAreTheLastFieldOfHealthAndFrame) {
+// Where docs/protocol.md puts them: health's flags (u16) after its counters, then (version 4)
+// its occupancy; the frame's flags (u8) last.
+TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays) {
   const auto payload_of = [](const Message& m) {
     const Bytes frame = frame_of(m, 0);
     Bytes payload(kMaxPayloadSize);
@@ -345,13 +349,19 @@ TEST(Protocol, FlagsAreTheLastFieldOfHealthAndFrame) {
   };
   Health health;
   health.flags = 0xA501;
+  health.wait_p50_us = 0x04030201;
+  health.wait_p99_us = 0x08070605;
+  health.busy_permille = 0x03E8;
   const Bytes h = payload_of(health);
   // 3 x u32, u16, 2 x u32, 8 x u32 stage times, 4 x u32 dropped by cause, 8 x u32 counters,
-  // u16 flags.
-  ASSERT_EQ(h.size(), kHeaderSize + 104 + kCrcSize);
-  EXPECT_EQ(h[0], 3) << "version";
+  // u16 flags, 2 x u32 waits, u16 busy.
+  ASSERT_EQ(h.size(), kHeaderSize + 114 + kCrcSize);
+  EXPECT_EQ(h[0], 4) << "version";
   EXPECT_EQ(h[kHeaderSize + 102], 0x01);
   EXPECT_EQ(h[kHeaderSize + 103], 0xA5);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 104 + i], i + 1) << i;
+  EXPECT_EQ(h[kHeaderSize + 112], 0xE8);
+  EXPECT_EQ(h[kHeaderSize + 113], 0x03);
   FrameSummary frame;
   frame.flags = kFrameTriggerFromCapture;
   const Bytes f = payload_of(frame);

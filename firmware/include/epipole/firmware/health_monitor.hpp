@@ -29,22 +29,24 @@ struct FaultCounts {
 };
 
 // Collects what the health message says: frames per second, the latency from trigger edge to
-// publishing (50th and 99th percentile) and the mean time of each stage, over windows of one
-// second on the board's clock. Fixed memory: room for `max_frames_per_window` latencies is
-// allocated by the constructor (later frames of a window still count, but only the first ones
-// enter the percentiles); record() and due() never allocate.
+// publishing and the wait of pairs for the frame loop (50th and 99th percentile each), the mean
+// time of each stage and the share of the window spent on pairs (the total stage), over windows
+// of one second on the board's clock. Fixed memory: room for `max_frames_per_window` latencies
+// and waits is allocated by the constructor (later frames of a window still count, but only the
+// first ones enter the percentiles); record() and due() never allocate.
 class HealthMonitor {
  public:
   explicit HealthMonitor(hal::Nanoseconds start, int max_frames_per_window = 1024,
                          hal::Nanoseconds window = 1'000'000'000);
 
-  void record(hal::Nanoseconds latency, const StageTimes& stages);
+  // `wait`: from the later of the pair's two frames to the start of its processing.
+  void record(hal::Nanoseconds latency, const StageTimes& stages, hal::Nanoseconds wait = 0);
   // When a window has ended by `now`: its health message (and a new window starts).
   std::optional<protocol::Health> due(hal::Nanoseconds now, const FaultCounts& faults);
 
   std::uint64_t frames() const { return frames_; }
   std::size_t working_set_bytes() const {
-    return static_cast<std::size_t>(capacity_) * sizeof(hal::Nanoseconds);
+    return 2 * static_cast<std::size_t>(capacity_) * sizeof(hal::Nanoseconds);
   }
 
  private:
@@ -52,8 +54,9 @@ class HealthMonitor {
   hal::Nanoseconds window_;
   hal::Nanoseconds window_start_;
   std::unique_ptr<hal::Nanoseconds[]> latencies_;
+  std::unique_ptr<hal::Nanoseconds[]> waits_;
   int capacity_;
-  int count_ = 0;  // latencies stored this window
+  int count_ = 0;  // latencies and waits stored this window
   int window_frames_ = 0;
   StageTimes stage_sums_{};
   std::uint64_t frames_ = 0;

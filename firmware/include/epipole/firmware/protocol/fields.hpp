@@ -34,6 +34,9 @@ void fields(Io& io, M& m) {
   io("messages_dropped", m.messages_dropped);
   io("snapshot_failures", m.snapshot_failures);
   io("flags", m.flags);
+  io("wait_p50_us", m.wait_p50_us);
+  io("wait_p99_us", m.wait_p99_us);
+  io("busy_permille", m.busy_permille);
 }
 
 template <class Io, class M>

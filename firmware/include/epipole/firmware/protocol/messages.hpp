@@ -11,7 +11,7 @@ namespace epipole::protocol {
 // Epipole serial protocol, version 3 (docs/protocol.md). Every number is little-endian on the
 // wire; sizes here are the wire sizes. Version 2 added the flags of health and frame.
 
-inline constexpr std::uint8_t kVersion = 3;
+inline constexpr std::uint8_t kVersion = 4;
 
 enum class MessageType : std::uint8_t {
   // firmware -> robot
@@ -60,6 +60,11 @@ struct Health {
   std::uint32_t messages_dropped = 0;   // not sent: the link's byte budget or queue was full
   std::uint32_t snapshot_failures = 0;  // snapshots that could not be written
   std::uint16_t flags = 0;              // kHealth* bits: the firmware's state
+  // The frame loop's occupancy: how long pairs waited for it (from the later of a pair's two
+  // frames to the start of its processing), and the share of the second it spent on pairs.
+  std::uint32_t wait_p50_us = 0;
+  std::uint32_t wait_p99_us = 0;
+  std::uint16_t busy_permille = 0;
   friend bool operator==(const Health&, const Health&) = default;
 };
 
