@@ -158,10 +158,14 @@ GrayView Rectifier::rectify(GrayView source) {
   return output_.view();
 }
 
-void Rectifier::rectify(GrayView source, MutableGrayView destination) {
+void Rectifier::check_source(GrayView source) const {
   require(source.width() == config_.source_width && source.height() == config_.source_height,
           "rectifier configured for ", config_.source_width, "x", config_.source_height,
           " sources was given a ", source.width(), "x", source.height(), " image");
+}
+
+void Rectifier::rectify(GrayView source, MutableGrayView destination) {
+  check_source(source);
   require(destination.width() == config_.width && destination.height() == config_.height,
           "rectifier output is ", config_.width, "x", config_.height, ", not ", destination.width(),
           "x", destination.height());
@@ -178,9 +182,7 @@ void Rectifier::rectify(GrayView source, MutableGrayView destination) {
 }
 
 GrayView Rectifier::rectify_rows(GrayView source, int first_row, int end_row) {
-  require(source.width() == config_.source_width && source.height() == config_.source_height,
-          "rectifier configured for ", config_.source_width, "x", config_.source_height,
-          " sources was given a ", source.width(), "x", source.height(), " image");
+  check_source(source);
   require(0 <= first_row && first_row <= end_row && end_row <= config_.height, "rows ", first_row,
           "..", end_row, " are not within the rectified image's ", config_.height);
   remap_rows(source, output_.view(), first_row, end_row);

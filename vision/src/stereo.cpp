@@ -383,15 +383,15 @@ void StereoMatcher::run_stripe(int stripe, int worker) {
   const int y0 = stripe * config_.height / stripes;
   const int y1 = (stripe + 1) * config_.height / stripes;
   if (config_.method == StereoMethod::sgm) {
-    sgm_stripe(w, y0, y1, left_, right_);
+    sgm_stripe(w, y0, y1);
   } else {
-    bm_stripe(w, y0, y1, left_, right_);
+    bm_stripe(w, y0, y1);
   }
 }
 
 // Rows y0..y1 of the output, aggregated from kWarmupRows above (those belong to the stripe
 // above, which writes them itself).
-void StereoMatcher::sgm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right) {
+void StereoMatcher::sgm_stripe(Worker& w, int y0, int y1) {
   const int W = config_.width;
   const int D = config_.max_disparity;
   const std::size_t stride = static_cast<std::size_t>(D) + 32;
@@ -406,7 +406,7 @@ void StereoMatcher::sgm_stripe(Worker& w, int y0, int y1, GrayView left, GrayVie
     std::fill(w.mins[prev][dir].begin(), w.mins[prev][dir].end(), std::uint8_t{0});
   }
   for (int y = std::max(0, y0 - kWarmupRows); y < y1; ++y) {
-    w.cost_row(left, right, y, D, w.cost.data());
+    w.cost_row(left_, right_, y, D, w.cost.data());
     kernels::SgmRow row{};
     row.cost = w.cost.data();
     row.width = W;
@@ -431,7 +431,7 @@ void StereoMatcher::sgm_stripe(Worker& w, int y0, int y1, GrayView left, GrayVie
 }
 
 // Block matching: a ring of cost rows y - r - 1 .. y + r and their vertical sums.
-void StereoMatcher::bm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right) {
+void StereoMatcher::bm_stripe(Worker& w, int y0, int y1) {
   const int H = config_.height;
   const int D = config_.max_disparity;
   const std::ptrdiff_t wd = static_cast<std::ptrdiff_t>(config_.width) * D;
@@ -441,14 +441,14 @@ void StereoMatcher::bm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView
   std::fill(w.columns.begin(), w.columns.end(), std::uint16_t{0});
   const int first = std::max(0, y0 - r);
   for (int y = first; y < std::min(H, y0 + r); ++y) {
-    w.cost_row(left, right, y, D, ring_row(y));
+    w.cost_row(left_, right_, y, D, ring_row(y));
     w.kernels.box_columns(w.columns.data(), ring_row(y), nullptr, static_cast<int>(wd));
   }
   for (int y = y0; y < y1; ++y) {
     kernels::BmRow row{nullptr, nullptr, w.columns.data(), config_.width,
                        D,       r,       w.sums.data(),    wta_row(config_, w, disparity_.row(y))};
     if (y + r < H) {
-      w.cost_row(left, right, y + r, D, ring_row(y + r));
+      w.cost_row(left_, right_, y + r, D, ring_row(y + r));
       row.entering = ring_row(y + r);
     }
     if (y - r - 1 >= first) row.leaving = ring_row(y - r - 1);

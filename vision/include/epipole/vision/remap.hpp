@@ -106,6 +106,8 @@ class Rectifier {
   SimdPath simd_path() const { return path_; }
 
  private:
+  // Throws Error for a source of another size than the configuration's.
+  void check_source(GrayView source) const;
   void remap_rows(GrayView source, MutableGrayView destination, int first_row, int end_row) const;
 
   RectifierConfig config_;

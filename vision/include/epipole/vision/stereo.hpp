@@ -73,8 +73,9 @@ class StereoMatcher {
   struct Worker;  // per-thread row buffers (stereo.cpp)
 
  private:
-  void sgm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right);
-  void bm_stripe(Worker& w, int y0, int y1, GrayView left, GrayView right);
+  // Rows y0..y1 of the disparity of the pair start() was given.
+  void sgm_stripe(Worker& w, int y0, int y1);
+  void bm_stripe(Worker& w, int y0, int y1);
 
   void remove_speckles();
 
