@@ -58,6 +58,7 @@ struct PngReader {
   char message[256] = "unknown error";
   int width = 0;
   int height = 0;
+  int depth = 0;  // bits per sample as read
   ~PngReader() { png_destroy_read_struct(&png, info ? &info : nullptr, nullptr); }
 };
 
@@ -69,7 +70,8 @@ struct PngReader {
 
 void on_png_warning(png_structp, png_const_charp) {}
 
-// Reads the header and sets the transforms that give one channel of `bits` bits.
+// Reads the header and sets the transforms that give one channel of at most `bits` bits (an 8-bit
+// file read for 16 bits stays 8-bit: its samples keep their values).
 bool png_read_header(PngReader& r, std::FILE* f, int bits) {
   if (setjmp(png_jmpbuf(r.png))) return false;
   png_init_io(r.png, f);
@@ -80,13 +82,13 @@ bool png_read_header(PngReader& r, std::FILE* f, int bits) {
   if (color == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(r.png);
   if (png_get_valid(r.png, r.info, PNG_INFO_tRNS)) png_set_tRNS_to_alpha(r.png);
   if (bits == 8) png_set_strip_16(r.png);
-  if (bits == 16 && depth < 16) png_set_expand_16(r.png);
-  if (bits == 16) png_set_swap(r.png);  // PNG is big-endian; our samples are native
+  if (bits == 16 && depth == 16) png_set_swap(r.png);  // PNG is big-endian; ours are native
   png_set_strip_alpha(r.png);
   if (color & PNG_COLOR_MASK_COLOR) png_set_rgb_to_gray(r.png, 1, 0.299, 0.587);
   png_read_update_info(r.png, r.info);
   r.width = static_cast<int>(png_get_image_width(r.png, r.info));
   r.height = static_cast<int>(png_get_image_height(r.png, r.info));
+  r.depth = png_get_bit_depth(r.png, r.info);
   return png_get_channels(r.png, r.info) == 1;
 }
 
@@ -110,6 +112,18 @@ Image<T> read_png(std::FILE* f, const path& file) {
   check_size(file, "PNG", r.width, r.height);
   Image<T> image(r.width, r.height);
   std::vector<png_bytep> rows(static_cast<std::size_t>(r.height));
+  if (sizeof(T) == 2 && r.depth == 8) {
+    // 8-bit samples for a 16-bit image: read, then widened with their values kept.
+    GrayImage narrow(r.width, r.height);
+    for (int y = 0; y < r.height; ++y) rows[y] = narrow.view().row(y);
+    if (!png_read_pixels(r, rows.data())) {
+      throw Error(cat(file.string(), ": bad PNG: ", r.message));
+    }
+    for (int y = 0; y < r.height; ++y) {
+      std::copy_n(narrow.view().row(y), r.width, image.view().row(y));
+    }
+    return image;
+  }
   for (int y = 0; y < r.height; ++y) rows[y] = reinterpret_cast<png_bytep>(image.view().row(y));
   if (!png_read_pixels(r, rows.data())) throw Error(cat(file.string(), ": bad PNG: ", r.message));
   return image;

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
 
   tools::add_features_command(app, global);
   tools::add_disparity_command(app, global);
+  tools::add_eval_disparity_command(app, global);
   tools::add_match_command(app, global);
   tools::add_calibrate_command(app, global);
   tools::add_rectify_command(app, global);

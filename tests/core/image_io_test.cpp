@@ -66,6 +66,21 @@ TEST_F(ImageFiles, SixteenBitRoundTrips) {
   }
 }
 
+TEST_F(ImageFiles, EightBitSamplesKeepTheirValuesWhenReadFor16Bits) {
+  // Middlebury's ground truth: 8-bit disparities in pixels, read as they are, from PNG as from
+  // PGM.
+  const GrayImage image = random_image<std::uint8_t>(21, 5, 3);
+  for (const char* name : {"g.png", "g.pgm"}) {
+    save_image(file(name), image.view());
+    const Image<std::uint16_t> wide = load_gray16(file(name));
+    ASSERT_EQ(wide.width(), 21);
+    for (int y = 0; y < 5; ++y) {
+      for (int x = 0; x < 21; ++x)
+        ASSERT_EQ(wide(x, y), image(x, y)) << name << " " << x << "," << y;
+    }
+  }
+}
+
 TEST_F(ImageFiles, RgbIsWrittenAndReadAsGray) {
   RgbImage image(4, 2);
   for (int y = 0; y < 2; ++y)

@@ -23,7 +23,8 @@ TEST(Cli, HelpAndVersion) {
   const Result features_help = run_tool("features --help");
   EXPECT_EQ(features_help.exit_code, 0);
   EXPECT_NE(features_help.out.find("--threshold"), std::string::npos) << features_help.out;
-  for (const char* command : {"--help", "features --help", "sim --help", "calibrate --help"}) {
+  for (const char* command :
+       {"--help", "features --help", "sim --help", "calibrate --help", "eval-disparity --help"}) {
     const Result r = run_tool(command);
     EXPECT_NE(r.out.find("Exit status: 0 success, 1 failure"), std::string::npos) << r.out;
   }

@@ -175,4 +175,108 @@ TEST(DisparityCli, RectifiesWithACalibration) {
       << wrong_size.out;
 }
 
+// A 4x2 scene whose every figure is known: truth 40 px (two pixels unknown), the disparity off
+// by 0, 1.5, 2.5 and 5 px, one pixel missing; the mask marks the top row non-occluded.
+struct HandMade {
+  std::string disparity = ::testing::TempDir() + "epipole-eval-disparity.png";
+  std::string truth = ::testing::TempDir() + "epipole-eval-truth.png";
+  std::string mask = ::testing::TempDir() + "epipole-eval-mask.png";
+  HandMade() {
+    epipole::Image<std::uint16_t> d(4, 2);
+    epipole::GrayImage t(4, 2);
+    epipole::GrayImage m(4, 2);
+    const double off[8] = {0, 1.5, 2.5, 5, 0, 0, 0, 0};
+    for (int i = 0; i < 8; ++i) {
+      const int x = i % 4, y = i / 4;
+      d(x, y) = static_cast<std::uint16_t>((40 + off[i]) * 16);
+      t(x, y) = 40;
+      m(x, y) = y == 0 ? 255 : 128;
+    }
+    d(0, 1) = 0;  // missing
+    t(2, 1) = 0;  // unknown
+    t(3, 1) = 0;
+    epipole::save_image(disparity, epipole::ImageView<const std::uint16_t>(d.view()));
+    epipole::save_image(truth, epipole::ImageView<const std::uint8_t>(t.view()));
+    epipole::save_image(mask, epipole::ImageView<const std::uint8_t>(m.view()));
+  }
+};
+
+TEST(EvalDisparityCli, EveryFigureOnAHandMadeMapAllAndNonOccluded) {
+  const HandMade files;
+  const Result r = run_tool(
+      "eval-disparity " + files.disparity + " " + files.truth + " --mask " + files.mask + " --json",
+      false);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["width"], 4);
+  // All: 6 pixels with truth (errors 0, 1.5, 2.5, 5, missing, 0).
+  const auto& all = j["all"];
+  EXPECT_EQ(all["pixels"], 6);
+  EXPECT_EQ(all["valid"], 5);
+  EXPECT_DOUBLE_EQ(all["bad1"].get<double>(), 4.0 / 6);
+  EXPECT_DOUBLE_EQ(all["bad2"].get<double>(), 3.0 / 6);
+  EXPECT_DOUBLE_EQ(all["bad4"].get<double>(), 2.0 / 6);
+  EXPECT_DOUBLE_EQ(all["d1"].get<double>(), 2.0 / 6);  // 5 px (> 3 and > 2) and the missing
+  EXPECT_DOUBLE_EQ(all["density"].get<double>(), 5.0 / 6);
+  EXPECT_DOUBLE_EQ(all["mean_error_px"].get<double>(), 9.0 / 5);
+  // Non-occluded: the top row only.
+  const auto& noc = j["nonoccluded"];
+  EXPECT_EQ(noc["pixels"], 4);
+  EXPECT_DOUBLE_EQ(noc["bad2"].get<double>(), 2.0 / 4);
+  EXPECT_DOUBLE_EQ(noc["density"].get<double>(), 1.0);
+  // The table says the same.
+  const Result table =
+      run_tool("eval-disparity " + files.disparity + " " + files.truth + " --mask " + files.mask);
+  ASSERT_EQ(table.exit_code, 0) << table.out;
+  EXPECT_NE(table.out.find("all             66.67 %  50.00 %  33.33 %  33.33 %   83.33 %"),
+            std::string::npos)
+      << table.out;
+  EXPECT_NE(table.out.find("non-occluded"), std::string::npos) << table.out;
+}
+
+TEST(EvalDisparityCli, AloeFromTheDisparityCommandAgainstItsGroundTruth) {
+  const std::string out = ::testing::TempDir() + "epipole-eval-aloe.png";
+  const Result made = run_tool("disparity " + aloe("samples/aloeL.jpg") + " " +
+                               aloe("samples/aloeR.jpg") + " -d 224 --out " + out);
+  ASSERT_EQ(made.exit_code, 0) << made.out;
+  const Result r =
+      run_tool("eval-disparity " + out + " " + aloe("samples/aloeGT.png") + " --json", false);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto all = nlohmann::json::parse(r.out)["all"];
+  // Middlebury's 8-bit truth read as disparities in pixels: the quality mode's figures
+  // (docs/vision.md: bad2 24 %, density near 80 %), not those of a misread scale.
+  EXPECT_GT(all["pixels"].get<long>(), 1'000'000);
+  EXPECT_LT(all["bad2"].get<double>(), 0.30);
+  EXPECT_GT(all["density"].get<double>(), 0.70);
+  EXPECT_LT(all["mean_error_px"].get<double>(), 2.0);
+}
+
+TEST(EvalDisparityCli, BadInputIsAOneLineError) {
+  const HandMade files;
+  const std::string aloe_truth = aloe("samples/aloeGT.png");
+  const std::string empty_truth = ::testing::TempDir() + "epipole-eval-empty.png";
+  epipole::save_image(empty_truth,
+                      epipole::ImageView<const std::uint8_t>(epipole::GrayImage(4, 2).view()));
+  const struct {
+    std::string arguments;
+    int exit_code;
+    std::string message;
+  } cases[] = {
+      {"eval-disparity " + files.disparity + " " + aloe_truth, 1, "is 4x2 but"},
+      {"eval-disparity " + files.disparity + " " + files.truth + " --mask " + aloe_truth, 1,
+       "is 1282x1110 but"},
+      {"eval-disparity " + files.disparity + " " + empty_truth, 1, "no pixel with ground truth"},
+      {"eval-disparity " + files.disparity + " " + files.truth + " --disparity-scale 0.5", 2,
+       "disparity-scale"},
+      {"eval-disparity " + files.disparity + " /no/such/truth.png", 2, "truth.png"},
+      {"eval-disparity " + files.disparity + " " + files.truth + " --truth-scale 0", 2,
+       "truth-scale"},
+  };
+  for (const auto& c : cases) {
+    const Result r = run_tool(c.arguments);
+    EXPECT_EQ(r.exit_code, c.exit_code) << c.arguments << "\n" << r.out;
+    EXPECT_NE(r.out.find(c.message), std::string::npos) << c.arguments << "\n" << r.out;
+  }
+}
+
 }  // namespace

@@ -1,60 +1,77 @@
 // Dense disparity on Middlebury Aloe against its ground truth, beside OpenCV's StereoSGBM and
 // StereoBM with the same disparity range, measured in the same run: quality mode must have at
-// most SGBM's bad2, fast mode at most StereoBM's.
+// most SGBM's bad2, fast mode at most StereoBM's. And against the figures stored in
+// stereo_quality_baseline.json (as OpenCV's own stereo regression test keeps its own): a
+// failure when bad2 grows or the density drops by more than 0.1 point. After a deliberate
+// change, `EPIPOLE_UPDATE_QUALITY_BASELINE=1 build/host/tests/stereo_reference_tests` writes
+// the new figures there.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
 
+#include "epipole/vision/disparity_quality.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "opencv_view.hpp"
 #include "test_data.hpp"
+#include "test_paths.hpp"
 
 namespace epipole::vision {
 namespace {
 
-struct Scores {
-  double bad1 = 0;        // share of pixels with ground truth that are missing or off by > 1 px
-  double bad2 = 0;        // ... by > 2 px
-  double density = 0;     // share of pixels with ground truth that have a disparity
-  double mean_error = 0;  // over those, in pixels
-};
+using Scores = DisparityQuality;
 
-// disparity: CV_16S, x16, anything < 0 invalid; truth: CV_32F in pixels, 0 unknown.
+// disparity: CV_16S, x16, below 0 missing; truth: CV_32F in pixels, 0 unknown.
 Scores score(const cv::Mat& disparity, const cv::Mat& truth) {
-  long known = 0, valid = 0, bad1 = 0, bad2 = 0;
-  double error_sum = 0;
-  for (int y = 0; y < truth.rows; ++y) {
-    for (int x = 0; x < truth.cols; ++x) {
-      const float t = truth.at<float>(y, x);
-      if (t <= 0) continue;
-      ++known;
-      const int d = disparity.at<std::int16_t>(y, x);
-      if (d < 0) {
-        ++bad1;
-        ++bad2;
-        continue;
-      }
-      ++valid;
-      const double e = std::abs(d / 16.0 - static_cast<double>(t));
-      error_sum += e;
-      bad1 += e > 1 ? 1 : 0;
-      bad2 += e > 2 ? 1 : 0;
-    }
-  }
-  const auto k = static_cast<double>(known);
-  return {static_cast<double>(bad1) / k, static_cast<double>(bad2) / k,
-          static_cast<double>(valid) / k, valid > 0 ? error_sum / static_cast<double>(valid) : 0.0};
+  const ImageView<const std::int16_t> d(disparity.ptr<std::int16_t>(), disparity.cols,
+                                        disparity.rows, static_cast<int>(disparity.step1()));
+  const ImageView<const float> t(truth.ptr<float>(), truth.cols, truth.rows,
+                                 static_cast<int>(truth.step1()));
+  return disparity_quality(d, t);
 }
 
 void print(const std::string& name, const Scores& s) {
-  std::printf("  %-26s bad1 %5.1f %%  bad2 %5.1f %%  density %5.1f %%  mean error %5.2f px\n",
-              name.c_str(), 100 * s.bad1, 100 * s.bad2, 100 * s.density, s.mean_error);
+  std::printf(
+      "  %-26s bad1 %5.1f %%  bad2 %5.1f %%  bad4 %5.1f %%  D1 %5.1f %%  density %5.1f %%  "
+      "mean error %5.2f px\n",
+      name.c_str(), 100 * s.bad1, 100 * s.bad2, 100 * s.bad4, 100 * s.d1, 100 * s.density,
+      s.mean_error);
+}
+
+// The stored figures of a scene and method: bad2 may not grow, the density not drop, by more
+// than this (the results are exact on every kernel path, so any change is a change of code).
+constexpr double kBaselineTolerance = 0.001;
+
+std::filesystem::path baseline_file() {
+  return std::filesystem::path(test::source_dir()) / "tests/reference/stereo_quality_baseline.json";
+}
+
+void check_baseline(const std::string& scene, const std::string& method, const Scores& s) {
+  const std::filesystem::path file = baseline_file();
+  nlohmann::json baseline = nlohmann::json::object();
+  if (std::ifstream in(file); in) baseline = nlohmann::json::parse(in);
+  if (std::getenv("EPIPOLE_UPDATE_QUALITY_BASELINE") != nullptr) {
+    baseline[scene][method] = {{"bad2", s.bad2}, {"density", s.density}, {"d1", s.d1}};
+    std::ofstream(file) << baseline.dump(2) << "\n";
+    std::printf("  %s %s: baseline written to %s\n", scene.c_str(), method.c_str(), file.c_str());
+    return;
+  }
+  ASSERT_TRUE(baseline.contains(scene) && baseline[scene].contains(method))
+      << "no baseline for " << scene << " " << method << " in " << file;
+  const nlohmann::json& b = baseline[scene][method];
+  EXPECT_LE(s.bad2, b["bad2"].get<double>() + kBaselineTolerance)
+      << scene << " " << method << ": bad2 grew from the baseline";
+  EXPECT_GE(s.density, b["density"].get<double>() - kBaselineTolerance)
+      << scene << " " << method << ": density dropped from the baseline";
 }
 
 cv::Mat ours(const cv::Mat& left, const cv::Mat& right, StereoMethod method, int disparities,
@@ -130,6 +147,10 @@ void compare(int width, int height, int disparities) {
   print("OpenCV StereoBM", cv_bm);
   EXPECT_LE(sgm.bad2, cv_sgbm.bad2);
   EXPECT_LE(bm.bad2, cv_bm.bad2);
+  const std::string scene = "aloe-" + std::to_string(a.left.cols) + "x" +
+                            std::to_string(a.left.rows) + "-" + std::to_string(disparities);
+  check_baseline(scene, "sgm", sgm);
+  check_baseline(scene, "bm", bm);
 }
 
 // Quality mode on 2 threads: the second stripe starts its vertical paths kWarmupRows above its

@@ -18,7 +18,8 @@ namespace epipole {
 inline constexpr long long kMaxImagePixels = 64ll * 1024 * 1024;
 GrayImage load_gray(const std::filesystem::path& file);
 
-// 16-bit gray (e.g. a disparity PNG holding disparity*16); 8-bit files are widened.
+// 16-bit gray (e.g. a disparity PNG holding disparity*16, or KITTI's ground truth); an 8-bit
+// file's samples keep their values, 0..255 (Middlebury's ground truth: disparities in pixels).
 Image<std::uint16_t> load_gray16(const std::filesystem::path& file);
 
 // Writes PNG when the name ends in .png, binary PGM/PPM when it ends in .pgm/.ppm.
