@@ -1,117 +1,21 @@
 // Dense disparity on Middlebury Aloe against its ground truth, beside OpenCV's StereoSGBM and
 // StereoBM with the same disparity range, measured in the same run: quality mode must have at
 // most SGBM's bad2, fast mode at most StereoBM's. And against the figures stored in
-// stereo_quality_baseline.json (as OpenCV's own stereo regression test keeps its own): a
-// failure when bad2 grows or the density drops by more than 0.1 point. After a deliberate
-// change, `EPIPOLE_UPDATE_QUALITY_BASELINE=1 build/host/tests/stereo_reference_tests` writes
-// the new figures there.
+// stereo_quality_baseline.json (as OpenCV's own stereo regression test keeps its own:
+// stereo_scoring.hpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <filesystem>
-#include <fstream>
-#include <nlohmann/json.hpp>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
 
-#include "epipole/vision/disparity_quality.hpp"
-#include "epipole/vision/stereo.hpp"
-#include "opencv_view.hpp"
+#include "stereo_scoring.hpp"
 #include "test_data.hpp"
-#include "test_paths.hpp"
 
 namespace epipole::vision {
 namespace {
-
-using Scores = DisparityQuality;
-
-// disparity: CV_16S, x16, below 0 missing; truth: CV_32F in pixels, 0 unknown.
-Scores score(const cv::Mat& disparity, const cv::Mat& truth) {
-  const ImageView<const std::int16_t> d(disparity.ptr<std::int16_t>(), disparity.cols,
-                                        disparity.rows, static_cast<int>(disparity.step1()));
-  const ImageView<const float> t(truth.ptr<float>(), truth.cols, truth.rows,
-                                 static_cast<int>(truth.step1()));
-  return disparity_quality(d, t);
-}
-
-void print(const std::string& name, const Scores& s) {
-  std::printf(
-      "  %-26s bad1 %5.1f %%  bad2 %5.1f %%  bad4 %5.1f %%  D1 %5.1f %%  density %5.1f %%  "
-      "mean error %5.2f px\n",
-      name.c_str(), 100 * s.bad1, 100 * s.bad2, 100 * s.bad4, 100 * s.d1, 100 * s.density,
-      s.mean_error);
-}
-
-// The stored figures of a scene and method: bad2 may not grow, the density not drop, by more
-// than this (the results are exact on every kernel path, so any change is a change of code).
-constexpr double kBaselineTolerance = 0.001;
-
-std::filesystem::path baseline_file() {
-  return std::filesystem::path(test::source_dir()) / "tests/reference/stereo_quality_baseline.json";
-}
-
-void check_baseline(const std::string& scene, const std::string& method, const Scores& s) {
-  const std::filesystem::path file = baseline_file();
-  nlohmann::json baseline = nlohmann::json::object();
-  if (std::ifstream in(file); in) baseline = nlohmann::json::parse(in);
-  if (std::getenv("EPIPOLE_UPDATE_QUALITY_BASELINE") != nullptr) {
-    baseline[scene][method] = {{"bad2", s.bad2}, {"density", s.density}, {"d1", s.d1}};
-    std::ofstream(file) << baseline.dump(2) << "\n";
-    std::printf("  %s %s: baseline written to %s\n", scene.c_str(), method.c_str(), file.c_str());
-    return;
-  }
-  ASSERT_TRUE(baseline.contains(scene) && baseline[scene].contains(method))
-      << "no baseline for " << scene << " " << method << " in " << file;
-  const nlohmann::json& b = baseline[scene][method];
-  EXPECT_LE(s.bad2, b["bad2"].get<double>() + kBaselineTolerance)
-      << scene << " " << method << ": bad2 grew from the baseline";
-  EXPECT_GE(s.density, b["density"].get<double>() - kBaselineTolerance)
-      << scene << " " << method << ": density dropped from the baseline";
-}
-
-cv::Mat ours(const cv::Mat& left, const cv::Mat& right, StereoMethod method, int disparities,
-             int threads = 1) {
-  StereoConfig config;
-  config.threads = threads;
-  config.width = left.cols;
-  config.height = left.rows;
-  config.max_disparity = disparities;
-  config.method = method;
-  StereoMatcher matcher(config);
-  const ImageView<const std::int16_t> d =
-      matcher.compute(test::view_of(left), test::view_of(right));
-  cv::Mat out(d.height(), d.width(), CV_16S);
-  for (int y = 0; y < d.height(); ++y) {
-    std::copy_n(d.row(y), d.width(), out.ptr<std::int16_t>(y));
-  }
-  return out;
-}
-
-cv::Mat opencv_sgbm(const cv::Mat& left, const cv::Mat& right, int disparities) {
-  constexpr int kBlock = 5;
-  const auto sgbm =
-      cv::StereoSGBM::create(0, disparities, kBlock, 8 * kBlock * kBlock, 32 * kBlock * kBlock, 1,
-                             63, 10, 100, 2, cv::StereoSGBM::MODE_SGBM);
-  cv::Mat out;
-  sgbm->compute(left, right, out);
-  return out;
-}
-
-cv::Mat opencv_bm(const cv::Mat& left, const cv::Mat& right, int disparities) {
-  const auto bm = cv::StereoBM::create(disparities, 15);
-  bm->setUniquenessRatio(10);
-  bm->setSpeckleWindowSize(100);
-  bm->setSpeckleRange(2);
-  bm->setDisp12MaxDiff(1);
-  cv::Mat out;
-  bm->compute(left, right, out);
-  return out;
-}
 
 struct Aloe {
   cv::Mat left, right, truth;

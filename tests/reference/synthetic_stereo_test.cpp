@@ -1,0 +1,121 @@
+// The synthetic scenes with exact ground truth (support/synthetic_stereo.hpp): the generator's
+// own exactness, then the quality mode beside OpenCV's StereoSGBM on each scene, all pixels and
+// non-occluded ones, checked against the stored figures (stereo_scoring.hpp).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "stereo_scoring.hpp"
+#include "synthetic_stereo.hpp"
+
+namespace epipole::vision {
+namespace {
+
+using test::synthetic_scene;
+using test::SyntheticPair;
+
+TEST(SyntheticStereo, AFrontoPlaneIsOneDisparityAndItsLeftBorderIsUnseen) {
+  const SyntheticPair p = synthetic_scene("fronto", 640, 480);
+  long occluded = 0;
+  for (int y = 0; y < 480; ++y) {
+    for (int x = 0; x < 640; ++x) {
+      ASSERT_EQ(p.truth(x, y), 37.25f);
+      // Points left of x = 37.25 fall outside the right view.
+      ASSERT_EQ(p.nonoccluded(x, y), x < 38 ? 128 : 255) << x << "," << y;
+      occluded += p.nonoccluded(x, y) == 128 ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(occluded, 38 * 480);
+}
+
+TEST(SyntheticStereo, BoxesHideTheWallBesideThemAndEveryVisiblePointLooksTheSame) {
+  const SyntheticPair p = synthetic_scene("boxes", 640, 480);
+  // Row 240 crosses the wall (16 px), the first box (x 96..224, 48 px) and the second (x
+  // 288..416, 72 px): unseen are the border (16 px), the wall left of the first box hidden by
+  // it (48 - 16 = 32 px) and the wall left of the second (72 - 16 = 56 px).
+  int unseen = 0;
+  for (int x = 0; x < 640; ++x) unseen += p.nonoccluded(x, 240) == 128 ? 1 : 0;
+  EXPECT_EQ(unseen, 16 + 32 + 56);
+  EXPECT_EQ(p.nonoccluded(63, 240), 255);
+  EXPECT_EQ(p.nonoccluded(64, 240), 128);
+  EXPECT_EQ(p.nonoccluded(95, 240), 128);
+  EXPECT_EQ(p.truth(96, 240), 48.0f);
+  // Integer disparities: a point seen in both views has the same value in both but for the
+  // cameras' gain, offset and noise (right = 0.92 left + 6, each within 3 levels).
+  long compared = 0;
+  double sum = 0;
+  for (int y = 0; y < 480; ++y) {
+    for (int x = 0; x < 640; ++x) {
+      if (p.nonoccluded(x, y) != 255) continue;
+      const int d = static_cast<int>(p.truth(x, y));
+      const double expected = 0.92 * p.left(x, y) + 6;
+      const double difference = p.right(x - d, y) - expected;
+      ASSERT_LE(std::abs(difference), 3 + 0.92 * 3 + 1) << x << "," << y;
+      sum += difference;
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 640 * 480 * 8 / 10);
+  EXPECT_NEAR(sum / static_cast<double>(compared), 0.0, 0.2) << "the noise has no bias";
+}
+
+TEST(SyntheticStereo, TheSameSceneEveryTime) {
+  const SyntheticPair a = synthetic_scene("thin", 320, 240);
+  const SyntheticPair b = synthetic_scene("thin", 320, 240);
+  for (int y = 0; y < 240; ++y) {
+    for (int x = 0; x < 320; ++x) {
+      ASSERT_EQ(a.left(x, y), b.left(x, y));
+      ASSERT_EQ(a.right(x, y), b.right(x, y));
+      ASSERT_EQ(a.truth(x, y), b.truth(x, y));
+    }
+  }
+}
+
+cv::Mat mat_of(const GrayImage& image) {
+  cv::Mat m(image.height(), image.width(), CV_8U);
+  for (int y = 0; y < image.height(); ++y) {
+    std::copy_n(image.view().row(y), image.width(), m.ptr<std::uint8_t>(y));
+  }
+  return m;
+}
+
+cv::Mat mat_of(const Image<float>& image) {
+  cv::Mat m(image.height(), image.width(), CV_32F);
+  for (int y = 0; y < image.height(); ++y) {
+    std::copy_n(image.view().row(y), image.width(), m.ptr<float>(y));
+  }
+  return m;
+}
+
+// The quality mode and SGBM with one range (128, the simulated board's) on each scene. The issue
+// of depth quality asks for at most 0.8x SGBM's bad2 on every scene; these figures say where
+// that stands (docs/vision.md), the baseline that they do not get worse.
+TEST(SyntheticStereo, QualityModeBesideSgbmOnEveryScene) {
+  constexpr int kDisparities = 128;
+  for (const std::string& name : test::synthetic_scene_names()) {
+    const SyntheticPair p = synthetic_scene(name, 640, 480);
+    const cv::Mat left = mat_of(p.left), right = mat_of(p.right), truth = mat_of(p.truth);
+    cv::Mat nonoccluded;
+    cv::compare(mat_of(p.nonoccluded), 255, nonoccluded, cv::CMP_EQ);
+    const cv::Mat sgm = ours(left, right, StereoMethod::sgm, kDisparities);
+    const cv::Mat sgbm = opencv_sgbm(left, right, kDisparities);
+    const Scores sgm_all = score(sgm, truth), sgm_noc = score(sgm, truth, nonoccluded);
+    const Scores cv_all = score(sgbm, truth), cv_noc = score(sgbm, truth, nonoccluded);
+    std::printf("%s 640x480, %d disparities:\n", name.c_str(), kDisparities);
+    print("epipole sgm, all", sgm_all);
+    print("OpenCV StereoSGBM, all", cv_all);
+    print("epipole sgm, non-occluded", sgm_noc);
+    print("OpenCV StereoSGBM, non-occl.", cv_noc);
+    std::printf("  bad2 epipole / SGBM: all %.2f, non-occluded %.2f\n", sgm_all.bad2 / cv_all.bad2,
+                sgm_noc.bad2 / cv_noc.bad2);
+    EXPECT_GT(sgm_all.density, 0.5) << name;
+    check_baseline("synthetic-" + name + "-640x480-" + std::to_string(kDisparities), "sgm",
+                   sgm_all);
+  }
+}
+
+}  // namespace
+}  // namespace epipole::vision
