@@ -31,6 +31,7 @@ struct DisparityOptions {
   int p2 = 120;
   int uniqueness = 10;
   int threads = 1;
+  int hole_fill = 0;
   std::string out;
   std::string color;
   bool json = false;
@@ -52,6 +53,7 @@ void run_disparity(const DisparityOptions& options, const GlobalOptions& global)
   config.p2 = options.p2;
   config.uniqueness = options.uniqueness;
   config.threads = options.threads;
+  config.hole_fill = options.hole_fill;
   vision::StereoMatcher matcher(config, path);
 
   const auto start = std::chrono::steady_clock::now();
@@ -133,6 +135,11 @@ void add_disparity_command(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--p2", options->p2, "sgm: penalty for larger steps (P1..224)")
       ->capture_default_str();
   cmd->add_option("--uniqueness", options->uniqueness, "Uniqueness ratio, percent (0..99)")
+      ->capture_default_str();
+  cmd->add_option("--hole-fill", options->hole_fill,
+                  "Fill holes up to this many pixels along a row from their background side "
+                  "(0: off)")
+      ->check(CLI::Range(0, 65535))
       ->capture_default_str();
   cmd->add_option("--threads", options->threads, "Row stripes on this many threads (1..64)")
       ->capture_default_str();

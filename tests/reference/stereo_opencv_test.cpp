@@ -49,12 +49,16 @@ void compare(int width, int height, int disparities) {
   print("OpenCV StereoSGBM", cv_sgbm);
   print("epipole bm", bm);
   print("OpenCV StereoBM", cv_bm);
+  const Scores filled =
+      score(ours(a.left, a.right, StereoMethod::sgm, disparities, 1, 64), a.truth);
+  print("epipole sgm, holes <= 64", filled);
   EXPECT_LE(sgm.bad2, cv_sgbm.bad2);
   EXPECT_LE(bm.bad2, cv_bm.bad2);
   const std::string scene = "aloe-" + std::to_string(a.left.cols) + "x" +
                             std::to_string(a.left.rows) + "-" + std::to_string(disparities);
   check_baseline(scene, "sgm", sgm);
   check_baseline(scene, "bm", bm);
+  check_baseline(scene, "sgm-holes64", filled);
 }
 
 // Quality mode on 2 threads: the second stripe starts its vertical paths kWarmupRows above its

@@ -73,9 +73,10 @@ inline void check_baseline(const std::string& scene, const std::string& method, 
 }
 
 inline cv::Mat ours(const cv::Mat& left, const cv::Mat& right, StereoMethod method, int disparities,
-                    int threads = 1) {
+                    int threads = 1, int hole_fill = 0) {
   StereoConfig config;
   config.threads = threads;
+  config.hole_fill = hole_fill;
   config.width = left.cols;
   config.height = left.rows;
   config.max_disparity = disparities;

@@ -112,6 +112,17 @@ TEST(SyntheticStereo, QualityModeBesideSgbmOnEveryScene) {
     std::printf("  bad2 epipole / SGBM: all %.2f, non-occluded %.2f\n", sgm_all.bad2 / cv_all.bad2,
                 sgm_noc.bad2 / cv_noc.bad2);
     EXPECT_GT(sgm_all.density, 0.5) << name;
+    // The hole filling (disparity_filters.hpp) at three lengths; 64 px against the baseline.
+    for (int hole : {16, 64, 128}) {
+      const cv::Mat f = ours(left, right, StereoMethod::sgm, kDisparities, 1, hole);
+      const Scores all = score(f, truth);
+      print("sgm, holes <= " + std::to_string(hole) + ", all", all);
+      print("sgm, holes <= " + std::to_string(hole) + ", non-occl.", score(f, truth, nonoccluded));
+      if (hole == 64) {
+        check_baseline("synthetic-" + name + "-640x480-" + std::to_string(kDisparities),
+                       "sgm-holes64", all);
+      }
+    }
     check_baseline("synthetic-" + name + "-640x480-" + std::to_string(kDisparities), "sgm",
                    sgm_all);
   }

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "epipole/core/error.hpp"
+#include "epipole/vision/disparity_filters.hpp"
 #include "kernel_set.hpp"
 #include "stereo_census.hpp"
 #include "stereo_kernels.hpp"
@@ -239,6 +240,8 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
           "block size ", config.block_size, " must be odd, in 3..21");
   require(config.uniqueness >= 0 && config.uniqueness <= 99, "uniqueness ratio ", config.uniqueness,
           " must be in 0..99 percent");
+  require(config.hole_fill >= 0 && config.hole_fill <= W, "hole filling up to ", config.hole_fill,
+          " pixels: expected 0 (off) to the image width ", W);
   require(config.speckle_size >= 0 && config.speckle_range >= 0,
           "speckle size and range must not be negative");
   require(simd_path_available(path), "kernel path ", to_string(path),
@@ -325,6 +328,7 @@ int StereoMatcher::start(GrayView left, GrayView right) {
 
 ImageView<const std::int16_t> StereoMatcher::finish() {
   if (config_.speckle_size > 0) remove_speckles();
+  fill_holes(disparity_, config_.hole_fill, path_);
   return disparity_;
 }
 

@@ -33,7 +33,8 @@ struct StereoConfig {
   int lr_max_diff = 1;     // left-right check tolerance in pixels; < 0 switches it off
   int speckle_size = 100;  // connected regions smaller than this are invalidated; 0: off
   int speckle_range = 1;   // in pixels: neighbours closer than this belong to one region
-  int threads = 1;         // row stripes, and the workers that may run them at once
+  int hole_fill = 0;  // after the speckles: holes up to this long filled (disparity_filters.hpp)
+  int threads = 1;    // row stripes, and the workers that may run them at once
 };
 
 // Dense disparity of a rectified pair (left image is the reference; a left pixel x matches the
