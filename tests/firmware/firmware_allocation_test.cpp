@@ -82,6 +82,8 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   test::SimRig rig(128, 64, 6);
   BoardConfig config = rig.parse("threads: {count: 2}\n");
   config.stereo.max_disparity = 16;
+  config.stereo.hole_fill = 32;  // the post-filters too
+  config.stereo.temporal_percent = 40;
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);
   config.serial.backend = "pty";

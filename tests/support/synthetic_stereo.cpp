@@ -87,8 +87,8 @@ Hit nearest_in_right(const std::vector<Surface>& scene, double right_x, double y
 // Two real cameras differ: the right one here has 8 % less gain and an offset of 6 levels, and
 // each pixel of each view has its own noise of up to 3 levels (std::mt19937's sequence, the same
 // everywhere).
-void add_camera_effects(SyntheticPair& p) {
-  std::mt19937 noise(2024);
+void add_camera_effects(SyntheticPair& p, unsigned seed) {
+  std::mt19937 noise(seed);
   const auto level = [&](double v) {
     const int n = static_cast<int>(noise() % 7) - 3;
     return static_cast<std::uint8_t>(std::clamp(std::lround(v) + n, 0L, 255L));
@@ -102,7 +102,7 @@ void add_camera_effects(SyntheticPair& p) {
 }
 
 SyntheticPair render(const std::string& name, const std::vector<Surface>& scene, int width,
-                     int height) {
+                     int height, unsigned noise_seed) {
   SyntheticPair p{name, GrayImage(width, height), GrayImage(width, height),
                   Image<float>(width, height), GrayImage(width, height)};
   for (int y = 0; y < height; ++y) {
@@ -122,7 +122,7 @@ SyntheticPair render(const std::string& name, const std::vector<Surface>& scene,
       p.right(x, y) = right.surface->texture->at(right.x, y);
     }
   }
-  add_camera_effects(p);
+  add_camera_effects(p, noise_seed);
   return p;
 }
 
@@ -181,8 +181,8 @@ std::vector<std::string> synthetic_scene_names() {
   return {"fronto", "slanted", "boxes", "low-texture", "thin"};
 }
 
-SyntheticPair synthetic_scene(const std::string& name, int width, int height) {
-  return render(name, scene_surfaces(name, width, height), width, height);
+SyntheticPair synthetic_scene(const std::string& name, int width, int height, unsigned noise_seed) {
+  return render(name, scene_surfaces(name, width, height), width, height, noise_seed);
 }
 
 }  // namespace epipole::test

@@ -28,7 +28,9 @@ struct SyntheticPair {
 // (a wide box of a real texture at 1/16 of its contrast on a textured wall), "thin" (bars and
 // wires 2 to 4 px wide in front of a wall). Textures: scripts/fetch-data.sh's samples.
 std::vector<std::string> synthetic_scene_names();
-// Throws Error for an unknown name, or a texture missing from the data sets.
-SyntheticPair synthetic_scene(const std::string& name, int width, int height);
+// Throws Error for an unknown name, or a texture missing from the data sets. `noise_seed`: the
+// cameras' noise (another seed: the same scene in another pair of frames).
+SyntheticPair synthetic_scene(const std::string& name, int width, int height,
+                              unsigned noise_seed = 2024);
 
 }  // namespace epipole::test

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -86,6 +87,65 @@ TEST(FillHoles, EveryPathFillsAnImageWithAnOddStrideAlike) {
                          SimdPath::reference);
             }),
             "hole filling: the longest hole must be 0 or more, not -1");
+}
+
+TEST(TemporalFilter, BlendsSmallStepsTakesLargeOnesAndNeverKeepsOldDepthWhereThereIsNone) {
+  TemporalFilter filter(5, 1, 25, 2);  // the new pair weighs 64/256; steps up to 2 px (32)
+  std::vector<std::int16_t> first{160, 320, X, 480, 640};
+  filter.apply(ImageView<std::int16_t>(first.data(), 5, 1, 5), SimdPath::reference);
+  EXPECT_EQ(first, (std::vector<std::int16_t>{160, 320, X, 480, 640})) << "nothing to blend yet";
+  std::vector<std::int16_t> second{192, 400, 480, X, 608};
+  filter.apply(ImageView<std::int16_t>(second.data(), 5, 1, 5), SimdPath::reference);
+  // 160 -> 192 (2 px): 160 + (32 * 64 + 128) >> 8 = 168; 320 -> 400 (5 px): taken at once; a
+  // pixel new here is taken; one gone stays gone; 640 -> 608: 640 + (-32 * 64 + 128) >> 8 = 632.
+  EXPECT_EQ(second, (std::vector<std::int16_t>{168, 400, 480, X, 632}));
+  std::vector<std::int16_t> third{168, 400, 480, 480, 632};
+  filter.apply(ImageView<std::int16_t>(third.data(), 5, 1, 5), SimdPath::reference);
+  EXPECT_EQ(third, (std::vector<std::int16_t>{168, 400, 480, 480, 632}))
+      << "a pixel gone in the pair before comes back as it is now";
+  filter.reset();
+  std::vector<std::int16_t> after_reset{0, 0, 0, 0, 0};
+  filter.apply(ImageView<std::int16_t>(after_reset.data(), 5, 1, 5), SimdPath::reference);
+  EXPECT_EQ(after_reset, (std::vector<std::int16_t>{0, 0, 0, 0, 0}));
+}
+
+TEST(TemporalFilter, NeonGivesTheReferencesBitsAtOddWidthsAndUnalignedRows) {
+  std::mt19937 rng(5);
+  for (int width : {1, 7, 8, 9, 16, 17, 33, 641}) {
+    for (int offset : {0, 1, 3}) {
+      for (int weight : {3, 64, 128, 253}) {
+        for (int step : {16, 112}) {
+          std::vector<std::int16_t> now(static_cast<std::size_t>(width + offset));
+          std::vector<std::int16_t> last(now.size());
+          for (std::size_t i = 0; i < now.size(); ++i) {
+            last[i] = rng() % 5 == 0 ? X : static_cast<std::int16_t>(rng() % 4096);
+            const int move = static_cast<int>(rng() % 2 ? rng() % 241 : rng() % 4096) - 120;
+            now[i] =
+                rng() % 7 == 0 ? X : static_cast<std::int16_t>(std::clamp(last[i] + move, 0, 4095));
+          }
+          std::vector<std::int16_t> now_neon = now, last_neon = last;
+          kernels::temporal_row_ref(now.data() + offset, last.data() + offset, width, weight, step);
+          kernels::temporal_row_neon(now_neon.data() + offset, last_neon.data() + offset, width,
+                                     weight, step);
+          ASSERT_EQ(now_neon, now) << width << " " << offset << " " << weight << " " << step;
+          ASSERT_EQ(last_neon, last) << width << " " << offset << " " << weight << " " << step;
+        }
+      }
+    }
+  }
+}
+
+TEST(TemporalFilter, BadSettingsAreErrors) {
+  EXPECT_EQ(test::error_of([] { TemporalFilter(4, 4, 0, 2); }),
+            "temporal filter: the new pair's weight is 0 %, expected 1..99");
+  EXPECT_EQ(test::error_of([] { TemporalFilter(4, 4, 50, 8); }),
+            "temporal filter: the largest step is 8 px, expected 1..7");
+  TemporalFilter filter(4, 4, 50, 2);
+  std::vector<std::int16_t> other(9);
+  EXPECT_EQ(test::error_of([&] {
+              filter.apply(ImageView<std::int16_t>(other.data(), 3, 3, 3), SimdPath::reference);
+            }),
+            "temporal filter for 4x4 was given a 3x3 disparity");
 }
 
 }  // namespace

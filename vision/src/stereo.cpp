@@ -299,6 +299,10 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
     runs_.assign(uw * static_cast<std::size_t>(H), 0);  // at most one run per pixel
     labels_.assign(2 * uw, 0);
   }
+  if (config.temporal_percent > 0) {
+    temporal_ =
+        std::make_unique<TemporalFilter>(W, H, config.temporal_percent, config.temporal_max_step);
+  }
 }
 
 StereoMatcher::~StereoMatcher() = default;
@@ -306,6 +310,7 @@ StereoMatcher::~StereoMatcher() = default;
 std::size_t StereoMatcher::working_set_bytes() const {
   std::size_t n = bytes_of(padded_) + bytes_of(runs_) + bytes_of(labels_);
   for (const auto& w : workers_) n += w->bytes();
+  if (temporal_) n += temporal_->working_set_bytes();
   return n;
 }
 
@@ -329,6 +334,7 @@ int StereoMatcher::start(GrayView left, GrayView right) {
 ImageView<const std::int16_t> StereoMatcher::finish() {
   if (config_.speckle_size > 0) remove_speckles();
   fill_holes(disparity_, config_.hole_fill, path_);
+  if (temporal_) temporal_->apply(disparity_, path_);
   return disparity_;
 }
 

@@ -1,8 +1,8 @@
 #pragma once
 
-// Post-filters of a dense disparity map (x16, invalid below 0: stereo.hpp), in place and without
-// memory of their own. Each has a scalar reference that defines its result and a NEON version
-// that gives the same bits.
+// Post-filters of a dense disparity map (x16, invalid below 0: stereo.hpp), in place. Each has
+// a scalar reference that defines its result and a NEON version that gives the same bits.
+#include <cstddef>
 #include <cstdint>
 
 #include "epipole/core/image.hpp"
@@ -17,10 +17,42 @@ namespace epipole::vision {
 // have one side only, and are left as they are. max_hole 0 changes nothing.
 void fill_holes(ImageView<std::int16_t> disparity, int max_hole, SimdPath path);
 
+// Smooths the disparity over time: where a pixel is valid in this pair and in the filter's last
+// result, and the two differ by at most `max_step` pixels, it becomes
+//   last + ((now - last) * weight + 128) >> 8      (x16 values; weight = new_percent * 256 / 100)
+// and keeps its value otherwise (a step larger than max_step is motion or a new surface, taken
+// at once; an invalid pixel stays invalid: old depth is never shown where there is none now).
+// The result is the filter's memory for the next pair: one disparity image, allocated here.
+class TemporalFilter {
+ public:
+  // new_percent: the new pair's weight, 1..99; max_step: 1..7 px. Throws Error otherwise or for
+  // an empty size.
+  TemporalFilter(int width, int height, int new_percent, int max_step);
+
+  void apply(ImageView<std::int16_t> disparity, SimdPath path);
+  // Forgets the past (the next pair passes unchanged): after a gap, a camera reopened.
+  void reset();
+
+  std::size_t working_set_bytes() const { return last_.size_bytes(); }
+
+ private:
+  Image<std::int16_t> last_;
+  int weight_;    // x/256
+  int max_step_;  // x16
+};
+
 namespace kernels {
 using FillHolesRow = void(std::int16_t* row, int width, int max_hole);
 void fill_holes_row_ref(std::int16_t* row, int width, int max_hole);
 void fill_holes_row_neon(std::int16_t* row, int width, int max_hole);
+
+// `now` becomes the filtered row, and `last` the same.
+using TemporalRow = void(std::int16_t* now, std::int16_t* last, int width, int weight,
+                         int max_step_x16);
+void temporal_row_ref(std::int16_t* now, std::int16_t* last, int width, int weight,
+                      int max_step_x16);
+void temporal_row_neon(std::int16_t* now, std::int16_t* last, int width, int weight,
+                       int max_step_x16);
 }  // namespace kernels
 
 }  // namespace epipole::vision

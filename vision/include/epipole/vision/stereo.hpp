@@ -8,6 +8,7 @@
 #include "epipole/core/image.hpp"
 #include "epipole/core/simd.hpp"
 #include "epipole/core/thread_pool.hpp"
+#include "epipole/vision/disparity_filters.hpp"
 
 namespace epipole::vision {
 
@@ -34,7 +35,9 @@ struct StereoConfig {
   int speckle_size = 100;  // connected regions smaller than this are invalidated; 0: off
   int speckle_range = 1;   // in pixels: neighbours closer than this belong to one region
   int hole_fill = 0;  // after the speckles: holes up to this long filled (disparity_filters.hpp)
-  int threads = 1;    // row stripes, and the workers that may run them at once
+  int temporal_percent = 0;   // then over time: the new pair's weight, 1..99 (0: off)
+  int temporal_max_step = 2;  // px: larger changes are taken at once (1..7)
+  int threads = 1;            // row stripes, and the workers that may run them at once
 };
 
 // Dense disparity of a rectified pair (left image is the reference; a left pixel x matches the
@@ -92,6 +95,7 @@ class StereoMatcher {
   // another run its parent) and the run of each pixel of two rows.
   std::vector<std::int32_t> runs_;
   std::vector<std::uint32_t> labels_;
+  std::unique_ptr<TemporalFilter> temporal_;  // with config.temporal_percent
 };
 
 }  // namespace epipole::vision
