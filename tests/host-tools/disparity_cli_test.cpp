@@ -255,8 +255,11 @@ TEST(EvalDisparityCli, BadInputIsAOneLineError) {
   const HandMade files;
   const std::string aloe_truth = aloe("samples/aloeGT.png");
   const std::string empty_truth = ::testing::TempDir() + "epipole-eval-empty.png";
-  epipole::save_image(empty_truth,
-                      epipole::ImageView<const std::uint8_t>(epipole::GrayImage(4, 2).view()));
+  epipole::GrayImage unknown(4, 2);  // an image's pixels start undefined: all set to 0 here
+  for (int y = 0; y < 2; ++y) {
+    for (int x = 0; x < 4; ++x) unknown(x, y) = 0;
+  }
+  epipole::save_image(empty_truth, epipole::ImageView<const std::uint8_t>(unknown.view()));
   const struct {
     std::string arguments;
     int exit_code;

@@ -66,8 +66,14 @@ TEST(DisparityQuality, TheMaskLimitsThePixelsCounted) {
 }
 
 TEST(DisparityQuality, NoTruthGivesZerosAndOtherSizesAreErrors) {
-  Image<float> truth(3, 2);
+  Image<float> truth(3, 2);  // pixels start undefined: set here
   Image<std::int16_t> disparity(3, 2);
+  for (int y = 0; y < 2; ++y) {
+    for (int x = 0; x < 3; ++x) {
+      truth(x, y) = 0;
+      disparity(x, y) = 0;
+    }
+  }
   const DisparityQuality q = disparity_quality(disparity.view(), truth.view());
   EXPECT_EQ(q.known, 0);
   EXPECT_EQ(q.bad2, 0);
