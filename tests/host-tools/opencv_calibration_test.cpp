@@ -213,6 +213,43 @@ TEST(OpenCvImport, MalformedXml) {
   expect_geometry(import_opencv_calibration(in, ex, 640, 480), c, 0.0);
 }
 
+// OpenCV 4.6's parsers hang on some malformed YAML (found by calibration_fuzz) and overflow
+// their stack on deep nesting in every syntax: each file is parsed in a child process first.
+TEST(OpenCvImport, FilesThatHangOrCrashOpenCvAreRefused) {
+  const StereoCalibration c = test::sample_calibration();
+  const auto in = write_temp("cv-in.yml", opencv_yaml(c).intrinsics);
+  const auto deep = [](const std::string& open, const std::string& close) {
+    std::string text;
+    for (int i = 0; i < 200000; ++i) text += open;
+    for (int i = 0; i < 200000; ++i) text += close;
+    return text;
+  };
+  const struct {
+    std::string name;
+    std::string text;
+    std::string error;
+  } cases[] = {
+      {"cv-hang.yml", "%YAML:1.0\n c: 1\nD:\n-\n",
+       "malformed YAML (OpenCV's reader was still parsing it after 5 s)"},
+      {"cv-deep.yml", "%YAML:1.0\na: " + deep("[", "]") + "\n",
+       "malformed YAML (OpenCV's reader crashed on it)"},
+      {"cv-deep.json", "{\"a\": " + deep("[", "]") + "}\n",
+       "malformed JSON (OpenCV's reader crashed on it)"},
+      {"cv-deep.xml",
+       "<?xml version=\"1.0\"?>\n<opencv_storage>" + deep("<a>", "</a>") + "</opencv_storage>\n",
+       "malformed XML (OpenCV's reader crashed on it)"},
+  };
+  for (const auto& bad : cases) {
+    SCOPED_TRACE(bad.name);
+    const auto ex = write_temp(bad.name, bad.text);
+    const std::string e = error_of([&] { import_opencv_calibration(in, ex, 640, 480); });
+    EXPECT_TRUE(e.ends_with("/" + bad.name + ": " + bad.error)) << e;
+  }
+  // The good files are still read, after their trial.
+  const auto ex = write_temp("cv-ex.yml", opencv_yaml(c).extrinsics);
+  expect_geometry(import_opencv_calibration(in, ex, 640, 480), c, 0.0);
+}
+
 // FileStorage's third syntax: JSON, as cv::FileStorage writes it.
 template <typename Derived>
 std::string json_matrix(const char* name, const Eigen::MatrixBase<Derived>& m) {

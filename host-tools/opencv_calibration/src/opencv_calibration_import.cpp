@@ -1,13 +1,14 @@
 // OpenCV's stereo calibration files, read by cv::FileStorage (YAML, XML or JSON, told apart by
 // their first bytes as OpenCV does), checked here key by key so that every refusal names the
 // file and the key. Bytes OpenCV 4.6 cannot take without crashing are refused before it sees
-// them.
+// them, and it parses each file first in a child process, which its hangs and crashes end.
 #include <opencv2/core.hpp>
 #include <pugixml.hpp>
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <optional>
@@ -19,6 +20,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/core/text_file.hpp"
 #include "epipole/tools/opencv_calibration.hpp"
+#include "trial_in_child.hpp"
 
 namespace epipole::tools {
 
@@ -94,6 +96,7 @@ class StorageFile {
     const std::size_t nul = text.find('\0');
     require(nul == std::string::npos, name_, ": not a text file (a NUL byte at offset ", nul, ")");
     if (text[0] == '<') check_xml(text);
+    try_parsing(text);
     try {
       storage_.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
     } catch (const cv::Exception& e) {
@@ -153,6 +156,28 @@ class StorageFile {
   // OpenCV 4.6's XML parser crashes on some malformed files (`<?xml version=` alone, found by
   // calibration_fuzz): pugixml, the XML library the host tool links for cascades, sees first
   // that the file is well-formed.
+  // OpenCV 4.6's parsers loop forever on some malformed YAML and recurse without limit on deep
+  // nesting (opencv/opencv#29939): tried in a child first. A real calibration file takes
+  // well under a millisecond.
+  void try_parsing(const std::string& text) const {
+    constexpr std::chrono::seconds limit{5};
+    const auto parse = [&] {
+      const cv::FileStorage storage(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+    };
+    switch (trial_in_child(parse, limit)) {
+      case TrialOutcome::finished:
+        return;
+      case TrialOutcome::timed_out:
+        throw Error(cat(name_, ": malformed ", syntax_of(text),
+                        " (OpenCV's reader was still "
+                        "parsing it after ",
+                        limit.count(), " s)"));
+      case TrialOutcome::crashed:
+        throw Error(
+            cat(name_, ": malformed ", syntax_of(text), " (OpenCV's reader crashed on it)"));
+    }
+  }
+
   void check_xml(const std::string& text) const {
     pugi::xml_document document;
     const pugi::xml_parse_result parsed = document.load_buffer(text.data(), text.size());
