@@ -99,11 +99,19 @@ void Fields::only_keys(const YAML::Node& map, const std::string& path,
 void Fields::only_keys(const YAML::Node& map, const std::string& path,
                        std::span<const std::string_view> known) const {
   require_map(map, path);
+  std::vector<std::string> seen;
   for (const auto& entry : map) {
     const std::string name = entry.first.IsScalar() ? entry.first.Scalar() : std::string("?");
     if (std::find(known.begin(), known.end(), name) == known.end()) {
       throw Error(cat(file_, ": unknown key '", join(path, name), "'"));
     }
+    // YAML readers keep one of a repeated key's values, silently: a second `stereo:` block
+    // added at the end of a board file would be ignored.
+    if (std::find(seen.begin(), seen.end(), name) != seen.end()) {
+      throw Error(cat(file_, ": line ", entry.first.Mark().line + 1, ": key '", join(path, name),
+                      "' appears twice"));
+    }
+    seen.push_back(name);
   }
 }
 

@@ -161,6 +161,10 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
        "unknown key 'stages.publish'"},
       {"not a map", "", "stereo: 12\n", "stereo: expected a map of keys"},
       {"malformed", "", "cameras: [\n", "malformed YAML"},
+      {"a key twice", "stages: {", "stereo: {max_disparity: 16}\nstages: {",
+       "line 9: key 'stereo' appears twice"},
+      {"a key twice in a map", "max_disparity: 32}", "max_disparity: 32, max_disparity: 16}",
+       "line 7: key 'stereo.max_disparity' appears twice"},
   };
   // The rig's file (yaml()) has one `sim:` and `stereo:` key; cases that add their own drop
   // the rig's first.
