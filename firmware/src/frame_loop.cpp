@@ -316,6 +316,7 @@ void FrameLoop::say_device_changes() {
                               std::pair{&board_.right_recovery(), &right_lost_}}) {
     if (camera->recovering() != *lost) {
       *lost = camera->recovering();
+      if (*lost) pipeline_.reset_history();
       journal(*lost ? Priority::warning : Priority::info, "camera %s %s%s%s",
               camera->name().c_str(), *lost ? "lost, reopening" : "recovered", *lost ? ": " : "",
               *lost ? camera->last_error().c_str() : "");

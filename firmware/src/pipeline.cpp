@@ -269,8 +269,11 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   r.stages = run & (stage_bit(Stage::capture) | stage_bit(Stage::rectify));
 
   // What cannot start (an image of the wrong size) throws here, before a task is queued.
-  const int stripes =
-      protocol::has_stage(run, Stage::disparity) ? stages_->matcher->start(r.left, r.right) : 0;
+  const bool disparity = protocol::has_stage(run, Stage::disparity);
+  if (disparity && !disparity_ran_last_) stages_->matcher->reset_history();
+  disparity_ran_last_ = false;
+  const int stripes = disparity ? stages_->matcher->start(r.left, r.right) : 0;
+  disparity_ran_last_ = disparity;
   const int levels = protocol::has_stage(run, Stage::detect) ? detector_->start(r.left) : 0;
   auto corners = [&](int image, int) {
     if (image == 0) {

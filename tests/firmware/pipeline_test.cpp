@@ -114,5 +114,41 @@ TEST(Pipeline, StagesSharingThePoolGiveWhatOneThreadGives) {
   EXPECT_GT(with_depth, 0);
 }
 
+// The temporal filter blends each disparity with the pairs before; after a gap (the frame loop
+// resets the history when a camera is lost; a pair without disparity is a gap by itself) the next
+// pair's disparity is what a pipeline that never saw the pairs before gives.
+TEST(Pipeline, TheTemporalFilterStartsAgainAfterAGap) {
+  test::SimRig rig(160, 120, 8);
+  BoardConfig config = rig.parse();
+  config.stereo.temporal_percent = 25;
+  const auto calibration = load_board_calibration(config);
+  ASSERT_TRUE(calibration.has_value());
+  // Pair 0 one pixel nearer than pair 1: within the filter's largest step, so blended.
+  SceneImages images = rig.images(2);
+  images.right[0] = hal::synthesize_right(images.left[0].view(), rig.disparity + 1);
+  const auto process = [&](Pipeline& p, std::size_t i, StageMask stages) -> const FrameResult& {
+    return p.process(images.left[i].view(), images.right[i].view(), static_cast<std::uint32_t>(i),
+                     0, stages);
+  };
+  const StageMask all = config.stages;
+  const StageMask no_disparity = all & ~stage_bit(protocol::Stage::disparity);
+  ASSERT_TRUE(protocol::has_stage(all, protocol::Stage::disparity));
+
+  Pipeline fresh(config, calibration);
+  const FrameResult& alone = process(fresh, 1, all);
+  ASSERT_TRUE(protocol::has_stage(alone.stages, protocol::Stage::disparity));
+
+  Pipeline p(config, calibration);
+  process(p, 0, all);
+  EXPECT_FALSE(same_image(process(p, 1, all).disparity, alone.disparity))
+      << "pair 1 after pair 0 is blended with it";
+  process(p, 0, all);
+  p.reset_history();
+  EXPECT_TRUE(same_image(process(p, 1, all).disparity, alone.disparity));
+  process(p, 0, all);
+  process(p, 0, no_disparity);
+  EXPECT_TRUE(same_image(process(p, 1, all).disparity, alone.disparity));
+}
+
 }  // namespace
 }  // namespace epipole::firmware

@@ -338,6 +338,10 @@ ImageView<const std::int16_t> StereoMatcher::finish() {
   return disparity_;
 }
 
+void StereoMatcher::reset_history() {
+  if (temporal_) temporal_->reset();
+}
+
 // The census of row y of both images (the right one reversed), then its cost into `cost`.
 void StereoMatcher::Worker::cost_row(GrayView left, GrayView right, int y, int disparities,
                                      std::uint8_t* cost_out) {

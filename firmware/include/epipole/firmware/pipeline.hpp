@@ -86,6 +86,11 @@ class Pipeline {
   const FrameResult& process(GrayView left, GrayView right, std::uint32_t frame,
                              hal::Nanoseconds trigger_ns, StageMask enabled);
 
+  // The next pair starts a new sequence: what filters over time (the disparity's temporal
+  // filter) forgets the pairs before it. The frame loop calls it when a camera is lost; a pair
+  // after one without disparity starts a new sequence by itself.
+  void reset_history() { disparity_ran_last_ = false; }
+
   // The stages this pipeline can run (rectification needs a calibration, and so on).
   StageMask available() const { return available_; }
   bool has_calibration() const { return triangulator_ != nullptr; }
@@ -108,6 +113,7 @@ class Pipeline {
   TaskBatch batch_;
   std::unique_ptr<calib::Triangulator> triangulator_;
   std::unique_ptr<ObstacleSectors> obstacles_;
+  bool disparity_ran_last_ = false;  // false: the next disparity starts a new sequence
   std::vector<SparsePoint> points_;
   std::vector<std::uint32_t> point_order_;
   std::vector<calib::RectifiedMatch> rectified_matches_;

@@ -69,6 +69,9 @@ class StereoMatcher {
   int start(GrayView left, GrayView right);
   void run_stripe(int stripe, int worker);
   ImageView<const std::int16_t> finish();
+  // The temporal filter forgets the pairs before (the next one passes unfiltered): after a gap
+  // in the sequence, such as a camera reopened or the stage turned off for a while.
+  void reset_history();
 
   std::size_t working_set_bytes() const;
   const StereoConfig& config() const { return config_; }
