@@ -394,8 +394,8 @@ class BoardReader {
   }
 
   void read_obstacles(const YAML::Node& root, BoardConfig& c) {
-    const YAML::Node n =
-        section(root, "obstacles", {"sectors", "band", "min_depth_m", "max_depth_m"});
+    const YAML::Node n = section(
+        root, "obstacles", {"sectors", "band", "min_depth_m", "max_depth_m", "min_confidence"});
     BoardConfig::Obstacles& o = c.obstacles;
     integer(n, "obstacles", "sectors", o.sectors, 1, 72);
     if (n.IsDefined()) {
@@ -410,6 +410,7 @@ class BoardReader {
     }
     number(n, "obstacles", "min_depth_m", o.min_depth_m, 0.0, 1000.0);
     number(n, "obstacles", "max_depth_m", o.max_depth_m, 0.001, 655.0);
+    integer(n, "obstacles", "min_confidence", o.min_confidence, 0, 255);
     if (o.max_depth_m <= o.min_depth_m) {
       f_.fail("obstacles.max_depth_m", "must be greater than min_depth_m");
     }

@@ -29,6 +29,8 @@ ObstacleSectors::ObstacleSectors(const ObstacleConfig& config,
               config.max_depth_m < 65.535,
           "obstacles: depth range ", config.min_depth_m, "..", config.max_depth_m,
           " m is not within 0..65.535 m");
+  require(config.min_confidence >= 0 && config.min_confidence <= 255, "obstacles: confidence ",
+          config.min_confidence, " is outside 0..255");
   require(std::isfinite(fx) && fx > 0 && std::isfinite(cx), "obstacles: the rectified camera (fx ",
           fx, ", cx ", cx, ") is not valid");
   const auto angle = [&](double u) { return degrees(std::atan((u - cx) / fx)); };
@@ -55,10 +57,15 @@ std::size_t ObstacleSectors::working_set_bytes() const {
 }
 
 const protocol::Obstacles& ObstacleSectors::measure(ImageView<const std::int16_t> disparity,
-                                                    std::uint32_t frame) {
+                                                    std::uint32_t frame,
+                                                    ImageView<const std::uint8_t> confidence) {
   require(disparity.width() == config_.width && disparity.height() == config_.height,
           "obstacles: disparity image ", disparity.width(), "x", disparity.height(),
           " is not the configured ", config_.width, "x", config_.height);
+  const bool trusted_only = config_.min_confidence > 0;
+  require(!trusted_only || same_size(confidence, disparity), "obstacles: a confidence of ",
+          confidence.width(), "x", confidence.height(), " for a ", config_.width, "x",
+          config_.height, " disparity (min_confidence needs the matcher's)");
   const int D = config_.max_disparity;
   std::fill(histogram_.begin(), histogram_.end(), 0u);
   std::fill(sums_.begin(), sums_.end(), 0u);
@@ -67,11 +74,13 @@ const protocol::Obstacles& ObstacleSectors::measure(ImageView<const std::int16_t
   const int y1 = std::max(y0 + 1, static_cast<int>(config_.band_bottom * config_.height));
   for (int y = y0; y < std::min(y1, config_.height); ++y) {
     const std::int16_t* row = disparity.row(y);
+    const std::uint8_t* trust = trusted_only ? confidence.row(y) : nullptr;
     for (int x = 0; x < config_.width; ++x) {
       const int s = sector_of_column_[static_cast<std::size_t>(x)];
       ++band_pixels_[static_cast<std::size_t>(s)];
       const int d = row[x] / vision::kDisparityScale;
       if (row[x] <= 0 || d >= D) continue;
+      if (trust != nullptr && trust[x] < config_.min_confidence) continue;
       const auto bin = static_cast<std::size_t>(s * D + d);
       ++histogram_[bin];
       sums_[bin] += static_cast<std::uint32_t>(row[x]);

@@ -172,6 +172,8 @@ Pipeline::Pipeline(const BoardConfig& board,
     o.band_bottom = board.obstacles.band_bottom;
     o.min_depth_m = board.obstacles.min_depth_m;
     o.max_depth_m = board.obstacles.max_depth_m;
+    o.min_confidence = board.obstacles.min_confidence;
+    stereo.confidence = o.min_confidence > 0;
     const auto& P1 = calibration->left.projection;
     obstacles_ = std::make_unique<ObstacleSectors>(o, *triangulator_, P1(0, 0), P1(0, 2));
   }
@@ -323,7 +325,9 @@ void Pipeline::finish_dense(FrameResult& r) {
   }
   r.valid_disparity_permille = static_cast<int>(
       valid * 1000 / (static_cast<std::uint64_t>(r.disparity.width()) * r.disparity.height()));
-  if (obstacles_) r.obstacles = &obstacles_->measure(r.disparity, r.frame);
+  if (obstacles_) {
+    r.obstacles = &obstacles_->measure(r.disparity, r.frame, stages_->matcher->confidence());
+  }
 }
 
 void Pipeline::match_sparse(FrameResult& r) {

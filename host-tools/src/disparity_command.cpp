@@ -34,6 +34,7 @@ struct DisparityOptions {
   int hole_fill = 0;
   std::string out;
   std::string color;
+  std::string confidence;
   bool json = false;
 };
 
@@ -54,6 +55,7 @@ void run_disparity(const DisparityOptions& options, const GlobalOptions& global)
   config.uniqueness = options.uniqueness;
   config.threads = options.threads;
   config.hole_fill = options.hole_fill;
+  config.confidence = !options.confidence.empty();
   vision::StereoMatcher matcher(config, path);
 
   const auto start = std::chrono::steady_clock::now();
@@ -83,22 +85,24 @@ void run_disparity(const DisparityOptions& options, const GlobalOptions& global)
     const RgbImage picture = disparity_picture(disparity, config.max_disparity);
     save_image(options.color, picture.view());
   }
+  if (config.confidence) save_image(options.confidence, matcher.confidence());
   const double density =
       static_cast<double>(valid) / (static_cast<double>(disparity.width()) * disparity.height());
   if (valid == 0) lowest = 0;
   if (options.json) {
-    const nlohmann::json out = {{"width", disparity.width()},
-                                {"height", disparity.height()},
-                                {"method", options.method},
-                                {"max_disparity", config.max_disparity},
-                                {"kernels", to_string(matcher.simd_path())},
-                                {"threads", config.threads},
-                                {"rectified", input.rectifiers.has_value()},
-                                {"density", density},
-                                {"min_disparity", lowest / 16.0},
-                                {"max_disparity_found", highest / 16.0},
-                                {"milliseconds", elapsed.count()},
-                                {"out", options.out}};
+    nlohmann::json out = {{"width", disparity.width()},
+                          {"height", disparity.height()},
+                          {"method", options.method},
+                          {"max_disparity", config.max_disparity},
+                          {"kernels", to_string(matcher.simd_path())},
+                          {"threads", config.threads},
+                          {"rectified", input.rectifiers.has_value()},
+                          {"density", density},
+                          {"min_disparity", lowest / 16.0},
+                          {"max_disparity_found", highest / 16.0},
+                          {"milliseconds", elapsed.count()},
+                          {"out", options.out}};
+    if (config.confidence) out["confidence"] = options.confidence;
     std::cout << out.dump() << "\n";
   } else {
     std::cout << "disparity " << disparity.width() << "x" << disparity.height() << " ("
@@ -147,6 +151,9 @@ void add_disparity_command(CLI::App& app, const GlobalOptions& global) {
       ->required();
   cmd->add_option("--color", options->color,
                   "Colour picture of the disparity with a legend (.png)");
+  cmd->add_option("--confidence", options->confidence,
+                  "Each pixel's confidence as an 8-bit PNG: 1..255, how clearly its disparity "
+                  "beat the others; 0 where it is invalid or filled");
   cmd->add_flag("--json", options->json, "Print a summary as JSON");
   cmd->callback([options, &global] { run_disparity(*options, global); });
 }

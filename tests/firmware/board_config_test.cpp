@@ -37,7 +37,8 @@ TEST(BoardConfig, ReadsEveryKey) {
   SimRig rig;
   const BoardConfig c = rig.parse(
       "pairing: {tolerance_us: 1500}\n"
-      "obstacles: {sectors: 36, band: [0.1, 0.9], min_depth_m: 0.5, max_depth_m: 12}\n"
+      "obstacles: {sectors: 36, band: [0.1, 0.9], min_depth_m: 0.5, max_depth_m: 12, "
+      "min_confidence: 96}\n"
       "threads: {count: 3, affinity: [0, 1], realtime_priority: 10, lock_memory: true}\n"
       "detector: {cascade: face.bin, scale_factor: 1.2, min_neighbors: 4, min_size: 40}\n"
       "memory_budget_mb: 8\n"
@@ -63,6 +64,7 @@ TEST(BoardConfig, ReadsEveryKey) {
   EXPECT_EQ(c.obstacles.sectors, 36);
   EXPECT_EQ(c.obstacles.band_top, 0.1);
   EXPECT_EQ(c.obstacles.max_depth_m, 12.0);
+  EXPECT_EQ(c.obstacles.min_confidence, 96);
   EXPECT_EQ(c.threads.count, 3);
   EXPECT_EQ(c.threads.affinity, (std::vector<int>{0, 1}));
   EXPECT_EQ(c.threads.realtime_priority, 10);
@@ -153,6 +155,8 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
       {"glob without files", "synthesize: unused.png, disparity: 8",
        "left: nothing-here-*.png, right: nothing-there-*.png",
        "sim.scenes.test.left: no file matches"},
+      {"confidence", "", "obstacles: {min_confidence: 300}\n",
+       "obstacles.min_confidence: 300 is outside"},
       {"band", "", "obstacles: {band: [0.8, 0.2]}\n",
        "obstacles.band: expected [top, bottom] with 0 <= top < bottom <= 1"},
       {"affinity", "", "threads: {affinity: [0.5]}\n", "threads.affinity: 0.5 is not a CPU number"},

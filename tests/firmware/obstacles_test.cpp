@@ -84,6 +84,33 @@ TEST(ObstacleSectors, OutsideTheBandAndBeyondTheRangeIsNothing) {
   EXPECT_EQ(o.nearest_mm[1], protocol::kUnknownDepth);
 }
 
+// With a minimum confidence, the pixels the matcher trusts less are not counted: a near patch
+// of doubtful disparities (a repeated texture, say) makes no obstacle in front of the wall.
+TEST(ObstacleSectors, PixelsBelowTheMinimumConfidenceAreLeftOut) {
+  Fixture f;
+  f.fill(0, kW, 0, kH, 4 * 16);     // the wall at 4 px: 2.5 m
+  f.fill(20, 60, 30, 70, 20 * 16);  // a patch at 20 px: 0.5 m, ...
+  Image<std::uint8_t> confidence(kW, kH);
+  for (int y = 0; y < kH; ++y) {
+    for (int x = 0; x < kW; ++x) {
+      confidence.view()(x, y) = x >= 20 && x < 60 && y >= 30 && y < 70 ? 40 : 200;  // ... doubtful
+    }
+  }
+  const auto wall = static_cast<std::uint16_t>(std::lround(kF * kB / 4.0 * 1000));
+  ObstacleConfig c = f.config(2);
+  ObstacleSectors every_pixel(c, f.triangulator, kF, (kW - 1) / 2.0);
+  EXPECT_NE(every_pixel.measure(f.disparity.view(), 1, confidence.view()).nearest_mm[0], wall)
+      << "without a minimum the patch is the nearest";
+  c.min_confidence = 64;
+  ObstacleSectors trusted(c, f.triangulator, kF, (kW - 1) / 2.0);
+  const protocol::Obstacles& o = trusted.measure(f.disparity.view(), 1, confidence.view());
+  EXPECT_EQ(o.nearest_mm[0], wall);
+  EXPECT_EQ(o.nearest_mm[1], wall);
+  EXPECT_THROW(trusted.measure(f.disparity.view(), 1), Error) << "no confidence given";
+  c.min_confidence = 256;
+  EXPECT_THROW(ObstacleSectors(c, f.triangulator, kF, 80), Error);
+}
+
 TEST(ObstacleSectors, BadInputIsAnError) {
   Fixture f;
   ObstacleConfig c = f.config(0);

@@ -102,6 +102,45 @@ TEST(DisparityCli, WritesDisparityPngAndColourPicture) {
   }
 }
 
+// --confidence: 0 exactly where the disparity is invalid, or filled by --hole-fill (made up,
+// not measured); a value for every measured pixel. Counted right of the first 224 columns: the
+// PNG's 0 means invalid, and nearer the left border a valid disparity can be 0 too.
+TEST(DisparityCli, WritesTheConfidenceOfEveryMeasuredPixel) {
+  const std::string out = ::testing::TempDir() + "epipole-disparity-c.png";
+  const std::string confidence = ::testing::TempDir() + "epipole-confidence.png";
+  const auto run = [&](const std::string& extra) {
+    const Result r = run_tool("disparity " + aloe("samples/aloeL.jpg") + " " +
+                                  aloe("samples/aloeR.jpg") + " --max-disparity 224 --out " + out +
+                                  " --confidence " + confidence + " --json" + extra,
+                              false);
+    EXPECT_EQ(r.exit_code, 0) << r.out;
+    EXPECT_EQ(nlohmann::json::parse(r.out)["confidence"], confidence);
+  };
+  for (const char* holes : {"", " --hole-fill 64"}) {
+    SCOPED_TRACE(holes);
+    run(holes);
+    const auto disparity = epipole::load_gray16(out);
+    const auto trust = epipole::load_gray(confidence);
+    ASSERT_EQ(trust.width(), disparity.width());
+    ASSERT_EQ(trust.height(), disparity.height());
+    long valid = 0, trusted = 0, invalid_with_confidence = 0;
+    for (int y = 0; y < trust.height(); ++y) {
+      for (int x = 224; x < trust.width(); ++x) {
+        valid += disparity(x, y) != 0 ? 1 : 0;
+        trusted += trust(x, y) != 0 ? 1 : 0;
+        invalid_with_confidence += disparity(x, y) == 0 && trust(x, y) != 0 ? 1 : 0;
+      }
+    }
+    EXPECT_EQ(invalid_with_confidence, 0);
+    EXPECT_GT(trusted, valid / 2);
+    if (*holes == '\0') {
+      EXPECT_EQ(trusted, valid) << "every measured pixel has a confidence";
+    } else {
+      EXPECT_LT(trusted, valid) << "the filled pixels have none";
+    }
+  }
+}
+
 TEST(DisparityCli, TextSummary) {
   const std::string out = ::testing::TempDir() + "epipole-disparity-text.png";
   const Result r = run_tool("disparity " + aloe("samples/aloeL.jpg") + " " +

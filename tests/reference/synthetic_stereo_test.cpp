@@ -128,6 +128,45 @@ TEST(SyntheticStereo, QualityModeBesideSgbmOnEveryScene) {
   }
 }
 
+// The confidence ranks the pixels: those it trusts more are right more often. For thresholds
+// 1 (every valid pixel), 64, 128 and 192: the share of pixels kept and bad2 among them.
+TEST(SyntheticStereo, TheConfidenceSaysWhichPixelsToTrust) {
+  constexpr int kThresholds[] = {1, 64, 128, 192};
+  for (const std::string& name : test::synthetic_scene_names()) {
+    const SyntheticPair p = synthetic_scene(name, 640, 480);
+    StereoConfig config;
+    config.width = 640;
+    config.height = 480;
+    config.max_disparity = 128;
+    config.confidence = true;
+    StereoMatcher matcher(config);
+    const ImageView<const std::int16_t> d = matcher.compute(p.left.view(), p.right.view());
+    cv::Mat disparity(480, 640, CV_16S);
+    cv::Mat confidence(480, 640, CV_8U);
+    for (int y = 0; y < 480; ++y) {
+      std::copy_n(d.row(y), 640, disparity.ptr<std::int16_t>(y));
+      std::copy_n(matcher.confidence().row(y), 640, confidence.ptr<std::uint8_t>(y));
+      for (int x = 0; x < 640; ++x) {
+        ASSERT_EQ(d.row(y)[x] < 0, matcher.confidence().row(y)[x] == 0)
+            << name << ": a valid pixel has a confidence, an invalid one none (" << x << ", " << y
+            << ")";
+      }
+    }
+    const cv::Mat truth = mat_of(p.truth);
+    std::printf("%s: confidence at least / pixels kept / bad2 among them\n", name.c_str());
+    double bad2[std::size(kThresholds)];
+    for (std::size_t i = 0; i < std::size(kThresholds); ++i) {
+      cv::Mat kept;
+      cv::compare(confidence, kThresholds[i], kept, cv::CMP_GE);
+      bad2[i] = score(disparity, truth, kept).bad2;
+      std::printf("  %3d  %5.1f %%  %5.1f %%\n", kThresholds[i],
+                  100.0 * cv::countNonZero(kept) / static_cast<double>(kept.total()),
+                  100 * bad2[i]);
+    }
+    EXPECT_LT(bad2[2], bad2[0]) << name;
+  }
+}
+
 // The temporal filter on eight pairs of one scene that differ only in the cameras' noise: how
 // many valid pixels change by more than 1 px from one pair to the next (flicker), and the last
 // pair's figures, without the filter and with it (the new pair's weight 25 %, steps up to 2 px).

@@ -110,24 +110,34 @@ TEST(StereoKernels, CostEqualsReference) {
   }
 }
 
-// The outputs of a winner take all, filled with a value the kernels never write.
+// The outputs of a winner take all, filled with a value the kernels never write (the
+// confidence: one they write only where a winner's cost curve says so).
 struct WtaOut {
   WtaOut(std::size_t width, int D)
       : disparity(width, 99),
         best(width, 99),
         right_best(width, 99),
-        window(2 * (static_cast<std::size_t>(D) + 16), 7) {}
+        window(2 * (static_cast<std::size_t>(D) + 16), 7),
+        confidence(width, 77) {}
   kernels::WtaRow row(int uniqueness) {
-    return {uniqueness, disparity.data(), best.data(), right_best.data(), window.data()};
+    return {uniqueness,        disparity.data(), best.data(),
+            right_best.data(), window.data(),    confidence.data()};
   }
   I16 disparity, best, right_best;
   U16 window;
+  U8 confidence;
 };
 
 void expect_same_wta(const WtaOut& out, const WtaOut& ref, const std::string& where) {
   ASSERT_EQ(out.disparity, ref.disparity) << where;
   ASSERT_EQ(out.best, ref.best) << where;
   ASSERT_EQ(out.right_best, ref.right_best) << where;
+  ASSERT_EQ(out.confidence, ref.confidence) << where;
+  for (std::size_t x = 0; x < ref.best.size(); ++x) {
+    if (ref.best[x] < 0) {
+      ASSERT_EQ(ref.confidence[x], 0) << where << " x " << x;
+    }
+  }
 }
 
 // Three rows of aggregation: path state carried from row to row must agree too, and so must

@@ -59,10 +59,13 @@ void wta_row_ref(const std::uint16_t* sums, int width, int D, const WtaRow& wta)
     const int min_cost = s[best];
     const int limit = uniqueness_limit(min_cost, ratio);
     bool unique = true;
+    int other = kNoCost;
     for (int d = 0; d < D; ++d) {
-      if (std::abs(d - best) > 1 && s[d] < limit) unique = false;
+      if (std::abs(d - best) <= 1) continue;
+      if (s[d] < limit) unique = false;
+      other = std::min<int>(other, s[d]);
     }
-    store_winner(wta, x, unique ? best : -1, s, D);
+    store_winner(wta, x, unique ? best : -1, s, D, other);
   }
   for (int xr = 0; xr < width; ++xr) {
     int best = 0;
@@ -299,6 +302,7 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
     runs_.assign(uw * static_cast<std::size_t>(H), 0);  // at most one run per pixel
     labels_.assign(2 * uw, 0);
   }
+  if (config.confidence) confidence_ = Image<std::uint8_t>(W, H);
   if (config.temporal_percent > 0) {
     temporal_ =
         std::make_unique<TemporalFilter>(W, H, config.temporal_percent, config.temporal_max_step);
@@ -311,6 +315,7 @@ std::size_t StereoMatcher::working_set_bytes() const {
   std::size_t n = bytes_of(padded_) + bytes_of(runs_) + bytes_of(labels_);
   for (const auto& w : workers_) n += w->bytes();
   if (temporal_) n += temporal_->working_set_bytes();
+  n += confidence_.size_bytes();
   return n;
 }
 
@@ -333,6 +338,14 @@ int StereoMatcher::start(GrayView left, GrayView right) {
 
 ImageView<const std::int16_t> StereoMatcher::finish() {
   if (config_.speckle_size > 0) remove_speckles();
+  if (!confidence_.empty()) {
+    // The speckles removed have no confidence either; the holes filled next keep none.
+    for (int y = 0; y < config_.height; ++y) {
+      const std::int16_t* d = disparity_.row(y);
+      std::uint8_t* c = confidence_.view().row(y);
+      for (int x = 0; x < config_.width; ++x) c[x] = d[x] < 0 ? 0 : c[x];
+    }
+  }
   fill_holes(disparity_, config_.hole_fill, path_);
   if (temporal_) temporal_->apply(disparity_, path_);
   return disparity_;
@@ -370,22 +383,27 @@ void StereoMatcher::Worker::cost_row(GrayView left, GrayView right, int y, int d
 
 namespace {
 
-// The winner take all of a row goes straight into the output row `out`.
-kernels::WtaRow wta_row(const StereoConfig& config, StereoMatcher::Worker& w, std::int16_t* out) {
-  return kernels::WtaRow{config.uniqueness, out, w.best.data(), w.right_best.data(),
-                         w.window.data()};
+// The winner take all of a row goes straight into the output row `out`, and its confidence
+// into `confidence` (null: none wanted).
+kernels::WtaRow wta_row(const StereoConfig& config, StereoMatcher::Worker& w, std::int16_t* out,
+                        std::uint8_t* confidence) {
+  return kernels::WtaRow{config.uniqueness, out,       w.best.data(), w.right_best.data(),
+                         w.window.data(),   confidence};
 }
 
 // The left-right check of an output row: a winner whose right image's winner is too far is
 // invalid.
-void check_row(const StereoConfig& config, const StereoMatcher::Worker& w, std::int16_t* out) {
+void check_row(const StereoConfig& config, const StereoMatcher::Worker& w, std::int16_t* out,
+               std::uint8_t* confidence) {
   if (config.lr_max_diff < 0) return;
   const std::int16_t* best = w.best.data();
   const std::int16_t* right_best = w.right_best.data();
   for (int x = 0; x < config.width; ++x) {
     const int b = best[x];  // -1: no winner, and out[x] is invalid already
     const int r = right_best[b >= 0 ? x - b : x];
-    out[x] = b >= 0 && std::abs(r - b) > config.lr_max_diff ? kInvalidDisparity : out[x];
+    const bool refused = b >= 0 && std::abs(r - b) > config.lr_max_diff;
+    out[x] = refused ? kInvalidDisparity : out[x];
+    if (confidence != nullptr && refused) confidence[x] = 0;
   }
 }
 
@@ -437,10 +455,11 @@ void StereoMatcher::sgm_stripe(Worker& w, int y0, int y1) {
     row.sums = w.sums.data();
     // Warm-up rows write their winners into the row that follows them in the output; it is
     // overwritten before it is final.
-    row.wta = wta_row(config_, w, disparity_.row(y >= y0 ? y : y0));
+    row.wta =
+        wta_row(config_, w, disparity_.row(y >= y0 ? y : y0), confidence_row(y >= y0 ? y : y0));
     w.kernels.sgm(row);
     prev = 1 - prev;
-    if (y >= y0) check_row(config_, w, disparity_.row(y));
+    if (y >= y0) check_row(config_, w, disparity_.row(y), confidence_row(y));
   }
 }
 
@@ -459,15 +478,21 @@ void StereoMatcher::bm_stripe(Worker& w, int y0, int y1) {
     w.kernels.box_columns(w.columns.data(), ring_row(y), nullptr, static_cast<int>(wd));
   }
   for (int y = y0; y < y1; ++y) {
-    kernels::BmRow row{nullptr, nullptr, w.columns.data(), config_.width,
-                       D,       r,       w.sums.data(),    wta_row(config_, w, disparity_.row(y))};
+    kernels::BmRow row{nullptr,
+                       nullptr,
+                       w.columns.data(),
+                       config_.width,
+                       D,
+                       r,
+                       w.sums.data(),
+                       wta_row(config_, w, disparity_.row(y), confidence_row(y))};
     if (y + r < H) {
       w.cost_row(left_, right_, y + r, D, ring_row(y + r));
       row.entering = ring_row(y + r);
     }
     if (y - r - 1 >= first) row.leaving = ring_row(y - r - 1);
     w.kernels.bm(row);
-    check_row(config_, w, disparity_.row(y));
+    check_row(config_, w, disparity_.row(y), confidence_row(y));
   }
 }
 

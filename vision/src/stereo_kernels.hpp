@@ -29,7 +29,8 @@ using CostRowKernel = void(const std::uint8_t* const* left, const std::uint8_t* 
 // kInvalidDisparity when not unique or when d > x; best[x]: that integer d or -1.
 // right_best[xr]: the right image's best disparity at xr, the smallest S(xr + d, d) over
 // 0 <= d < min(D, width - xr), the smallest d among equal costs. window: 2 * (D + 16) values
-// of scratch.
+// of scratch. confidence[x] (when not null): confidence_of() the winner's cost and the lowest
+// cost outside best +-1, 0 where there is no winner.
 constexpr std::uint16_t kNoCost = 0x7FFF;
 struct WtaRow {
   int uniqueness;
@@ -37,6 +38,7 @@ struct WtaRow {
   std::int16_t* best;
   std::int16_t* right_best;
   std::uint16_t* window;
+  std::uint8_t* confidence = nullptr;
 };
 
 // One row of semi-global aggregation and its winner take all. Path values are 8-bit: each path

@@ -119,9 +119,10 @@ class WtaPixels {
   }
 
   // The winner of pixel x. sums(d) gives the sums of disparities d .. d + 15 and has stored
-  // them at s + d, where the uniqueness test reads them again.
+  // them at s + d, where the uniqueness test reads them again (and changes three of them for
+  // the time it takes: the caller's next sums may start from them).
   template <typename Sums>
-  [[gnu::always_inline]] inline void pixel(int x, const std::uint16_t* s, Sums&& sums) {
+  [[gnu::always_inline]] inline void pixel(int x, std::uint16_t* s, Sums&& sums) {
     const int D = disparities_;
     const H sixteen = V::splath(16);
     H index = V::iotah();
@@ -148,16 +149,25 @@ class WtaPixels {
     const std::uint16_t min_cost = V::hminh(m);
     const int best =
         V::hminh(V::selecth(V::eqh(m, V::splath(min_cost)), m_index, V::splath(0xFFFF)));
-    // Unique when every sum below the limit is at best - 1 .. best + 1: the count of sums
-    // below it (each lane counts down by the all-ones mask) equals the count among those three.
+    // Unique when no sum outside best - 1 .. best + 1 is below the limit. Those three are
+    // set to kNoCost (never below it) while the sums are counted (each lane counts down by the
+    // all-ones mask) and their minimum, the confidence's `other`, is taken.
     const int limit = std::min(uniqueness_limit(min_cost, ratio_), static_cast<int>(kNoCost));
-    const std::uint32_t near = (best > 0 && s[best - 1] < limit ? 1u : 0u) +
-                               (s[best] < limit ? 1u : 0u) +
-                               (best < D - 1 && s[best + 1] < limit ? 1u : 0u);
+    const int first = std::max(best - 1, 0);
+    const int end = std::min(best + 2, D);
+    std::uint16_t near[3];
+    std::copy(s + first, s + end, near);
+    std::fill(s + first, s + end, kNoCost);
     const H l = V::splath(static_cast<std::uint16_t>(limit));
     H count = V::splath(0);
-    for (int d = 0; d < D; d += 16) count = V::subh(count, V::gth(l, V::loadh(s + d)));
-    store_winner(row_, x, V::hsumh(count) == near ? best : -1, s, D);
+    H others = V::splath(kNoCost);
+    for (int d = 0; d < D; d += 16) {
+      const H v = V::loadh(s + d);
+      count = V::subh(count, V::gth(l, v));
+      others = V::minh(others, v);
+    }
+    std::copy(near, near + (end - first), s + first);
+    store_winner(row_, x, V::hsumh(count) == 0 ? best : -1, s, D, V::hminh(others));
   }
 
   // After the last pixel: the right pixels width - D .. width - 1 are in the window.

@@ -89,6 +89,7 @@ struct BoardConfig {
     double band_bottom = 0.75;
     double min_depth_m = 0.2;
     double max_depth_m = 20.0;
+    int min_confidence = 0;  // 1..255: pixels the disparity trusts less are left out; 0 off
   } obstacles;
 
   struct Threads {

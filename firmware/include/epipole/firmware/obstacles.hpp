@@ -23,6 +23,9 @@ struct ObstacleConfig {
   // at least min_pixels), so that a few wrong disparities do not make phantom obstacles.
   double min_share = 0.002;
   int min_pixels = 12;
+  // 1..255: only pixels whose disparity confidence (vision::StereoMatcher::confidence()) is at
+  // least this count; 0: every valid pixel.
+  int min_confidence = 0;
 };
 
 // The nearest depth per angular sector of the rectified left view, from a disparity image
@@ -40,7 +43,9 @@ class ObstacleSectors {
   ObstacleSectors(const ObstacleConfig& config, const calib::Triangulator& triangulator, double fx,
                   double cx);
 
-  const protocol::Obstacles& measure(ImageView<const std::int16_t> disparity, std::uint32_t frame);
+  // `confidence`: the disparity's, required with config.min_confidence (ignored without).
+  const protocol::Obstacles& measure(ImageView<const std::int16_t> disparity, std::uint32_t frame,
+                                     ImageView<const std::uint8_t> confidence = {});
   // The view's horizontal field of view, degrees.
   double field_of_view_deg() const { return fov_deg_; }
   // Horizontal angle of a sector's centre from the optical axis, degrees (positive to the right).

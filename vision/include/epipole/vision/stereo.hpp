@@ -37,6 +37,7 @@ struct StereoConfig {
   int hole_fill = 0;  // after the speckles: holes up to this long filled (disparity_filters.hpp)
   int temporal_percent = 0;   // then over time: the new pair's weight, 1..99 (0: off)
   int temporal_max_step = 2;  // px: larger changes are taken at once (1..7)
+  bool confidence = false;    // also a confidence per pixel (StereoMatcher::confidence())
   int threads = 1;            // row stripes, and the workers that may run them at once
 };
 
@@ -44,7 +45,8 @@ struct StereoConfig {
 // right pixel x - d). Cost: 9x7 centre-symmetric census (31 bits) with Hamming distance.
 // Quality mode: semi-global aggregation along 5 paths (left, right, top, top-left, top-right),
 // all in one top-down pass, so no cost volume is stored. Fast mode: box aggregation. Both: winner
-// take all, parabolic sub-pixel, uniqueness ratio, left-right check, speckle removal.
+// take all, parabolic sub-pixel, uniqueness ratio, left-right check, speckle removal; on request
+// a confidence per pixel from its cost curve.
 //
 // Fixed memory: everything is allocated by the constructor; compute() never allocates. See
 // working_set_bytes() and docs/vision.md for the formula.
@@ -69,6 +71,13 @@ class StereoMatcher {
   int start(GrayView left, GrayView right);
   void run_stripe(int stripe, int worker);
   ImageView<const std::int16_t> finish();
+
+  // With config.confidence, after finish(): how clearly each pixel's disparity won, 1..255, from
+  // the aggregated cost curve: 255 * (c2 - c1) / c2 with c1 the winner's cost and c2 the lowest
+  // outside the winner +-1 (a margin ratio; uniqueness is the same test with a threshold). 0
+  // where the disparity is invalid, and where a post-filter (hole filling) made it up rather
+  // than measured it. Empty without config.confidence.
+  ImageView<const std::uint8_t> confidence() const { return confidence_.view(); }
   // The temporal filter forgets the pairs before (the next one passes unfiltered): after a gap
   // in the sequence, such as a camera reopened or the stage turned off for a while.
   void reset_history();
@@ -85,6 +94,10 @@ class StereoMatcher {
   void bm_stripe(Worker& w, int y0, int y1);
 
   void remove_speckles();
+  // Row y of the confidence, or null without config.confidence.
+  std::uint8_t* confidence_row(int y) {
+    return confidence_.empty() ? nullptr : confidence_.view().row(y);
+  }
 
   StereoConfig config_;
   SimdPath path_;
@@ -99,6 +112,7 @@ class StereoMatcher {
   std::vector<std::int32_t> runs_;
   std::vector<std::uint32_t> labels_;
   std::unique_ptr<TemporalFilter> temporal_;  // with config.temporal_percent
+  Image<std::uint8_t> confidence_;            // with config.confidence
 };
 
 }  // namespace epipole::vision
