@@ -1,7 +1,7 @@
 # epipole-bench as a board runs it (under qemu-user in a cross build): the simulated board's Aloe
-# pair through every stage of both sides at 1 and 2 threads, as JSON, checked; then a board that
-# does not exist and an unknown option, each with its exit status. Timings are only checked to
-# be there, never against a bound.
+# pair through every stage of both sides at 1 and 2 threads, as JSON, checked; OpenCV's side
+# alone; then a board that does not exist and an unknown option, each with its exit status.
+# Timings are only checked to be there, never against a bound.
 #
 #   cmake -DBENCH=path [-DEMULATOR=a|b|c] -DBOARD=folder [-DKERNELS=neon] -P this file
 string(REPLACE "|" ";" emulator "${EMULATOR}")
@@ -56,6 +56,14 @@ foreach(run 0 1)
   expect("${corners} corners at ${threads} threads" corners GREATER 1000)
   expect("${matches} sparse matches at ${threads} threads" matches GREATER 100)
 endforeach()
+
+# One side only, as the ARM instruction counts run it.
+run_bench(--board ${BOARD} --scene aloe -n 1 --warmup 0 --threads 1 --opencv-only --json)
+expect("--opencv-only: exit ${status}" status EQUAL 0)
+string(JSON rate ERROR_VARIABLE missing GET "${out}" runs 0 opencv pairs_per_second)
+expect("--opencv-only: no OpenCV figures" NOT missing)
+string(JSON ours ERROR_VARIABLE missing GET "${out}" runs 0 epipole)
+expect("--opencv-only: the firmware's side ran too" missing)
 
 run_bench(--board ${BOARD}/no-such-board -n 1)
 expect("a board that does not exist: exit ${status}, expected 1" status EQUAL 1)

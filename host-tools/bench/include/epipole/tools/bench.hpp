@@ -25,6 +25,7 @@ struct BenchOptions {
   std::vector<int> threads;  // default: 1 .. the CPUs this process may use
   int pairs = 30;
   int warmup = 3;
+  bool epipole = true;  // false: OpenCV's side only (--opencv-only: one side's instruction count)
   bool opencv = true;
   bool json = false;
 };
