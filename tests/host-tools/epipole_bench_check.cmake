@@ -1,6 +1,7 @@
 # epipole-bench as a board runs it (under qemu-user in a cross build): the simulated board's Aloe
 # pair through every stage of both sides at 1 and 2 threads, as JSON, checked; OpenCV's side
-# alone; then a board that does not exist and an unknown option, each with its exit status.
+# alone; some stages only; then a board that does not exist and an unknown option, each with its
+# exit status.
 # Timings are only checked to be there, never against a bound.
 #
 #   cmake -DBENCH=path [-DEMULATOR=a|b|c] -DBOARD=folder [-DKERNELS=neon] -P this file
@@ -64,6 +65,18 @@ string(JSON rate ERROR_VARIABLE missing GET "${out}" runs 0 opencv pairs_per_sec
 expect("--opencv-only: no OpenCV figures" NOT missing)
 string(JSON ours ERROR_VARIABLE missing GET "${out}" runs 0 epipole)
 expect("--opencv-only: the firmware's side ran too" missing)
+
+# Some stages only.
+run_bench(--board ${BOARD} --scene aloe -n 1 --warmup 0 --threads 1 --stages corners --json)
+expect("--stages corners: exit ${status}" status EQUAL 0)
+foreach(side epipole opencv)
+  string(JSON stages GET "${out}" runs 0 ${side} stages)
+  string(JSON count LENGTH "${stages}")
+  string(JSON p50 ERROR_VARIABLE missing GET "${stages}" corners p50_ms)
+  expect("--stages corners: ${side} ran ${stages}" count EQUAL 1 AND NOT missing)
+endforeach()
+run_bench(--stages colour)
+expect("--stages colour: exit ${status}, expected 2 (usage)" status EQUAL 2)
 
 run_bench(--board ${BOARD}/no-such-board -n 1)
 expect("a board that does not exist: exit ${status}, expected 1" status EQUAL 1)

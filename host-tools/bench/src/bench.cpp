@@ -95,6 +95,14 @@ class Bench {
   Bench(const BenchOptions& options, SimdPath path)
       : options_(options), board_(firmware::load_board_config(options.board)), path_(path) {
     if (!options.scene.empty()) board_.sim.scene = options.scene;
+    if (!options.stages.empty()) {
+      board_.stages &= static_cast<protocol::StageMask>(~protocol::kSwitchableStages);
+      for (const std::string& name : options.stages) {
+        for (const protocol::StageInfo& s : protocol::kStages) {
+          if (s.name == name) board_.stages |= protocol::stage_bit(s.id);
+        }
+      }
+    }
     images_ = bench_images(options, board_);
     calibration_ = firmware::load_board_calibration(board_);
   }
@@ -305,6 +313,14 @@ void add_bench_options(CLI::App& command, BenchOptions& options) {
                   "Thread counts to measure, e.g. 1,2,4 (default: 1 to the CPUs usable)")
       ->delimiter(',')
       ->check(CLI::Range(1, 64));
+  std::vector<std::string> switchable;
+  for (const protocol::StageInfo& s : protocol::kStages) {
+    if (s.kind == protocol::StageKind::switchable) switchable.emplace_back(s.name);
+  }
+  cmd->add_option("--stages", options.stages,
+                  "Run only these stages, e.g. rectify,disparity (default: the board's)")
+      ->delimiter(',')
+      ->check(CLI::IsMember(switchable));
   cmd->add_option("--pairs,-n", options.pairs, "Pairs measured per thread count and side")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();

@@ -22,7 +22,8 @@ struct BenchOptions {
   std::string scene;  // the board's simulated scene to take images from (default: its own)
   std::string left;   // or these images, letterboxed to the board's size
   std::string right;
-  std::vector<int> threads;  // default: 1 .. the CPUs this process may use
+  std::vector<int> threads;         // default: 1 .. the CPUs this process may use
+  std::vector<std::string> stages;  // the stages run instead of the board's (names of kStages)
   int pairs = 30;
   int warmup = 3;
   bool epipole = true;  // false: OpenCV's side only (--opencv-only: one side's instruction count)
