@@ -149,16 +149,28 @@ class WtaPixels {
     const std::uint16_t min_cost = V::hminh(m);
     const int best =
         V::hminh(V::selecth(V::eqh(m, V::splath(min_cost)), m_index, V::splath(0xFFFF)));
-    // Unique when no sum outside best - 1 .. best + 1 is below the limit. Those three are
-    // set to kNoCost (never below it) while the sums are counted (each lane counts down by the
-    // all-ones mask) and their minimum, the confidence's `other`, is taken.
     const int limit = std::min(uniqueness_limit(min_cost, ratio_), static_cast<int>(kNoCost));
+    const H l = V::splath(static_cast<std::uint16_t>(limit));
+    if (row_.confidence == nullptr) {
+      // Unique when every sum below the limit is at best - 1 .. best + 1: the count of sums
+      // below it (each lane counts down by the all-ones mask) equals the count among those
+      // three.
+      const std::uint32_t near = (best > 0 && s[best - 1] < limit ? 1u : 0u) +
+                                 (s[best] < limit ? 1u : 0u) +
+                                 (best < D - 1 && s[best + 1] < limit ? 1u : 0u);
+      H count = V::splath(0);
+      for (int d = 0; d < D; d += 16) count = V::subh(count, V::gth(l, V::loadh(s + d)));
+      store_winner(row_, x, V::hsumh(count) == near ? best : -1, s, D, kNoCost);
+      return;
+    }
+    // The same test, and the lowest sum outside best - 1 .. best + 1 for the confidence: those
+    // three are set to kNoCost (never below the limit) while the sums are counted and their
+    // minimum taken.
     const int first = std::max(best - 1, 0);
     const int end = std::min(best + 2, D);
     std::uint16_t near[3];
     std::copy(s + first, s + end, near);
     std::fill(s + first, s + end, kNoCost);
-    const H l = V::splath(static_cast<std::uint16_t>(limit));
     H count = V::splath(0);
     H others = V::splath(kNoCost);
     for (int d = 0; d < D; d += 16) {
