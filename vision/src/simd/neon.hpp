@@ -6,14 +6,47 @@
 //   b: 16 unsigned bytes (B)           h: the same 16 lanes as unsigned 16-bit values (H)
 //   i, f, m: 4 lanes of 32-bit integers (I), floats (F) and masks (M)
 // Only intrinsics that exist on both AArch64 and ARMv7 are used (no float64 or 64-bit compare
-// vectors: ARMv7 has neither), except the across-lane reductions: one AArch64 instruction
-// (UMINV, UADDLV) where ARMv7 needs a ladder of pairwise steps.
+// vectors: ARMv7 has neither), except the across-lane reductions (`across`).
 #include <cmath>
 #include <cstdint>
 
 #include "epipole/core/neon.hpp"
 
 namespace epipole::vision::simd {
+
+// Across-lane reductions: one instruction on AArch64 (UMINV, UADDLV), a ladder of pairwise
+// steps on ARMv7.
+namespace across {
+#if defined(__aarch64__)
+inline std::uint8_t min_u8(uint8x16_t v) {
+  return vminvq_u8(v);
+}
+inline std::uint16_t min_u16(uint16x8_t v) {
+  return vminvq_u16(v);
+}
+inline std::uint32_t sum_u16(uint16x8_t v) {
+  return vaddlvq_u16(v);
+}
+#else
+inline std::uint8_t min_u8(uint8x16_t v) {
+  uint8x8_t m = vmin_u8(vget_low_u8(v), vget_high_u8(v));
+  m = vpmin_u8(m, m);
+  m = vpmin_u8(m, m);
+  m = vpmin_u8(m, m);
+  return vget_lane_u8(m, 0);
+}
+inline std::uint16_t min_u16(uint16x8_t v) {
+  uint16x4_t m = vmin_u16(vget_low_u16(v), vget_high_u16(v));
+  m = vpmin_u16(m, m);
+  m = vpmin_u16(m, m);
+  return vget_lane_u16(m, 0);
+}
+inline std::uint32_t sum_u16(uint16x8_t v) {
+  const uint64x2_t q = vpaddlq_u32(vpaddlq_u16(v));
+  return static_cast<std::uint32_t>(vgetq_lane_u64(q, 0) + vgetq_lane_u64(q, 1));
+}
+#endif
+}  // namespace across
 
 struct Neon {
   // Bytes: 16 unsigned lanes.
@@ -61,17 +94,7 @@ struct Neon {
   static B popcount4(B a, B b, B c, B d) {
     return vaddq_u8(vaddq_u8(vcntq_u8(a), vcntq_u8(b)), vaddq_u8(vcntq_u8(c), vcntq_u8(d)));
   }
-  static std::uint8_t hminb(B v) {
-#if defined(__aarch64__)
-    return vminvq_u8(v);
-#else
-    uint8x8_t m = vmin_u8(vget_low_u8(v), vget_high_u8(v));
-    m = vpmin_u8(m, m);
-    m = vpmin_u8(m, m);
-    m = vpmin_u8(m, m);
-    return vget_lane_u8(m, 0);
-#endif
-  }
+  static std::uint8_t hminb(B v) { return across::min_u8(v); }
 
   // Halves: the same 16 lanes as unsigned 16-bit values, in two registers.
   using H = uint16x8x2_t;
@@ -118,26 +141,9 @@ struct Neon {
     return {{vextq_u16(prev.val[1], cur.val[0], 7), vextq_u16(cur.val[0], cur.val[1], 7)}};
   }
   static std::uint16_t last(H v) { return vgetq_lane_u16(v.val[1], 7); }
-  static std::uint16_t hminh(H v) {
-    const uint16x8_t q = vminq_u16(v.val[0], v.val[1]);
-#if defined(__aarch64__)
-    return vminvq_u16(q);
-#else
-    uint16x4_t m = vmin_u16(vget_low_u16(q), vget_high_u16(q));
-    m = vpmin_u16(m, m);
-    m = vpmin_u16(m, m);
-    return vget_lane_u16(m, 0);
-#endif
-  }
+  static std::uint16_t hminh(H v) { return across::min_u16(vminq_u16(v.val[0], v.val[1])); }
   // The sum of the 8 lanes of the two registers added lane by lane (modulo 2^16).
-  static std::uint32_t hsumh(H v) {
-#if defined(__aarch64__)
-    return vaddlvq_u16(vaddq_u16(v.val[0], v.val[1]));
-#else
-    const uint64x2_t q = vpaddlq_u32(vpaddlq_u16(vaddq_u16(v.val[0], v.val[1])));
-    return static_cast<std::uint32_t>(vgetq_lane_u64(q, 0) + vgetq_lane_u64(q, 1));
-#endif
-  }
+  static std::uint32_t hsumh(H v) { return across::sum_u16(vaddq_u16(v.val[0], v.val[1])); }
   static bool anyh(H mask) {
     const uint64x2_t halves = vreinterpretq_u64_u16(vorrq_u16(mask.val[0], mask.val[1]));
     return (vgetq_lane_u64(halves, 0) | vgetq_lane_u64(halves, 1)) != 0;
