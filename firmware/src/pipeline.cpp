@@ -273,7 +273,7 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   // What cannot start (an image of the wrong size) throws here, before a task is queued.
   const bool disparity = protocol::has_stage(run, Stage::disparity);
   if (disparity && !disparity_ran_last_) stages_->matcher->reset_history();
-  disparity_ran_last_ = false;
+  disparity_ran_last_ = false;  // stays so if start() throws: that pair had no disparity
   const int stripes = disparity ? stages_->matcher->start(r.left, r.right) : 0;
   disparity_ran_last_ = disparity;
   const int levels = protocol::has_stage(run, Stage::detect) ? detector_->start(r.left) : 0;

@@ -339,7 +339,8 @@ int StereoMatcher::start(GrayView left, GrayView right) {
 ImageView<const std::int16_t> StereoMatcher::finish() {
   if (config_.speckle_size > 0) remove_speckles();
   if (!confidence_.empty()) {
-    // The speckles removed have no confidence either; the holes filled next keep none.
+    // What the left-right check refused and the speckles removed have no confidence either;
+    // the holes filled next keep none.
     for (int y = 0; y < config_.height; ++y) {
       const std::int16_t* d = disparity_.row(y);
       std::uint8_t* c = confidence_.view().row(y);
@@ -393,17 +394,14 @@ kernels::WtaRow wta_row(const StereoConfig& config, StereoMatcher::Worker& w, st
 
 // The left-right check of an output row: a winner whose right image's winner is too far is
 // invalid.
-void check_row(const StereoConfig& config, const StereoMatcher::Worker& w, std::int16_t* out,
-               std::uint8_t* confidence) {
+void check_row(const StereoConfig& config, const StereoMatcher::Worker& w, std::int16_t* out) {
   if (config.lr_max_diff < 0) return;
   const std::int16_t* best = w.best.data();
   const std::int16_t* right_best = w.right_best.data();
   for (int x = 0; x < config.width; ++x) {
     const int b = best[x];  // -1: no winner, and out[x] is invalid already
     const int r = right_best[b >= 0 ? x - b : x];
-    const bool refused = b >= 0 && std::abs(r - b) > config.lr_max_diff;
-    out[x] = refused ? kInvalidDisparity : out[x];
-    if (confidence != nullptr && refused) confidence[x] = 0;
+    out[x] = b >= 0 && std::abs(r - b) > config.lr_max_diff ? kInvalidDisparity : out[x];
   }
 }
 
@@ -459,7 +457,7 @@ void StereoMatcher::sgm_stripe(Worker& w, int y0, int y1) {
         wta_row(config_, w, disparity_.row(y >= y0 ? y : y0), confidence_row(y >= y0 ? y : y0));
     w.kernels.sgm(row);
     prev = 1 - prev;
-    if (y >= y0) check_row(config_, w, disparity_.row(y), confidence_row(y));
+    if (y >= y0) check_row(config_, w, disparity_.row(y));
   }
 }
 
@@ -492,7 +490,7 @@ void StereoMatcher::bm_stripe(Worker& w, int y0, int y1) {
     }
     if (y - r - 1 >= first) row.leaving = ring_row(y - r - 1);
     w.kernels.bm(row);
-    check_row(config_, w, disparity_.row(y), confidence_row(y));
+    check_row(config_, w, disparity_.row(y));
   }
 }
 

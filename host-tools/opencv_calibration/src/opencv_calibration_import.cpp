@@ -156,6 +156,15 @@ class StorageFile {
   // OpenCV 4.6's XML parser crashes on some malformed files (`<?xml version=` alone, found by
   // calibration_fuzz): pugixml, the XML library the host tool links for cascades, sees first
   // that the file is well-formed.
+  void check_xml(const std::string& text) const {
+    pugi::xml_document document;
+    const pugi::xml_parse_result parsed = document.load_buffer(text.data(), text.size());
+    if (parsed) return;
+    const auto end = text.begin() + std::clamp<std::ptrdiff_t>(parsed.offset, 0, text.size());
+    throw Error(cat(name_, ": malformed XML (line ", 1 + std::count(text.begin(), end, '\n'), ": ",
+                    parsed.description(), ")"));
+  }
+
   // OpenCV 4.6's parsers loop forever on some malformed YAML and recurse without limit on deep
   // nesting (opencv/opencv#29939): tried in a child first. A real calibration file takes
   // well under a millisecond.
@@ -169,22 +178,11 @@ class StorageFile {
         return;
       case TrialOutcome::timed_out:
         throw Error(cat(name_, ": malformed ", syntax_of(text),
-                        " (OpenCV's reader was still "
-                        "parsing it after ",
-                        limit.count(), " s)"));
+                        " (OpenCV's reader was still parsing it after ", limit.count(), " s)"));
       case TrialOutcome::crashed:
         throw Error(
             cat(name_, ": malformed ", syntax_of(text), " (OpenCV's reader crashed on it)"));
     }
-  }
-
-  void check_xml(const std::string& text) const {
-    pugi::xml_document document;
-    const pugi::xml_parse_result parsed = document.load_buffer(text.data(), text.size());
-    if (parsed) return;
-    const auto end = text.begin() + std::clamp<std::ptrdiff_t>(parsed.offset, 0, text.size());
-    throw Error(cat(name_, ": malformed XML (line ", 1 + std::count(text.begin(), end, '\n'), ": ",
-                    parsed.description(), ")"));
   }
 
   // OpenCV's own complaints about a node, as an Error naming the file and the key.
