@@ -597,11 +597,65 @@ BoardConfig parse_board_config(const std::string& yaml_text, const fs::path& fil
   return c;
 }
 
-BoardConfig load_board_config(const fs::path& path) {
-  fs::path file = path;
+namespace {
+
+fs::path board_file(const fs::path& path) {
   std::error_code ec;
-  if (fs::is_directory(path, ec)) file = path / "board.yaml";
+  return fs::is_directory(path, ec) ? path / "board.yaml" : path;
+}
+
+// Sets one `KEY=VALUE` override in the board file's document.
+void apply_override(YAML::Node root, const std::string& setting, const std::string& file) {
+  const auto refuse = [&](const std::string& why) {
+    return Error(cat(file, ": the override '", setting, "' ", why));
+  };
+  const std::size_t equals = setting.find('=');
+  if (equals == std::string::npos || equals == 0) {
+    throw refuse("is not KEY=VALUE (e.g. stereo.method=bm)");
+  }
+  std::vector<std::string> keys;
+  for (std::size_t start = 0; start <= equals;) {
+    const std::size_t end = std::min(setting.find('.', start), equals);
+    keys.push_back(setting.substr(start, end - start));
+    if (keys.back().empty()) throw refuse("has an empty key between its dots");
+    start = end + 1;
+  }
+  YAML::Node value;
+  try {
+    value = YAML::Load(setting.substr(equals + 1));
+  } catch (const YAML::Exception& e) {
+    throw refuse(cat("has a value that is not YAML (", e.msg, ")"));
+  }
+  // Nodes are handles: reset() moves one to another node, where `=` would overwrite its value.
+  YAML::Node node = root;
+  std::string path;
+  for (std::size_t i = 0; i + 1 < keys.size(); ++i) {
+    path += (path.empty() ? "" : ".") + keys[i];
+    YAML::Node child = node[keys[i]];
+    if (!child.IsDefined() || child.IsNull()) {
+      node[keys[i]] = YAML::Node(YAML::NodeType::Map);
+      child.reset(node[keys[i]]);
+    }
+    if (!child.IsMap()) throw refuse(cat("sets a key inside ", path, ", which is not a map"));
+    node.reset(child);
+  }
+  node[keys.back()] = value;
+}
+
+}  // namespace
+
+BoardConfig load_board_config(const fs::path& path) {
+  const fs::path file = board_file(path);
   return parse_board_config(read_text_file(file), file);
+}
+
+BoardConfig load_board_config(const fs::path& path, std::span<const std::string> overrides) {
+  if (overrides.empty()) return load_board_config(path);
+  const fs::path file = board_file(path);
+  const YAML::Node root = yaml::Fields(file.string()).parse(read_text_file(file));
+  if (!root.IsMap()) throw Error(cat(file.string(), ": expected a YAML map of keys"));
+  for (const std::string& setting : overrides) apply_override(root, setting, file.string());
+  return parse_board_config(YAML::Dump(root), file);
 }
 
 }  // namespace epipole::firmware

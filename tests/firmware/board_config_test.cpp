@@ -204,6 +204,45 @@ TEST(BoardConfig, AFolderMeansItsBoardFile) {
   }
 }
 
+// `epipole-bench --set KEY=VALUE`: keys set over the file's, nested or new, validated as the
+// file is; an override that cannot apply is an error naming it.
+TEST(BoardConfig, OverridesSetKeysBeforeTheFileIsRead) {
+  SimRig rig;
+  std::ofstream(rig.dir.path() / "board.yaml") << rig.yaml();
+  const std::vector<std::string> overrides{"stereo.method=bm", "corners.threshold=35",
+                                           "sparse.max_points=7", "obstacles.band=[0.2, 0.6]"};
+  const BoardConfig c = load_board_config(rig.dir.path(), overrides);
+  EXPECT_EQ(c.stereo.method, vision::StereoMethod::bm);
+  EXPECT_EQ(c.stereo.max_disparity, 32) << "the other keys of the map stay";
+  EXPECT_EQ(c.corners.threshold, 35);
+  EXPECT_EQ(c.corners.max_corners, 500);
+  EXPECT_EQ(c.sparse.max_points, 7) << "a map the file does not have is added";
+  EXPECT_DOUBLE_EQ(c.obstacles.band_top, 0.2);
+  EXPECT_DOUBLE_EQ(c.obstacles.band_bottom, 0.6);
+  EXPECT_EQ(load_board_config(rig.dir.path(), {}).stereo.method, vision::StereoMethod::sgm);
+
+  const struct {
+    std::string override_text;
+    const char* expected;
+  } bad[] = {
+      {"stereo.method", "is not KEY=VALUE"},
+      {"=bm", "is not KEY=VALUE"},
+      {"stereo..method=bm", "empty key"},
+      {"stereo.method.=bm", "empty key"},
+      {"version.x=1", "inside version, which is not a map"},
+      {"corners.threshold=[1, 2", "not YAML"},
+      {"stereo.method=fast", "stereo.method"},
+      {"stereo.colour=red", "colour"},
+  };
+  for (const auto& b : bad) {
+    const std::vector<std::string> one{b.override_text};
+    const std::string error = test::error_of([&] { load_board_config(rig.dir.path(), one); });
+    EXPECT_NE(error.find(b.expected), std::string::npos)
+        << b.override_text << ": got '" << error << "'";
+    EXPECT_NE(error.find("board.yaml"), std::string::npos) << b.override_text << ": " << error;
+  }
+}
+
 // Every board file the repository ships (board/*/board.yaml and board/*/board-*.yaml: what a
 // user copies to start a board of their own) loads through the firmware's own reading and
 // validation, and so does every calibration file it names that ships beside it.

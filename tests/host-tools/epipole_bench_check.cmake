@@ -1,7 +1,7 @@
 # epipole-bench as a board runs it (under qemu-user in a cross build): the simulated board's Aloe
 # pair through every stage of both sides at 1 and 2 threads, as JSON, checked; OpenCV's side
-# alone; some stages only; then a board that does not exist and an unknown option, each with its
-# exit status.
+# alone; some stages only; a key of the board set by --set; then a board that does not exist and
+# an unknown option, each with its exit status.
 # Timings are only checked to be there, never against a bound.
 #
 #   cmake -DBENCH=path [-DEMULATOR=a|b|c] -DBOARD=folder [-DKERNELS=neon] -P this file
@@ -77,6 +77,21 @@ foreach(side epipole opencv)
 endforeach()
 run_bench(--stages colour)
 expect("--stages colour: exit ${status}, expected 2 (usage)" status EQUAL 2)
+
+# A key of the board set over its file's: block matching instead of SGM, on both sides.
+run_bench(--board ${BOARD} --scene aloe -n 1 --warmup 0 --threads 1 --stages disparity
+          --set stereo.method=bm --json)
+expect("--set stereo.method=bm: exit ${status}" status EQUAL 0)
+string(JSON method GET "${out}" method)
+string(JSON set GET "${out}" set 0)
+expect("--set stereo.method=bm: method ${method}, set ${set}"
+       method STREQUAL "bm" AND set STREQUAL "stereo.method=bm")
+run_bench(--board ${BOARD} -n 1 --set stereo.method=fast)
+expect("--set stereo.method=fast: exit ${status}, expected 1" status EQUAL 1)
+expect("--set stereo.method=fast: '${err}'" err MATCHES "stereo.method")
+run_bench(--board ${BOARD} -n 1 --set stereo)
+expect("--set stereo: exit ${status}, expected 1" status EQUAL 1)
+expect("--set stereo: '${err}'" err MATCHES "is not KEY=VALUE")
 
 run_bench(--board ${BOARD}/no-such-board -n 1)
 expect("a board that does not exist: exit ${status}, expected 1" status EQUAL 1)

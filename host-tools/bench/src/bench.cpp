@@ -93,7 +93,9 @@ double ms_since(std::chrono::steady_clock::time_point start) {
 class Bench {
  public:
   Bench(const BenchOptions& options, SimdPath path)
-      : options_(options), board_(firmware::load_board_config(options.board)), path_(path) {
+      : options_(options),
+        board_(firmware::load_board_config(options.board, options.overrides)),
+        path_(path) {
     if (!options.scene.empty()) board_.sim.scene = options.scene;
     if (!options.stages.empty()) {
       board_.stages &= static_cast<protocol::StageMask>(~protocol::kSwitchableStages);
@@ -128,6 +130,7 @@ class Bench {
             {"height", board_.height()},
             {"max_disparity", board_.stereo.max_disparity},
             {"method", board_.stereo.method == vision::StereoMethod::sgm ? "sgm" : "bm"},
+            {"set", options_.overrides},
             {"kernels", std::string(to_string(path_))},
             {"pairs", options_.pairs},
             {"warmup", options_.warmup},
@@ -243,6 +246,7 @@ void print_table(const nlohmann::json& b) {
       b["max_disparity"].get<int>(), b["method"].get<std::string>().c_str(),
       b["images"].get<std::string>().c_str(), b["kernels"].get<std::string>().c_str(),
       b["pairs"].get<int>(), b["warmup"].get<int>());
+  for (const auto& key : b["set"]) std::printf("  set: %s\n", key.get<std::string>().c_str());
   for (const auto& note : b["notes"]) std::printf("  note: %s\n", note.get<std::string>().c_str());
   for (const auto& all_sides : b["runs"]) {
     // With one side only (--no-opencv, --opencv-only), its figures take the first columns.
@@ -321,6 +325,9 @@ void add_bench_options(CLI::App& command, BenchOptions& options) {
                   "Run only these stages, e.g. rectify,disparity (default: the board's)")
       ->delimiter(',')
       ->check(CLI::IsMember(switchable));
+  cmd->add_option("--set", options.overrides,
+                  "Set a key of the board file first, e.g. --set stereo.method=bm (repeatable)")
+      ->type_name("KEY=VALUE");
   cmd->add_option("--pairs,-n", options.pairs, "Pairs measured per thread count and side")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();

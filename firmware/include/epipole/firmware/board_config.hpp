@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -140,6 +141,11 @@ struct BoardConfig {
 // ${NAME} in paths is replaced by the environment variable NAME; ${EPIPOLE_DATA_DIR} defaults to
 // the data cache of scripts/fetch-data.sh. Relative paths are relative to the file's folder.
 BoardConfig load_board_config(const std::filesystem::path& path);
+// The same with some keys set first, each override `KEY=VALUE`: KEY a dotted path of map keys
+// (`stereo.method`), added when the file has no such key; VALUE read as YAML (`bm`, `[0.2, 0.8]`).
+// The result is validated as a file is. Throws Error naming an override that does not apply.
+BoardConfig load_board_config(const std::filesystem::path& path,
+                              std::span<const std::string> overrides);
 BoardConfig parse_board_config(const std::string& yaml, const std::filesystem::path& file);
 
 // Cross-checks a configuration (also done by the loaders): stage limits against the image size,

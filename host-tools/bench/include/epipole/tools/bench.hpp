@@ -22,8 +22,9 @@ struct BenchOptions {
   std::string scene;  // the board's simulated scene to take images from (default: its own)
   std::string left;   // or these images, letterboxed to the board's size
   std::string right;
-  std::vector<int> threads;         // default: 1 .. the CPUs this process may use
-  std::vector<std::string> stages;  // the stages run instead of the board's (names of kStages)
+  std::vector<int> threads;            // default: 1 .. the CPUs this process may use
+  std::vector<std::string> stages;     // the stages run instead of the board's (names of kStages)
+  std::vector<std::string> overrides;  // KEY=VALUE set over the board file's (--set)
   int pairs = 30;
   int warmup = 3;
   bool epipole = true;  // false: OpenCV's side only (--opencv-only: one side's instruction count)
