@@ -1,6 +1,7 @@
 # The instruction-counting plugin under qemu-user: the probe's counts for N, 2N and 3N loop runs
 # step by the same amount (the count is exact: nothing of the machine's load gets in), a multiple
-# of N; an unknown plugin argument stops QEMU.
+# of N; its profile (profile=FILE) adds up to the count and puts the step in `main`, the function
+# of the loop; an unknown plugin argument stops QEMU.
 #
 #   cmake -DEMULATOR=a|b|c -DPLUGIN=path -DPROBE=path -DOUT=folder -P this file
 string(REPLACE "|" ";" emulator "${EMULATOR}")
@@ -9,10 +10,12 @@ set(counts)
 foreach(times 1 2 3)
   math(EXPR runs "${n} * ${times}")
   set(file ${OUT}/insn-count-${runs})
-  file(REMOVE ${file})
-  execute_process(COMMAND ${emulator} -plugin ${PLUGIN},out=${file} ${PROBE} ${runs}
+  set(profile ${OUT}/insn-profile-${runs})
+  file(REMOVE ${file} ${profile})
+  execute_process(COMMAND ${emulator} -plugin ${PLUGIN},out=${file},profile=${profile} ${PROBE}
+                          ${runs}
                   RESULT_VARIABLE status ERROR_VARIABLE err)
-  if(NOT status EQUAL 0 OR NOT EXISTS ${file})
+  if(NOT status EQUAL 0 OR NOT EXISTS ${file} OR NOT EXISTS ${profile})
     message(FATAL_ERROR "insn_count_probe ${runs} under the plugin: exit ${status}\n${err}")
   endif()
   file(STRINGS ${file} count)
@@ -20,6 +23,28 @@ foreach(times 1 2 3)
     message(FATAL_ERROR "the plugin wrote '${count}', not a count")
   endif()
   list(APPEND counts ${count})
+  # The profile: "COUNT SYMBOL" lines, largest first, adding up to the count.
+  file(STRINGS ${profile} lines)
+  set(total 0)
+  set(in_main 0)
+  set(previous "")
+  foreach(line IN LISTS lines)
+    if(NOT line MATCHES "^([0-9]+) (.+)$")
+      message(FATAL_ERROR "a profile line '${line}' is not COUNT SYMBOL")
+    endif()
+    if(previous AND CMAKE_MATCH_1 GREATER previous)
+      message(FATAL_ERROR "the profile is not largest first: ${previous}, then ${CMAKE_MATCH_1}")
+    endif()
+    set(previous ${CMAKE_MATCH_1})
+    math(EXPR total "${total} + ${CMAKE_MATCH_1}")
+    if(CMAKE_MATCH_2 STREQUAL "main")
+      set(in_main ${CMAKE_MATCH_1})
+    endif()
+  endforeach()
+  if(NOT total EQUAL count)
+    message(FATAL_ERROR "the profile adds up to ${total}, the count is ${count}")
+  endif()
+  list(APPEND main_counts ${in_main})
 endforeach()
 list(GET counts 0 c1)
 list(GET counts 1 c2)
@@ -32,9 +57,21 @@ message(STATUS "guest instructions: ${c1}, ${c2}, ${c3}: ${per_run} a loop run")
 if(NOT step1 EQUAL step2 OR step1 LESS_EQUAL 0 OR NOT rest EQUAL 0)
   message(FATAL_ERROR "the counts ${c1}, ${c2}, ${c3} do not grow by one multiple of ${n}")
 endif()
+list(GET main_counts 0 m1)
+list(GET main_counts 1 m2)
+math(EXPR main_step "${m2} - ${m1}")
+if(NOT main_step EQUAL step1)
+  message(FATAL_ERROR "the profile's main: ${m1}, ${m2} for ${n} and 2 x ${n} runs; the count "
+                      "grew by ${step1}")
+endif()
 
 execute_process(COMMAND ${emulator} -plugin ${PLUGIN},colour=blue ${PROBE} 1
                 RESULT_VARIABLE status ERROR_VARIABLE err)
 if(status EQUAL 0 OR NOT err MATCHES "unknown argument")
   message(FATAL_ERROR "an unknown plugin argument: exit ${status}\n${err}")
+endif()
+execute_process(COMMAND ${emulator} -plugin ${PLUGIN},profile= ${PROBE} 1
+                RESULT_VARIABLE status ERROR_VARIABLE err)
+if(status EQUAL 0 OR NOT err MATCHES "unknown argument")
+  message(FATAL_ERROR "profile= without a file: exit ${status}\n${err}")
 endif()
