@@ -21,6 +21,7 @@
 #include "cascade_kernels.hpp"
 #include "epipole/tools/cascade_xml.hpp"
 #include "epipole/vision/cascade.hpp"
+#include "opencv_view.hpp"
 #include "test_data.hpp"
 
 namespace epipole::vision {
@@ -29,9 +30,7 @@ namespace {
 constexpr const char* kHaar = "cascades/haarcascades/haarcascade_frontalface_default.xml";
 constexpr const char* kLbp = "cascades/lbpcascades/lbpcascade_frontalface_improved.xml";
 
-GrayView view_of(const cv::Mat& m) {
-  return {m.ptr<std::uint8_t>(), m.cols, m.rows, static_cast<std::ptrdiff_t>(m.step1())};
-}
+using test::view_of;
 
 struct TestImage {
   std::string name;

@@ -14,6 +14,7 @@
 namespace epipole::vision {
 namespace {
 
+using test::mat_of;
 using test::synthetic_scene;
 using test::SyntheticPair;
 
@@ -74,22 +75,6 @@ TEST(SyntheticStereo, TheSameSceneEveryTime) {
   }
 }
 
-cv::Mat mat_of(const GrayImage& image) {
-  cv::Mat m(image.height(), image.width(), CV_8U);
-  for (int y = 0; y < image.height(); ++y) {
-    std::copy_n(image.view().row(y), image.width(), m.ptr<std::uint8_t>(y));
-  }
-  return m;
-}
-
-cv::Mat mat_of(const Image<float>& image) {
-  cv::Mat m(image.height(), image.width(), CV_32F);
-  for (int y = 0; y < image.height(); ++y) {
-    std::copy_n(image.view().row(y), image.width(), m.ptr<float>(y));
-  }
-  return m;
-}
-
 // The quality mode and SGBM with one range (128, the simulated board's) on each scene. The issue
 // of depth quality asks for at most 0.8x SGBM's bad2 on every scene; these figures say where
 // that stands (docs/vision.md), the baseline that they do not get worse.
@@ -141,11 +126,9 @@ TEST(SyntheticStereo, TheConfidenceSaysWhichPixelsToTrust) {
     config.confidence = true;
     StereoMatcher matcher(config);
     const ImageView<const std::int16_t> d = matcher.compute(p.left.view(), p.right.view());
-    cv::Mat disparity(480, 640, CV_16S);
-    cv::Mat confidence(480, 640, CV_8U);
+    const cv::Mat disparity = mat_of(d);
+    const cv::Mat confidence = mat_of(matcher.confidence());
     for (int y = 0; y < 480; ++y) {
-      std::copy_n(d.row(y), 640, disparity.ptr<std::int16_t>(y));
-      std::copy_n(matcher.confidence().row(y), 640, confidence.ptr<std::uint8_t>(y));
       for (int x = 0; x < 640; ++x) {
         ASSERT_EQ(d.row(y)[x] < 0, matcher.confidence().row(y)[x] == 0)
             << name << ": a valid pixel has a confidence, an invalid one none (" << x << ", " << y
@@ -187,8 +170,7 @@ TEST(SyntheticStereo, TheTemporalFilterSteadiesTheDepthOfAStillScene) {
       for (int i = 0; i < kPairs; ++i) {
         const SyntheticPair p = synthetic_scene(name, 640, 480, 100 + static_cast<unsigned>(i));
         const ImageView<const std::int16_t> d = matcher.compute(p.left.view(), p.right.view());
-        cv::Mat now(480, 640, CV_16S);
-        for (int y = 0; y < 480; ++y) std::copy_n(d.row(y), 640, now.ptr<std::int16_t>(y));
+        const cv::Mat now = mat_of(d);
         if (!previous.empty()) {
           for (int y = 0; y < 480; ++y) {
             for (int x = 0; x < 640; ++x) {
