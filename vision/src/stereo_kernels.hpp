@@ -72,11 +72,13 @@ struct SgmDownPaths {
     const std::ptrdiff_t stride = r.disparities + 32;
     for (int k = 0; k < 3; ++k) {
       prev[k] = r.prev[k] + (x + kDx[k] + 1) * stride + 16;
-      prev_min[k] = r.prev_min[k][x + kDx[k] + 1];
+      prev_min_at[k] = r.prev_min[k] + x + kDx[k] + 1;
+      prev_min[k] = *prev_min_at[k];
       cur[k] = r.cur[k] + (x + 1) * stride + 16;
     }
   }
   const std::uint8_t* prev[3];
+  const std::uint8_t* prev_min_at[3];  // where prev_min was read
   int prev_min[3];
   std::uint8_t* cur[3];
 };

@@ -65,36 +65,47 @@ void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* c
   }
 }
 
-// The costs of pixel x for the 16 disparities from d (left: its census bytes, splat); the
-// disparities beyond the left border (d > x) cost the most.
+// The costs of one pixel for 16 disparities: the Hamming distances between its census bytes
+// (left, splat) and those of 16 pixels of the reversed right planes from `at`.
 template <typename V>
-inline typename V::B cost_block(const typename V::B* left, const std::uint8_t* const* right,
-                                std::ptrdiff_t k, int x, int d) {
-  using B = typename V::B;
-  const B c = V::popcount4(
-      V::xorb(left[0], V::loadb(right[0] + k + d)), V::xorb(left[1], V::loadb(right[1] + k + d)),
-      V::xorb(left[2], V::loadb(right[2] + k + d)), V::xorb(left[3], V::loadb(right[3] + k + d)));
-  if (x >= d + 15) return c;
-  const B beyond = V::gtb(V::addb(V::iotab(), V::splatb(static_cast<std::uint8_t>(d))),
-                          V::splatb(static_cast<std::uint8_t>(x)));
-  return V::maxb(c, V::andb(beyond, V::splatb(kMaxCensusCost)));
+inline typename V::B census_distance(const typename V::B* left, const std::uint8_t* const* right,
+                                     std::ptrdiff_t at) {
+  return V::popcount4(
+      V::xorb(left[0], V::loadb(right[0] + at)), V::xorb(left[1], V::loadb(right[1] + at)),
+      V::xorb(left[2], V::loadb(right[2] + at)), V::xorb(left[3], V::loadb(right[3] + at)));
 }
 
+// Row costs, pixel by pixel: the blocks of 16 disparities inside the image first, then those
+// that reach beyond its left border (d > x), which cost the most there.
 template <typename V>
-inline void splat_census(const std::uint8_t* const* left, int x, typename V::B* out) {
-  for (int p = 0; p < kCensusPlanes; ++p) out[p] = V::splatb(left[p][x]);
-}
-
-template <typename V>
-void cost_row_simd(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
-                   int disparities, std::uint8_t* cost) {
+void cost_row_simd(const std::uint8_t* const* left_planes, const std::uint8_t* const* right_planes,
+                   int width, int disparities, std::uint8_t* cost) {
   using B = typename V::B;
+  // The planes in locals: the byte stores into `cost` may alias what the arguments point to,
+  // and the compiler would load them again after each one.
+  const std::uint8_t* left[kCensusPlanes];
+  const std::uint8_t* right[kCensusPlanes];
+#pragma GCC unroll 4
+  for (int p = 0; p < kCensusPlanes; ++p) {
+    left[p] = left_planes[p];
+    right[p] = right_planes[p];
+  }
+  const B max_cost = V::splatb(kMaxCensusCost);
   for (int x = 0; x < width; ++x) {
     B l[kCensusPlanes];
-    splat_census<V>(left, x, l);
+#pragma GCC unroll 4
+    for (int p = 0; p < kCensusPlanes; ++p) l[p] = V::load_splatb(left[p] + x);
     const std::ptrdiff_t k = width - 1 - x;
     std::uint8_t* out = cost + static_cast<std::ptrdiff_t>(x) * disparities;
-    for (int d = 0; d < disparities; d += 16) V::storeb(out + d, cost_block<V>(l, right, k, x, d));
+    // Block d lies inside when its last disparity does: d + 15 <= x.
+    const int inside = x < 15 ? 0 : std::min(disparities, (x - 15) / 16 * 16 + 16);
+    int d = 0;
+    for (; d < inside; d += 16) V::storeb(out + d, census_distance<V>(l, right, k + d));
+    for (; d < disparities; d += 16) {
+      const B beyond = V::gtb(V::addb(V::iotab(), V::splatb(static_cast<std::uint8_t>(d))),
+                              V::splatb(static_cast<std::uint8_t>(x)));
+      V::storeb(out + d, V::maxb(census_distance<V>(l, right, k + d), V::andb(beyond, max_cost)));
+    }
   }
 }
 
@@ -130,6 +141,7 @@ class WtaPixels {
     H m_index = V::splath(0);
     H prev_cost = V::loadh(cost_);
     H prev_disp = V::loadh(disp_);
+#pragma GCC unroll 2
     for (int d = 0; d < D; d += 16) {
       const H v = sums(d);
       m_index = V::selecth(V::gth(m, v), index, m_index);
@@ -221,44 +233,67 @@ void sgm_first_pass_simd(const SgmRow& r) {
   using B = typename V::B;
   using H = typename V::H;
   const int D = r.disparities;
+  const int width = r.width;
   const B p1 = V::splatb(static_cast<std::uint8_t>(r.p1));
+  const B p2 = V::splatb(static_cast<std::uint8_t>(r.p2));
   std::uint8_t* h[2];
   sgm_horizontal_rows(r, h);
-  int h_min = 0;
-  for (int x = r.width - 1; x >= 0; --x) {
-    const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
-    const SgmDownPaths paths(r, x);
-    const std::uint8_t* const* p = paths.prev;
-    std::uint8_t* const* q = paths.cur;
+  // Where pixel 0's downward paths are (SgmDownPaths): pixel x's are x * stride bytes (x
+  // minima) on. In locals, so that the byte stores below do not make the compiler load them
+  // again from r.
+  const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(D) + 32;
+  const SgmDownPaths origin(r, 0);
+  const std::uint8_t* prev[3];
+  std::uint8_t* cur[3];
+  const std::uint8_t* prev_min[3];
+  std::uint8_t* cur_min[3];
+#pragma GCC unroll 3
+  for (int k = 0; k < 3; ++k) {
+    prev[k] = origin.prev[k];
+    cur[k] = origin.cur[k];
+    prev_min[k] = origin.prev_min_at[k];
+    cur_min[k] = r.cur_min[k] + 1;
+  }
+  const std::uint8_t* const cost = r.cost;
+  std::uint16_t* const sums = r.sums;
+  B h_prev = V::zerob();
+  for (int x = width - 1; x >= 0; --x) {
+    const std::ptrdiff_t at = static_cast<std::ptrdiff_t>(x) * stride;
+    const std::uint8_t* c = cost + static_cast<std::ptrdiff_t>(x) * D;
+    std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
+    const std::uint8_t* p[3];
+    std::uint8_t* q[3];
     B min_prev[3];
     B min_p2[3];
     B mins[4];
+#pragma GCC unroll 3
     for (int k = 0; k < 3; ++k) {
-      min_prev[k] = V::splatb(static_cast<std::uint8_t>(paths.prev_min[k]));
-      min_p2[k] = V::splatb(sgm_plus_p2(paths.prev_min[k], r.p2));
+      p[k] = prev[k] + at;
+      q[k] = cur[k] + at;
+      min_prev[k] = V::load_splatb(prev_min[k] + x);
+      min_p2[k] = V::addsb(min_prev[k], p2);  // min_prev + P2, saturated (sgm_plus_p2)
       mins[k] = V::splatb(0xFF);
     }
     mins[3] = V::splatb(0xFF);
-    const B h_prev = V::splatb(static_cast<std::uint8_t>(h_min));
-    const B h_p2 = V::splatb(sgm_plus_p2(h_min, r.p2));
-    std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
+    const B h_p2 = V::addsb(h_prev, p2);
     for (int d = 0; d < D; d += 16) {
-      const B cost = V::loadb(c + d);
-      const B rl = sgm_step<V>(cost, h[0] + d, p1, h_p2, h_prev);
+      const B c_d = V::loadb(c + d);
+      const B rl = sgm_step<V>(c_d, h[0] + d, p1, h_p2, h_prev);
       V::storeb(h[1] + d, rl);
       mins[3] = V::minb(mins[3], rl);
       H sum = V::widen(rl);
 #pragma GCC unroll 3
       for (int k = 0; k < 3; ++k) {
-        const B v = sgm_step<V>(cost, p[k] + d, p1, min_p2[k], min_prev[k]);
+        const B v = sgm_step<V>(c_d, p[k] + d, p1, min_p2[k], min_prev[k]);
         V::storeb(q[k] + d, v);
         mins[k] = V::minb(mins[k], v);
         sum = V::addw(sum, v);
       }
       V::storeh(s + d, sum);
     }
-    for (int k = 0; k < 3; ++k) r.cur_min[k][x + 1] = V::hminb(mins[k]);
-    h_min = V::hminb(mins[3]);
+#pragma GCC unroll 3
+    for (int k = 0; k < 3; ++k) cur_min[k][x] = V::hminb(mins[k]);
+    h_prev = V::splatb(V::hminb(mins[3]));
     std::swap(h[0], h[1]);
   }
 }
@@ -270,16 +305,19 @@ void sgm_second_pass_simd(const SgmRow& r) {
   using B = typename V::B;
   using H = typename V::H;
   const int D = r.disparities;
+  const int width = r.width;
   const B p1 = V::splatb(static_cast<std::uint8_t>(r.p1));
+  const B p2 = V::splatb(static_cast<std::uint8_t>(r.p2));
+  const std::uint8_t* const cost = r.cost;  // in locals: see sgm_first_pass_simd
+  std::uint16_t* const sums = r.sums;
   std::uint8_t* h[2];
   sgm_horizontal_rows(r, h);
   WtaPixels<V> wta(r.wta, D);
-  int h_min = 0;
-  for (int x = 0; x < r.width; ++x) {
-    const std::uint8_t* c = r.cost + static_cast<std::ptrdiff_t>(x) * D;
-    std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
-    const B h_prev = V::splatb(static_cast<std::uint8_t>(h_min));
-    const B h_p2 = V::splatb(sgm_plus_p2(h_min, r.p2));
+  B h_prev = V::zerob();
+  for (int x = 0; x < width; ++x) {
+    const std::uint8_t* c = cost + static_cast<std::ptrdiff_t>(x) * D;
+    std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
+    const B h_p2 = V::addsb(h_prev, p2);  // min_prev + P2, saturated (sgm_plus_p2)
     B m = V::splatb(0xFF);
     wta.pixel(x, s, [&](int d) {
       const B lr = sgm_step<V>(V::loadb(c + d), h[0] + d, p1, h_p2, h_prev);
@@ -289,10 +327,10 @@ void sgm_second_pass_simd(const SgmRow& r) {
       V::storeh(s + d, sum);
       return sum;
     });
-    h_min = V::hminb(m);
+    h_prev = V::splatb(V::hminb(m));
     std::swap(h[0], h[1]);
   }
-  wta.finish(r.width);
+  wta.finish(width);
 }
 
 template <typename V>

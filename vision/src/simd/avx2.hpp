@@ -168,6 +168,7 @@ struct Avx2x16 {
   }
   static void storeb(std::uint8_t* p, B v) { _mm_storeu_si128(reinterpret_cast<__m128i*>(p), v); }
   static B splatb(std::uint8_t v) { return _mm_set1_epi8(static_cast<char>(v)); }
+  static B load_splatb(const std::uint8_t* p) { return splatb(*p); }
   static B zerob() { return _mm_setzero_si128(); }
   static B minb(B a, B b) { return _mm_min_epu8(a, b); }
   static B addb(B a, B b) { return _mm_add_epi8(a, b); }

@@ -55,6 +55,7 @@ struct Neon {
   static B loadb(const std::uint8_t* p) { return vld1q_u8(p); }
   static void storeb(std::uint8_t* p, B v) { vst1q_u8(p, v); }
   static B splatb(std::uint8_t v) { return vdupq_n_u8(v); }
+  static B load_splatb(const std::uint8_t* p) { return vld1q_dup_u8(p); }
   static B zerob() { return vdupq_n_u8(0); }
   static B minb(B a, B b) { return vminq_u8(a, b); }
   static B addb(B a, B b) { return vaddq_u8(a, b); }    // wrapping
