@@ -49,7 +49,12 @@ vboard_download() {
   if ! apt-get download -q "$@" >/dev/null 2>&1; then
     local sudo=""
     [[ $(id -u) -eq 0 ]] || sudo="sudo"
-    $sudo apt-get update -qq
+    # Both architectures may get here at once: apt-get update refuses to share its lists' lock.
+    mkdir -p "$(vboard_cache "")"
+    (
+      flock 9
+      $sudo apt-get update -qq
+    ) 9>"$(vboard_cache apt-update.lock)"
     apt-get download -q "$@" >/dev/null
   fi
 }

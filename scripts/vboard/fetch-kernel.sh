@@ -61,17 +61,24 @@ fi
 ls ./*.deb | xargs -n1 basename >"$root.partial/.complete-v1"
 
 # Driver sources: gpio-sim (and the interrupt simulator it needs) and vimc, which Debian's
-# configuration leaves out. A few files out of linux-source's 140 MB archive.
+# configuration leaves out. A few files out of linux-source's 140 MB archive. Both architectures'
+# kernels share them, and both are prepared at once (ctest -j): one unpacks under a lock, into a
+# private folder that is renamed into place when complete.
 source_dir=$(vboard_cache "linux-source-$version")
+mkdir -p "$(dirname "$source_dir")"
+exec {source_lock}>"$source_dir.lock"
+flock "$source_lock"
 if [[ ! -f $source_dir/.complete-v1 ]]; then
   vboard_download "linux-source-6.1=$version"
-  rm -rf "$source_dir" && mkdir -p "$source_dir"
+  rm -rf "$source_dir" "$source_dir.partial" && mkdir -p "$source_dir.partial"
   dpkg-deb --fsys-tarfile linux-source-6.1_*.deb | tar -xO ./usr/src/linux-source-6.1.tar.xz |
-    tar -xJ -C "$source_dir" --strip-components=1 --wildcards linux-source-6.1/drivers/gpio/gpio-sim.c \
-      linux-source-6.1/drivers/gpio/gpiolib.h linux-source-6.1/kernel/irq/irq_sim.c \
-      'linux-source-6.1/drivers/media/test-drivers/vimc/*'
-  touch "$source_dir/.complete-v1"
+    tar -xJ -C "$source_dir.partial" --strip-components=1 --wildcards \
+      linux-source-6.1/drivers/gpio/gpio-sim.c linux-source-6.1/drivers/gpio/gpiolib.h \
+      linux-source-6.1/kernel/irq/irq_sim.c 'linux-source-6.1/drivers/media/test-drivers/vimc/*'
+  touch "$source_dir.partial/.complete-v1"
+  mv "$source_dir.partial" "$source_dir"
 fi
+flock -u "$source_lock"
 echo "$version" >"$root.partial/source-version"
 
 rm -rf "$root"
