@@ -31,6 +31,7 @@ struct DisparityOptions {
   int p2 = 120;
   int uniqueness = 10;
   int threads = 1;
+  int spatial = 0;
   int hole_fill = 0;
   std::string out;
   std::string color;
@@ -54,6 +55,7 @@ void run_disparity(const DisparityOptions& options, const GlobalOptions& global)
   config.p2 = options.p2;
   config.uniqueness = options.uniqueness;
   config.threads = options.threads;
+  config.spatial_percent = options.spatial;
   config.hole_fill = options.hole_fill;
   config.confidence = !options.confidence.empty();
   vision::StereoMatcher matcher(config, path);
@@ -139,6 +141,11 @@ void add_disparity_command(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--p2", options->p2, "sgm: penalty for larger steps (P1..224)")
       ->capture_default_str();
   cmd->add_option("--uniqueness", options->uniqueness, "Uniqueness ratio, percent (0..99)")
+      ->capture_default_str();
+  cmd->add_option("--spatial", options->spatial,
+                  "Edge-preserving smoothing along rows and columns: a pixel's own weight "
+                  "against its filtered neighbour, percent (1..99; 0: off)")
+      ->check(CLI::Range(0, 99))
       ->capture_default_str();
   cmd->add_option("--hole-fill", options->hole_fill,
                   "Fill holes up to this many pixels along a row from their background side "

@@ -84,6 +84,7 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   config.stereo.max_disparity = 16;
   config.stereo.hole_fill = 32;  // the post-filters too
   config.stereo.temporal_percent = 40;
+  config.stereo.spatial_percent = 50;
   config.obstacles.min_confidence = 64;  // and the confidence
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);

@@ -72,15 +72,10 @@ inline void check_baseline(const std::string& scene, const std::string& method, 
       << scene << " " << method << ": density dropped from the baseline";
 }
 
-inline cv::Mat ours(const cv::Mat& left, const cv::Mat& right, StereoMethod method, int disparities,
-                    int threads = 1, int hole_fill = 0) {
-  StereoConfig config;
-  config.threads = threads;
-  config.hole_fill = hole_fill;
+// config's size is the images'.
+inline cv::Mat ours(const cv::Mat& left, const cv::Mat& right, StereoConfig config) {
   config.width = left.cols;
   config.height = left.rows;
-  config.max_disparity = disparities;
-  config.method = method;
   StereoMatcher matcher(config);
   const ImageView<const std::int16_t> d =
       matcher.compute(test::view_of(left), test::view_of(right));
@@ -89,6 +84,16 @@ inline cv::Mat ours(const cv::Mat& left, const cv::Mat& right, StereoMethod meth
     std::copy_n(d.row(y), d.width(), out.ptr<std::int16_t>(y));
   }
   return out;
+}
+
+inline cv::Mat ours(const cv::Mat& left, const cv::Mat& right, StereoMethod method, int disparities,
+                    int threads = 1, int hole_fill = 0) {
+  StereoConfig config;
+  config.threads = threads;
+  config.hole_fill = hole_fill;
+  config.max_disparity = disparities;
+  config.method = method;
+  return ours(left, right, config);
 }
 
 inline cv::Mat opencv_sgbm(const cv::Mat& left, const cv::Mat& right, int disparities) {

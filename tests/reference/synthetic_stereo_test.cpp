@@ -113,6 +113,35 @@ TEST(SyntheticStereo, QualityModeBesideSgbmOnEveryScene) {
   }
 }
 
+// The spatial filter (disparity_filters.hpp) at two weights, 2 passes, steps up to 2 px: the
+// share of pixels more than 1 px off and the mean error, and nothing filled or removed (the
+// same density).
+TEST(SyntheticStereo, TheSpatialFilterSmoothsWithinSurfaces) {
+  for (const std::string& name : test::synthetic_scene_names()) {
+    const SyntheticPair p = synthetic_scene(name, 640, 480);
+    const cv::Mat left = mat_of(p.left), right = mat_of(p.right), truth = mat_of(p.truth);
+    cv::Mat nonoccluded;
+    cv::compare(mat_of(p.nonoccluded), 255, nonoccluded, cv::CMP_EQ);
+    StereoConfig config;
+    config.max_disparity = 128;
+    const Scores off = score(ours(left, right, config), truth, nonoccluded);
+    std::printf("%s 640x480, non-occluded pixels:\n", name.c_str());
+    print("sgm", off);
+    for (int percent : {50, 25}) {
+      config.spatial_percent = percent;
+      const cv::Mat filtered = ours(left, right, config);
+      const Scores on = score(filtered, truth, nonoccluded);
+      print("sgm, spatial " + std::to_string(percent) + " %", on);
+      EXPECT_EQ(on.density, off.density) << name << ": the filter fills nothing, removes nothing";
+      EXPECT_LE(on.bad1, off.bad1) << name << ": more pixels within 1 px of the truth, not fewer";
+      if (percent == 50) {
+        check_baseline("synthetic-" + name + "-640x480-128", "sgm-spatial50",
+                       score(filtered, truth));
+      }
+    }
+  }
+}
+
 // The confidence ranks the pixels: those it trusts more are right more often. For thresholds
 // 1 (every valid pixel), 64, 128 and 192: the share of pixels kept and bad2 among them.
 TEST(SyntheticStereo, TheConfidenceSaysWhichPixelsToTrust) {

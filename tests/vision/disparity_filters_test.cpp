@@ -148,5 +148,116 @@ TEST(TemporalFilter, BadSettingsAreErrors) {
             "temporal filter for 4x4 was given a 3x3 disparity");
 }
 
+TEST(SpatialFilter, SmoothsAlongARowBothWaysAndStopsAtEdgesAndHoles) {
+  // A pixel's own weight 50 % (128/256), steps up to 2 px (32), one pass.
+  std::vector<std::int16_t> row{160, 176, X, 320, 336, 800};
+  SpatialFilter(6, 1, 50, 2, 1)
+      .apply(ImageView<std::int16_t>(row.data(), 6, 1, 6), SimdPath::reference);
+  // Left to right: 176 -> 160 + (16 * 128 + 128) >> 8 = 168; the hole stays and stops the
+  // smoothing (320 is taken as it is); 336 -> 328; 800 is an edge. Right to left: 328 stays
+  // beside the edge; 320 -> 328 + (-8 * 128 + 128) >> 8 = 324; 160 -> 168 - 4 = 164.
+  EXPECT_EQ(row, (std::vector<std::int16_t>{164, 168, X, 324, 328, 800}));
+  // Down a column, then up: the same values.
+  std::vector<std::int16_t> column{160, 176, X, 320, 336, 800};
+  SpatialFilter(1, 6, 50, 2, 1)
+      .apply(ImageView<std::int16_t>(column.data(), 1, 6, 1), SimdPath::reference);
+  EXPECT_EQ(column, row);
+}
+
+TEST(SpatialFilter, RowsFirstThenColumns) {
+  // 2x2: along the rows nothing is close enough to blend (steps of 4 px); down the columns
+  // 16 -> 0 + (16 * 128 + 128) >> 8 = 8 and back up 0 -> 8 - 4 = 4 (and so on).
+  std::vector<std::int16_t> image{0, 64, 16, 80};
+  SpatialFilter(2, 2, 50, 2, 1)
+      .apply(ImageView<std::int16_t>(image.data(), 2, 2, 2), SimdPath::reference);
+  EXPECT_EQ(image, (std::vector<std::int16_t>{4, 68, 8, 72}));
+}
+
+// Surfaces with a slope, noise, steps between them and holes: many blends, many edges.
+std::vector<std::int16_t> surfaces(std::mt19937& rng, int width, int height, int stride) {
+  std::vector<std::int16_t> image(static_cast<std::size_t>(stride) * height + 8, 77);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const int surface = (x / 5 + y / 4) % 3 * 400;
+      const int noise = static_cast<int>(rng() % 41) - 20;
+      image[static_cast<std::size_t>(y) * stride + x] =
+          rng() % 9 == 0 ? X : static_cast<std::int16_t>(800 + surface + 3 * x + 2 * y + noise);
+    }
+  }
+  return image;
+}
+
+TEST(SpatialFilter, NeonGivesTheReferencesBitsAtOddSizesStridesAndUnalignedRows) {
+  std::mt19937 rng(13);
+  for (int width : {1, 7, 8, 9, 17, 33, 100}) {
+    for (int height : {1, 2, 7, 8, 9, 17, 23}) {
+      for (int extra : {0, 3}) {
+        for (int offset : {0, 1}) {
+          for (int weight : {3, 128, 253}) {
+            for (int step : {16, 112}) {
+              const int stride = width + extra;
+              std::vector<std::int16_t> ref = surfaces(rng, width, height + 1, stride);
+              std::vector<std::int16_t> neon = ref;
+              std::vector<std::int16_t> scratch(static_cast<std::size_t>(9 * width), 99);
+              kernels::spatial_pass_ref(ref.data() + offset, stride, width, height, weight, step,
+                                        nullptr);
+              kernels::spatial_pass_neon(neon.data() + offset, stride, width, height, weight, step,
+                                         scratch.data());
+              ASSERT_EQ(neon, ref) << width << "x" << height << " stride " << stride << " offset "
+                                   << offset << " weight " << weight << " step " << step;
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(SpatialFilter, EveryPathFiltersAnImageWithAnOddStrideAlikeAndLeavesThePadding) {
+  std::mt19937 rng(17);
+  const int width = 45, height = 19, stride = 51;
+  const std::vector<std::int16_t> pixels = surfaces(rng, width, height, stride);
+  std::vector<std::int16_t> results[3];
+  const SimdPath paths[3] = {SimdPath::reference, SimdPath::neon, best_simd_path()};
+  for (int i = 0; i < 3; ++i) {
+    results[i] = pixels;
+    SpatialFilter filter(width, height, 40, 3, 2);
+    filter.apply(ImageView<std::int16_t>(results[i].data(), width, height, stride), paths[i]);
+    EXPECT_EQ(filter.working_set_bytes(), 9u * width * sizeof(std::int16_t));
+  }
+  EXPECT_EQ(results[1], results[0]);
+  EXPECT_EQ(results[2], results[0]);
+  int changed = 0;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < stride; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * stride + x;
+      if (x >= width) {
+        EXPECT_EQ(results[0][i], pixels[i]) << "padding at " << x << "," << y;
+      } else {
+        EXPECT_EQ(results[0][i] < 0, pixels[i] < 0) << "nothing filled, nothing removed";
+        changed += results[0][i] != pixels[i] ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(changed, width * height / 2) << "most valid pixels were smoothed";
+}
+
+TEST(SpatialFilter, BadSettingsAreErrors) {
+  EXPECT_EQ(test::error_of([] { SpatialFilter(4, 4, 100, 2, 2); }),
+            "spatial filter: a pixel's own weight is 100 %, expected 1..99");
+  EXPECT_EQ(test::error_of([] { SpatialFilter(4, 4, 50, 0, 2); }),
+            "spatial filter: the largest step is 0 px, expected 1..7");
+  EXPECT_EQ(test::error_of([] { SpatialFilter(4, 4, 50, 2, 5); }),
+            "spatial filter: 5 passes, expected 1..4");
+  EXPECT_EQ(test::error_of([] { SpatialFilter(0, 4, 50, 2, 2); }),
+            "spatial filter: empty size 0x4");
+  SpatialFilter filter(4, 4, 50, 2, 2);
+  std::vector<std::int16_t> other(9);
+  EXPECT_EQ(test::error_of([&] {
+              filter.apply(ImageView<std::int16_t>(other.data(), 3, 3, 3), SimdPath::reference);
+            }),
+            "spatial filter for 4x4 was given a 3x3 disparity");
+}
+
 }  // namespace
 }  // namespace epipole::vision

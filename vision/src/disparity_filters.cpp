@@ -25,15 +25,40 @@ void fill_holes_row_ref(std::int16_t* row, int width, int max_hole) {
   }
 }
 
+namespace {
+
+// The blend of both filters: `pixel` moved towards `before` where both are valid and close. The
+// step is rounded half away from zero: rounding half up would add half a unit at each blend,
+// and the spatial filter's chains of blends would drift upwards by a fifth of a pixel.
+inline std::int16_t blend(int pixel, int before, int weight, int max_step_x16) {
+  const int step = pixel - before;
+  if (pixel < 0 || before < 0 || std::abs(step) > max_step_x16) {
+    return static_cast<std::int16_t>(pixel);
+  }
+  const int moved = (std::abs(step) * weight + 128) >> 8;
+  return static_cast<std::int16_t>(before + (step < 0 ? -moved : moved));
+}
+
+}  // namespace
+
 void temporal_row_ref(std::int16_t* now, std::int16_t* last, int width, int weight,
                       int max_step_x16) {
+  for (int x = 0; x < width; ++x) now[x] = last[x] = blend(now[x], last[x], weight, max_step_x16);
+}
+
+void spatial_pass_ref(std::int16_t* image, std::ptrdiff_t stride, int width, int height, int weight,
+                      int max_step_x16, std::int16_t* /*scratch*/) {
+  for (int y = 0; y < height; ++y) {
+    std::int16_t* row = image + y * stride;
+    for (int x = 1; x < width; ++x) row[x] = blend(row[x], row[x - 1], weight, max_step_x16);
+    for (int x = width - 2; x >= 0; --x) row[x] = blend(row[x], row[x + 1], weight, max_step_x16);
+  }
+  const auto at = [&](int x, int y) -> std::int16_t& { return image[y * stride + x]; };
   for (int x = 0; x < width; ++x) {
-    const int n = now[x], l = last[x];
-    int out = n;
-    if (n >= 0 && l >= 0 && std::abs(n - l) <= max_step_x16) {
-      out = l + (((n - l) * weight + 128) >> 8);
+    for (int y = 1; y < height; ++y) at(x, y) = blend(at(x, y), at(x, y - 1), weight, max_step_x16);
+    for (int y = height - 2; y >= 0; --y) {
+      at(x, y) = blend(at(x, y), at(x, y + 1), weight, max_step_x16);
     }
-    now[x] = last[x] = static_cast<std::int16_t>(out);
   }
 }
 
@@ -66,6 +91,34 @@ void TemporalFilter::apply(ImageView<std::int16_t> disparity, SimdPath path) {
   kernels::TemporalRow* const filter = kTemporal.pick(path);
   for (int y = 0; y < disparity.height(); ++y) {
     filter(disparity.row(y), last_.view().row(y), disparity.width(), weight_, max_step_);
+  }
+}
+
+SpatialFilter::SpatialFilter(int width, int height, int own_percent, int max_step, int passes)
+    : width_(width),
+      height_(height),
+      weight_((own_percent * 256 + 50) / 100),
+      max_step_(max_step * kDisparityScale),
+      passes_(passes) {
+  require(width > 0 && height > 0, "spatial filter: empty size ", width, "x", height);
+  require(own_percent >= 1 && own_percent <= 99, "spatial filter: a pixel's own weight is ",
+          own_percent, " %, expected 1..99");
+  require(max_step >= 1 && max_step <= 7, "spatial filter: the largest step is ", max_step,
+          " px, expected 1..7");
+  require(passes >= 1 && passes <= 4, "spatial filter: ", passes, " passes, expected 1..4");
+  scratch_.assign(static_cast<std::size_t>(width) * 9, 0);
+}
+
+void SpatialFilter::apply(ImageView<std::int16_t> disparity, SimdPath path) {
+  require(disparity.width() == width_ && disparity.height() == height_, "spatial filter for ",
+          width_, "x", height_, " was given a ", disparity.width(), "x", disparity.height(),
+          " disparity");
+  static constexpr KernelSet<kernels::SpatialPass> kSpatial{kernels::spatial_pass_ref,
+                                                            kernels::spatial_pass_neon, nullptr};
+  kernels::SpatialPass* const pass = kSpatial.pick(path);
+  for (int i = 0; i < passes_; ++i) {
+    pass(disparity.row(0), disparity.stride(), width_, height_, weight_, max_step_,
+         scratch_.data());
   }
 }
 

@@ -245,6 +245,8 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
           " must be in 0..99 percent");
   require(config.hole_fill >= 0 && config.hole_fill <= W, "hole filling up to ", config.hole_fill,
           " pixels: expected 0 (off) to the image width ", W);
+  require(config.spatial_percent >= 0 && config.spatial_percent <= 99, "spatial filter weight ",
+          config.spatial_percent, " %: expected 0 (off) to 99");
   require(config.speckle_size >= 0 && config.speckle_range >= 0,
           "speckle size and range must not be negative");
   require(simd_path_available(path), "kernel path ", to_string(path),
@@ -303,6 +305,10 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
     labels_.assign(2 * uw, 0);
   }
   if (config.confidence) confidence_ = Image<std::uint8_t>(W, H);
+  if (config.spatial_percent > 0) {
+    spatial_ = std::make_unique<SpatialFilter>(W, H, config.spatial_percent,
+                                               config.spatial_max_step, config.spatial_passes);
+  }
   if (config.temporal_percent > 0) {
     temporal_ =
         std::make_unique<TemporalFilter>(W, H, config.temporal_percent, config.temporal_max_step);
@@ -314,6 +320,7 @@ StereoMatcher::~StereoMatcher() = default;
 std::size_t StereoMatcher::working_set_bytes() const {
   std::size_t n = bytes_of(padded_) + bytes_of(runs_) + bytes_of(labels_);
   for (const auto& w : workers_) n += w->bytes();
+  if (spatial_) n += spatial_->working_set_bytes();
   if (temporal_) n += temporal_->working_set_bytes();
   n += confidence_.size_bytes();
   return n;
@@ -347,6 +354,7 @@ ImageView<const std::int16_t> StereoMatcher::finish() {
       for (int x = 0; x < config_.width; ++x) c[x] = d[x] < 0 ? 0 : c[x];
     }
   }
+  if (spatial_) spatial_->apply(disparity_, path_);
   fill_holes(disparity_, config_.hole_fill, path_);
   if (temporal_) temporal_->apply(disparity_, path_);
   return disparity_;

@@ -4,6 +4,7 @@
 // a scalar reference that defines its result and a NEON version that gives the same bits.
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "epipole/core/image.hpp"
 #include "epipole/core/simd.hpp"
@@ -19,7 +20,8 @@ void fill_holes(ImageView<std::int16_t> disparity, int max_hole, SimdPath path);
 
 // Smooths the disparity over time: where a pixel is valid in this pair and in the filter's last
 // result, and the two differ by at most `max_step` pixels, it becomes
-//   last + ((now - last) * weight + 128) >> 8      (x16 values; weight = new_percent * 256 / 100)
+//   last + sign(d) * ((|d| * weight + 128) >> 8)   (x16 values, d = now - last;
+//                                                   weight = new_percent * 256 / 100)
 // and keeps its value otherwise (a step larger than max_step is motion or a new surface, taken
 // at once; an invalid pixel stays invalid: old depth is never shown where there is none now).
 // The result is the filter's memory for the next pair: one disparity image, allocated here.
@@ -41,6 +43,33 @@ class TemporalFilter {
   int max_step_;  // x16
 };
 
+// Smooths the disparity within each surface and keeps its edges: a recursive filter along each
+// row (left to right, then right to left), then along each column (down, then up), `passes`
+// times, as the spatial filter of Intel RealSense and Luxonis DepthAI. Each pixel valid beside
+// the one filtered before it on its way, and within `max_step` px of it, becomes
+//   before + sign(d) * ((|d| * weight + 128) >> 8)   (x16 values, d = pixel - before;
+//                                                     weight = own_percent * 256 / 100)
+// the same blend as the temporal filter's; a larger step is an edge and stops the smoothing,
+// and so does an invalid pixel (it stays invalid: nothing is filled). Memory: nine rows of the
+// disparity's width, allocated here (the NEON path turns bands of eight rows into columns).
+class SpatialFilter {
+ public:
+  // own_percent: a pixel's weight against the one before it, 1..99; max_step: 1..7 px;
+  // passes: 1..4. Throws Error otherwise or for an empty size.
+  SpatialFilter(int width, int height, int own_percent, int max_step, int passes);
+
+  void apply(ImageView<std::int16_t> disparity, SimdPath path);
+
+  std::size_t working_set_bytes() const { return scratch_.size() * sizeof(std::int16_t); }
+
+ private:
+  int width_, height_;
+  int weight_;    // x/256
+  int max_step_;  // x16
+  int passes_;
+  std::vector<std::int16_t> scratch_;
+};
+
 namespace kernels {
 using FillHolesRow = void(std::int16_t* row, int width, int max_hole);
 void fill_holes_row_ref(std::int16_t* row, int width, int max_hole);
@@ -53,6 +82,15 @@ void temporal_row_ref(std::int16_t* now, std::int16_t* last, int width, int weig
                       int max_step_x16);
 void temporal_row_neon(std::int16_t* now, std::int16_t* last, int width, int weight,
                        int max_step_x16);
+
+// One pass of the spatial filter over a whole image: along every row both ways, then along every
+// column both ways. scratch: 9 x width elements (the reference needs none).
+using SpatialPass = void(std::int16_t* image, std::ptrdiff_t stride, int width, int height,
+                         int weight, int max_step_x16, std::int16_t* scratch);
+void spatial_pass_ref(std::int16_t* image, std::ptrdiff_t stride, int width, int height, int weight,
+                      int max_step_x16, std::int16_t* scratch);
+void spatial_pass_neon(std::int16_t* image, std::ptrdiff_t stride, int width, int height,
+                       int weight, int max_step_x16, std::int16_t* scratch);
 }  // namespace kernels
 
 }  // namespace epipole::vision

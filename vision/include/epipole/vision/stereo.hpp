@@ -27,14 +27,18 @@ struct StereoConfig {
   int height = 0;
   int max_disparity = 64;  // disparities 0..max_disparity-1; 16..256, a multiple of 16
   StereoMethod method = StereoMethod::sgm;
-  int p1 = 11;             // SGM: penalty for a disparity change of 1 (census cost units)
-  int p2 = 120;            // SGM: penalty for larger changes (p1..224)
-  int block_size = 7;      // BM: box of block_size x block_size census costs (odd, 3..21)
-  int uniqueness = 10;     // percent: another disparity (not +-1) must cost this much more
-  int lr_max_diff = 1;     // left-right check tolerance in pixels; < 0 switches it off
-  int speckle_size = 100;  // connected regions smaller than this are invalidated; 0: off
-  int speckle_range = 1;   // in pixels: neighbours closer than this belong to one region
-  int hole_fill = 0;  // after the speckles: holes up to this long filled (disparity_filters.hpp)
+  int p1 = 11;                // SGM: penalty for a disparity change of 1 (census cost units)
+  int p2 = 120;               // SGM: penalty for larger changes (p1..224)
+  int block_size = 7;         // BM: box of block_size x block_size census costs (odd, 3..21)
+  int uniqueness = 10;        // percent: another disparity (not +-1) must cost this much more
+  int lr_max_diff = 1;        // left-right check tolerance in pixels; < 0 switches it off
+  int speckle_size = 100;     // connected regions smaller than this are invalidated; 0: off
+  int speckle_range = 1;      // in pixels: neighbours closer than this belong to one region
+  int spatial_percent = 0;    // after the speckles, along rows and columns (disparity_filters.hpp):
+                              // a pixel's own weight, 1..99 (0: off)
+  int spatial_max_step = 2;   // px: larger steps are edges, kept (1..7)
+  int spatial_passes = 2;     // 1..4
+  int hole_fill = 0;          // then holes up to this long filled (disparity_filters.hpp)
   int temporal_percent = 0;   // then over time: the new pair's weight, 1..99 (0: off)
   int temporal_max_step = 2;  // px: larger changes are taken at once (1..7)
   bool confidence = false;    // also a confidence per pixel (StereoMatcher::confidence())
@@ -111,6 +115,7 @@ class StereoMatcher {
   // another run its parent) and the run of each pixel of two rows.
   std::vector<std::int32_t> runs_;
   std::vector<std::uint32_t> labels_;
+  std::unique_ptr<SpatialFilter> spatial_;    // with config.spatial_percent
   std::unique_ptr<TemporalFilter> temporal_;  // with config.temporal_percent
   Image<std::uint8_t> confidence_;            // with config.confidence
 };
