@@ -345,11 +345,11 @@ class BoardReader {
   }
 
   void read_stereo(const YAML::Node& root, BoardConfig& c) {
-    const YAML::Node n =
-        section(root, "stereo",
-                {"method", "max_disparity", "p1", "p2", "block_size", "uniqueness", "lr_max_diff",
-                 "speckle_size", "speckle_range", "spatial_percent", "spatial_max_step",
-                 "spatial_passes", "hole_fill", "temporal_percent", "temporal_max_step"});
+    const YAML::Node n = section(
+        root, "stereo",
+        {"method", "max_disparity", "p1", "p2", "block_size", "uniqueness", "lr_max_diff",
+         "speckle_size", "speckle_range", "fill_occlusions", "spatial_percent", "spatial_max_step",
+         "spatial_passes", "hole_fill", "temporal_percent", "temporal_max_step"});
     vision::StereoConfig& s = c.stereo;
     choice(n, "stereo", "method", s.method, {"sgm", "bm"});
     integer(n, "stereo", "max_disparity", s.max_disparity, 16, 256);
@@ -365,6 +365,7 @@ class BoardReader {
     integer(n, "stereo", "lr_max_diff", s.lr_max_diff, -1, 256);
     integer(n, "stereo", "speckle_size", s.speckle_size, 0, 1'000'000);
     integer(n, "stereo", "speckle_range", s.speckle_range, 0, 256);
+    boolean(n, "stereo", "fill_occlusions", s.fill_occlusions);
     integer(n, "stereo", "spatial_percent", s.spatial_percent, 0, 99);
     integer(n, "stereo", "spatial_max_step", s.spatial_max_step, 1, 7);
     integer(n, "stereo", "spatial_passes", s.spatial_passes, 1, 4);

@@ -31,6 +31,7 @@ struct DisparityOptions {
   int p2 = 120;
   int uniqueness = 10;
   int threads = 1;
+  bool fill_occlusions = false;
   int spatial = 0;
   int hole_fill = 0;
   std::string out;
@@ -55,6 +56,7 @@ void run_disparity(const DisparityOptions& options, const GlobalOptions& global)
   config.p2 = options.p2;
   config.uniqueness = options.uniqueness;
   config.threads = options.threads;
+  config.fill_occlusions = options.fill_occlusions;
   config.spatial_percent = options.spatial;
   config.hole_fill = options.hole_fill;
   config.confidence = !options.confidence.empty();
@@ -142,6 +144,9 @@ void add_disparity_command(CLI::App& app, const GlobalOptions& global) {
       ->capture_default_str();
   cmd->add_option("--uniqueness", options->uniqueness, "Uniqueness ratio, percent (0..99)")
       ->capture_default_str();
+  cmd->add_flag("--fill-occlusions", options->fill_occlusions,
+                "Fill the pixels the right camera cannot see (found by the left-right check) "
+                "from their background");
   cmd->add_option("--spatial", options->spatial,
                   "Edge-preserving smoothing along rows and columns: a pixel's own weight "
                   "against its filtered neighbour, percent (1..99; 0: off)")

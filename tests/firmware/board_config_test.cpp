@@ -209,9 +209,10 @@ TEST(BoardConfig, AFolderMeansItsBoardFile) {
 TEST(BoardConfig, OverridesSetKeysBeforeTheFileIsRead) {
   SimRig rig;
   std::ofstream(rig.dir.path() / "board.yaml") << rig.yaml();
-  const std::vector<std::string> overrides{"stereo.method=bm",          "corners.threshold=35",
-                                           "sparse.max_points=7",       "obstacles.band=[0.2, 0.6]",
-                                           "stereo.spatial_percent=40", "stereo.spatial_passes=3"};
+  const std::vector<std::string> overrides{
+      "stereo.method=bm",           "corners.threshold=35",      "sparse.max_points=7",
+      "obstacles.band=[0.2, 0.6]",  "stereo.spatial_percent=40", "stereo.spatial_passes=3",
+      "stereo.fill_occlusions=true"};
   const BoardConfig c = load_board_config(rig.dir.path(), overrides);
   EXPECT_EQ(c.stereo.method, vision::StereoMethod::bm);
   EXPECT_EQ(c.stereo.max_disparity, 32) << "the other keys of the map stay";
@@ -219,6 +220,7 @@ TEST(BoardConfig, OverridesSetKeysBeforeTheFileIsRead) {
   EXPECT_EQ(c.corners.max_corners, 500);
   EXPECT_EQ(c.sparse.max_points, 7) << "a map the file does not have is added";
   EXPECT_EQ(c.stereo.spatial_percent, 40);
+  EXPECT_TRUE(c.stereo.fill_occlusions);
   EXPECT_EQ(c.stereo.spatial_passes, 3);
   EXPECT_EQ(c.stereo.spatial_max_step, 2) << "the default";
   EXPECT_DOUBLE_EQ(c.obstacles.band_top, 0.2);
@@ -239,6 +241,7 @@ TEST(BoardConfig, OverridesSetKeysBeforeTheFileIsRead) {
       {"stereo.colour=red", "colour"},
       {"stereo.spatial_passes=5", "stereo.spatial_passes: 5 is outside"},
       {"stereo.spatial_percent=100", "stereo.spatial_percent: 100 is outside"},
+      {"stereo.fill_occlusions=maybe", "stereo.fill_occlusions"},
   };
   for (const auto& b : bad) {
     const std::vector<std::string> one{b.override_text};

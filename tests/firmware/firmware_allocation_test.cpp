@@ -85,6 +85,7 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   config.stereo.hole_fill = 32;  // the post-filters too
   config.stereo.temporal_percent = 40;
   config.stereo.spatial_percent = 50;
+  config.stereo.fill_occlusions = true;
   config.obstacles.min_confidence = 64;  // and the confidence
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);

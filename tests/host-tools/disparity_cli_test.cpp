@@ -102,10 +102,10 @@ TEST(DisparityCli, WritesDisparityPngAndColourPicture) {
   }
 }
 
-// --confidence: 0 exactly where the disparity is invalid, or filled by --hole-fill (made up,
-// not measured); a value for every measured pixel, smoothed by --spatial or not. Counted right of
-// the first 224 columns: the PNG's 0 means invalid, and nearer the left border a valid disparity
-// can be 0 too.
+// --confidence: 0 exactly where the disparity is invalid, or filled by --hole-fill or
+// --fill-occlusions (made up, not measured); a value for every measured pixel, smoothed by
+// --spatial or not. Counted right of the first 224 columns: the PNG's 0 means invalid, and nearer
+// the left border a valid disparity can be 0 too.
 TEST(DisparityCli, WritesTheConfidenceOfEveryMeasuredPixel) {
   const std::string out = ::testing::TempDir() + "epipole-disparity-c.png";
   const std::string confidence = ::testing::TempDir() + "epipole-confidence.png";
@@ -117,7 +117,7 @@ TEST(DisparityCli, WritesTheConfidenceOfEveryMeasuredPixel) {
     EXPECT_EQ(r.exit_code, 0) << r.out;
     EXPECT_EQ(nlohmann::json::parse(r.out)["confidence"], confidence);
   };
-  for (const std::string filters : {"", " --spatial 50", " --hole-fill 64"}) {
+  for (const std::string filters : {"", " --spatial 50", " --hole-fill 64", " --fill-occlusions"}) {
     SCOPED_TRACE(filters);
     run(filters);
     const auto disparity = epipole::load_gray16(out);
@@ -134,7 +134,7 @@ TEST(DisparityCli, WritesTheConfidenceOfEveryMeasuredPixel) {
     }
     EXPECT_EQ(invalid_with_confidence, 0);
     EXPECT_GT(trusted, valid / 2);
-    if (filters.find("hole") == std::string::npos) {
+    if (filters.find("fill") == std::string::npos) {
       EXPECT_EQ(trusted, valid) << "every measured pixel has a confidence";
     } else {
       EXPECT_LT(trusted, valid) << "the filled pixels have none";

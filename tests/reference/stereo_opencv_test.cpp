@@ -52,6 +52,17 @@ void compare(int width, int height, int disparities) {
   const Scores filled =
       score(ours(a.left, a.right, StereoMethod::sgm, disparities, 1, 64), a.truth);
   print("epipole sgm, holes <= 64", filled);
+  StereoConfig occlusions;
+  occlusions.max_disparity = disparities;
+  occlusions.fill_occlusions = true;
+  const Scores sgm_occlusions = score(ours(a.left, a.right, occlusions), a.truth);
+  print("epipole sgm, occlusions", sgm_occlusions);
+  occlusions.method = StereoMethod::bm;
+  const Scores bm_occlusions = score(ours(a.left, a.right, occlusions), a.truth);
+  print("epipole bm, occlusions", bm_occlusions);
+  // The depth-quality issue's aim: at most 0.8x SGBM's bad2, with the occlusions filled.
+  EXPECT_LE(sgm_occlusions.bad2, 0.8 * cv_sgbm.bad2);
+  EXPECT_GE(sgm_occlusions.density, cv_sgbm.density);
   EXPECT_LE(sgm.bad2, cv_sgbm.bad2);
   EXPECT_LE(bm.bad2, cv_bm.bad2);
   const std::string scene = "aloe-" + std::to_string(a.left.cols) + "x" +
@@ -59,6 +70,8 @@ void compare(int width, int height, int disparities) {
   check_baseline(scene, "sgm", sgm);
   check_baseline(scene, "bm", bm);
   check_baseline(scene, "sgm-holes64", filled);
+  check_baseline(scene, "sgm-occlusions", sgm_occlusions);
+  check_baseline(scene, "bm-occlusions", bm_occlusions);
 }
 
 // Quality mode on 2 threads: the second stripe starts its vertical paths kWarmupRows above its

@@ -113,6 +113,55 @@ TEST(SyntheticStereo, QualityModeBesideSgbmOnEveryScene) {
   }
 }
 
+// The occlusions filled from their background (StereoConfig::fill_occlusions): how many of the
+// pixels filled are occluded in the truth, and how many of them are within 2 px of it.
+TEST(SyntheticStereo, OcclusionsTakeTheirBackground) {
+  for (const std::string& name : test::synthetic_scene_names()) {
+    const SyntheticPair p = synthetic_scene(name, 640, 480);
+    const cv::Mat left = mat_of(p.left), right = mat_of(p.right), truth = mat_of(p.truth);
+    cv::Mat nonoccluded;
+    cv::compare(mat_of(p.nonoccluded), 255, nonoccluded, cv::CMP_EQ);
+    StereoConfig config;
+    config.max_disparity = 128;
+    const cv::Mat off = ours(left, right, config);
+    config.fill_occlusions = true;
+    const cv::Mat on = ours(left, right, config);
+    long filled = 0, filled_occluded = 0, filled_right = 0;
+    for (int y = 0; y < 480; ++y) {
+      for (int x = 0; x < 640; ++x) {
+        const int before = off.at<std::int16_t>(y, x), after = on.at<std::int16_t>(y, x);
+        if (before >= 0) {
+          ASSERT_EQ(after, before) << name << ": only holes change (" << x << ", " << y << ")";
+          continue;
+        }
+        if (after < 0) continue;
+        ++filled;
+        filled_occluded += nonoccluded.at<std::uint8_t>(y, x) == 0 ? 1 : 0;
+        const double error = std::abs(after / 16.0 - static_cast<double>(truth.at<float>(y, x)));
+        filled_right += error <= 2 ? 1 : 0;
+      }
+    }
+    std::printf(
+        "%s 640x480: %ld pixels filled, %.1f %% of them occluded, %.1f %% within 2 px\n",
+        name.c_str(), filled,
+        100.0 * static_cast<double>(filled_occluded) / static_cast<double>(std::max(filled, 1L)),
+        100.0 * static_cast<double>(filled_right) / static_cast<double>(std::max(filled, 1L)));
+    print("sgm, all", score(off, truth));
+    print("sgm, occlusions filled, all", score(on, truth));
+    print("sgm, non-occluded", score(off, truth, nonoccluded));
+    print("sgm, occl. filled, non-occl.", score(on, truth, nonoccluded));
+    // Where there is much to fill (the boxes' walls, the low-texture box's), the fills are
+    // mostly right; elsewhere there is little.
+    if (filled >= 1000) {
+      EXPECT_GE(static_cast<double>(filled_right), 0.8 * static_cast<double>(filled)) << name;
+    }
+    if (name == "boxes") {
+      EXPECT_GT(filled, 20000) << "the walls the boxes hide";
+    }
+    check_baseline("synthetic-" + name + "-640x480-128", "sgm-occlusions", score(on, truth));
+  }
+}
+
 // The spatial filter (disparity_filters.hpp) at two weights, 2 passes, steps up to 2 px: the
 // share of pixels more than 1 px off and the mean error, and nothing filled or removed (the
 // same density).

@@ -354,6 +354,7 @@ ImageView<const std::int16_t> StereoMatcher::finish() {
       for (int x = 0; x < config_.width; ++x) c[x] = d[x] < 0 ? 0 : c[x];
     }
   }
+  if (config_.fill_occlusions) fill_occlusions();
   if (spatial_) spatial_->apply(disparity_, path_);
   fill_holes(disparity_, config_.hole_fill, path_);
   if (temporal_) temporal_->apply(disparity_, path_);
@@ -392,6 +393,10 @@ void StereoMatcher::Worker::cost_row(GrayView left, GrayView right, int y, int d
 
 namespace {
 
+// The left-right check's mark of an occluded pixel (invalid, as every negative value), which
+// finish() fills or turns into kInvalidDisparity.
+constexpr std::int16_t kOccluded = 2 * kInvalidDisparity;
+
 // The winner take all of a row goes straight into the output row `out`, and its confidence
 // into `confidence` (null: none wanted).
 kernels::WtaRow wta_row(const StereoConfig& config, StereoMatcher::Worker& w, std::int16_t* out,
@@ -401,15 +406,19 @@ kernels::WtaRow wta_row(const StereoConfig& config, StereoMatcher::Worker& w, st
 }
 
 // The left-right check of an output row: a winner whose right image's winner is too far is
-// invalid.
+// invalid. With config.fill_occlusions, it is marked kOccluded where that winner is nearer (the
+// right camera sees a nearer surface there: this pixel is hidden from it).
 void check_row(const StereoConfig& config, const StereoMatcher::Worker& w, std::int16_t* out) {
   if (config.lr_max_diff < 0) return;
   const std::int16_t* best = w.best.data();
   const std::int16_t* right_best = w.right_best.data();
+  const std::int16_t refused_nearer = config.fill_occlusions ? kOccluded : kInvalidDisparity;
   for (int x = 0; x < config.width; ++x) {
     const int b = best[x];  // -1: no winner, and out[x] is invalid already
     const int r = right_best[b >= 0 ? x - b : x];
-    out[x] = b >= 0 && std::abs(r - b) > config.lr_max_diff ? kInvalidDisparity : out[x];
+    if (b >= 0 && std::abs(r - b) > config.lr_max_diff) {
+      out[x] = r > b ? refused_nearer : kInvalidDisparity;
+    }
   }
 }
 
@@ -514,12 +523,12 @@ void StereoMatcher::remove_speckles() {
   // Calls run(begin, end) for each run of row d, in order.
   const auto for_each_run = [&](const std::int16_t* d, auto&& run) {
     for (int x = 0; x < W;) {
-      if (d[x] == kInvalidDisparity) {
+      if (d[x] < 0) {
         ++x;
         continue;
       }
       const int begin = x;
-      for (++x; x < W && d[x] != kInvalidDisparity && near(d[x], d[x - 1]);) ++x;
+      for (++x; x < W && d[x] >= 0 && near(d[x], d[x - 1]);) ++x;
       run(begin, x);
     }
   };
@@ -546,7 +555,7 @@ void StereoMatcher::remove_speckles() {
       std::uint32_t last_a = 0xFFFFFFFF;
       std::uint32_t last_b = 0xFFFFFFFF;
       for (int x = 0; x < W; ++x) {
-        if (d[x] == kInvalidDisparity || u[x] == kInvalidDisparity || !near(d[x], u[x])) continue;
+        if (d[x] < 0 || u[x] < 0 || !near(d[x], u[x])) continue;
         if (labels[x] == last_a && above[x] == last_b) continue;  // the same two runs again
         last_a = labels[x];
         last_b = above[x];
@@ -566,6 +575,39 @@ void StereoMatcher::remove_speckles() {
     for_each_run(d, [&](int begin, int end) {
       if (-node[find(i++)] < config_.speckle_size) std::fill(d + begin, d + end, kInvalidDisparity);
     });
+  }
+}
+
+// Each run of invalid pixels along a row with a pixel the left-right check found occluded, valid
+// pixels on both sides, and at most the disparity range long (an occlusion is never wider), takes
+// the farther of the two: the background that the nearer surface on one side hides from the right
+// camera. The marks become kInvalidDisparity where nothing is filled.
+void StereoMatcher::fill_occlusions() {
+  const int W = config_.width;
+  for (int y = 0; y < config_.height; ++y) {
+    std::int16_t* d = disparity_.row(y);
+    for (int x = 0; x < W;) {
+      if (d[x] >= 0) {
+        ++x;
+        continue;
+      }
+      const int begin = x;
+      bool occluded = false;
+      for (; x < W && d[x] < 0; ++x) {
+        occluded = occluded || d[x] == kOccluded;
+        d[x] = kInvalidDisparity;
+      }
+      if (!occluded || begin == 0 || x == W) continue;
+      // An occlusion lies left of a nearer surface and is as wide as the step to it: the
+      // background shows there in the left image only.
+      const int background = d[begin - 1];
+      const int step = (d[x] - background) / kDisparityScale;
+      // Near the left border the right image has nothing to show: those runs are mismatches.
+      const bool inside = begin >= d[x] / kDisparityScale;
+      if (inside && step > 0 && std::abs(x - begin - step) <= std::max(2, step / 4)) {
+        std::fill(d + begin, d + x, static_cast<std::int16_t>(background));
+      }
+    }
   }
 }
 

@@ -27,13 +27,15 @@ struct StereoConfig {
   int height = 0;
   int max_disparity = 64;  // disparities 0..max_disparity-1; 16..256, a multiple of 16
   StereoMethod method = StereoMethod::sgm;
-  int p1 = 11;                // SGM: penalty for a disparity change of 1 (census cost units)
-  int p2 = 120;               // SGM: penalty for larger changes (p1..224)
-  int block_size = 7;         // BM: box of block_size x block_size census costs (odd, 3..21)
-  int uniqueness = 10;        // percent: another disparity (not +-1) must cost this much more
-  int lr_max_diff = 1;        // left-right check tolerance in pixels; < 0 switches it off
-  int speckle_size = 100;     // connected regions smaller than this are invalidated; 0: off
-  int speckle_range = 1;      // in pixels: neighbours closer than this belong to one region
+  int p1 = 11;                   // SGM: penalty for a disparity change of 1 (census cost units)
+  int p2 = 120;                  // SGM: penalty for larger changes (p1..224)
+  int block_size = 7;            // BM: box of block_size x block_size census costs (odd, 3..21)
+  int uniqueness = 10;           // percent: another disparity (not +-1) must cost this much more
+  int lr_max_diff = 1;           // left-right check tolerance in pixels; < 0 switches it off
+  int speckle_size = 100;        // connected regions smaller than this are invalidated; 0: off
+  int speckle_range = 1;         // in pixels: neighbours closer than this belong to one region
+  bool fill_occlusions = false;  // after the speckles: holes where the left-right check found
+                                 // the right camera's view hidden take their background
   int spatial_percent = 0;    // after the speckles, along rows and columns (disparity_filters.hpp):
                               // a pixel's own weight, 1..99 (0: off)
   int spatial_max_step = 2;   // px: larger steps are edges, kept (1..7)
@@ -98,6 +100,7 @@ class StereoMatcher {
   void bm_stripe(Worker& w, int y0, int y1);
 
   void remove_speckles();
+  void fill_occlusions();
   // Row y of the confidence, or null without config.confidence.
   std::uint8_t* confidence_row(int y) {
     return confidence_.empty() ? nullptr : confidence_.view().row(y);
