@@ -75,16 +75,24 @@ TEST(SyntheticStereo, TheSameSceneEveryTime) {
   }
 }
 
+// A synthetic scene at 640x480 as OpenCV images, and the mask of its non-occluded pixels.
+struct SceneMats {
+  cv::Mat left, right, truth, nonoccluded;
+};
+SceneMats scene_mats(const std::string& name) {
+  const SyntheticPair p = synthetic_scene(name, 640, 480);
+  SceneMats m{mat_of(p.left), mat_of(p.right), mat_of(p.truth), {}};
+  cv::compare(mat_of(p.nonoccluded), 255, m.nonoccluded, cv::CMP_EQ);
+  return m;
+}
+
 // The quality mode and SGBM with one range (128, the simulated board's) on each scene. The issue
 // of depth quality asks for at most 0.8x SGBM's bad2 on every scene; these figures say where
 // that stands (docs/vision.md), the baseline that they do not get worse.
 TEST(SyntheticStereo, QualityModeBesideSgbmOnEveryScene) {
   constexpr int kDisparities = 128;
   for (const std::string& name : test::synthetic_scene_names()) {
-    const SyntheticPair p = synthetic_scene(name, 640, 480);
-    const cv::Mat left = mat_of(p.left), right = mat_of(p.right), truth = mat_of(p.truth);
-    cv::Mat nonoccluded;
-    cv::compare(mat_of(p.nonoccluded), 255, nonoccluded, cv::CMP_EQ);
+    const auto [left, right, truth, nonoccluded] = scene_mats(name);
     const cv::Mat sgm = ours(left, right, StereoMethod::sgm, kDisparities);
     const cv::Mat sgbm = opencv_sgbm(left, right, kDisparities);
     const Scores sgm_all = score(sgm, truth), sgm_noc = score(sgm, truth, nonoccluded);
@@ -117,10 +125,7 @@ TEST(SyntheticStereo, QualityModeBesideSgbmOnEveryScene) {
 // pixels filled are occluded in the truth, and how many of them are within 2 px of it.
 TEST(SyntheticStereo, OcclusionsTakeTheirBackground) {
   for (const std::string& name : test::synthetic_scene_names()) {
-    const SyntheticPair p = synthetic_scene(name, 640, 480);
-    const cv::Mat left = mat_of(p.left), right = mat_of(p.right), truth = mat_of(p.truth);
-    cv::Mat nonoccluded;
-    cv::compare(mat_of(p.nonoccluded), 255, nonoccluded, cv::CMP_EQ);
+    const auto [left, right, truth, nonoccluded] = scene_mats(name);
     StereoConfig config;
     config.max_disparity = 128;
     const cv::Mat off = ours(left, right, config);
@@ -167,10 +172,7 @@ TEST(SyntheticStereo, OcclusionsTakeTheirBackground) {
 // same density).
 TEST(SyntheticStereo, TheSpatialFilterSmoothsWithinSurfaces) {
   for (const std::string& name : test::synthetic_scene_names()) {
-    const SyntheticPair p = synthetic_scene(name, 640, 480);
-    const cv::Mat left = mat_of(p.left), right = mat_of(p.right), truth = mat_of(p.truth);
-    cv::Mat nonoccluded;
-    cv::compare(mat_of(p.nonoccluded), 255, nonoccluded, cv::CMP_EQ);
+    const auto [left, right, truth, nonoccluded] = scene_mats(name);
     StereoConfig config;
     config.max_disparity = 128;
     const Scores off = score(ours(left, right, config), truth, nonoccluded);

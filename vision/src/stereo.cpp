@@ -578,10 +578,10 @@ void StereoMatcher::remove_speckles() {
   }
 }
 
-// Each run of invalid pixels along a row with a pixel the left-right check found occluded, valid
-// pixels on both sides, and at most the disparity range long (an occlusion is never wider), takes
-// the farther of the two: the background that the nearer surface on one side hides from the right
-// camera. The marks become kInvalidDisparity where nothing is filled.
+// Each run of invalid pixels along a row with a pixel the left-right check found occluded takes
+// the disparity of its left neighbour (the background) when the geometry says it is an
+// occlusion: a nearer surface on its right, the run as wide as the step to it, and clear of the
+// left border. The marks become kInvalidDisparity where nothing is filled.
 void StereoMatcher::fill_occlusions() {
   const int W = config_.width;
   for (int y = 0; y < config_.height; ++y) {
