@@ -109,6 +109,10 @@ void FrameLoop::start() {
 void FrameLoop::finish() {
   if (!started_) return;
   started_ = false;
+  if (ahead_.result && ahead_.result->status == hal::PairStatus::ok) {
+    grabber_.release(ahead_.result->pair);  // taken ahead, not processed
+  }
+  ahead_.result.reset();
   if (trigger_) trigger_->stop();
   board_.left().stop();
   board_.right().stop();
@@ -368,6 +372,41 @@ void FrameLoop::tick() {
   if (heartbeat_ && link_.alive(kLinkAlive)) heartbeat_();
 }
 
+std::optional<NextPair::Images> FrameLoop::GrabAhead::take() {
+  struct DeferReopen {
+    hal::RecoveringCamera& left;
+    hal::RecoveringCamera& right;
+    DeferReopen(hal::RecoveringCamera& l, hal::RecoveringCamera& r) : left(l), right(r) {
+      left.defer_reopen(true);
+      right.defer_reopen(true);
+    }
+    ~DeferReopen() {
+      left.defer_reopen(false);
+      right.defer_reopen(false);
+    }
+  };
+  const hal::Nanoseconds now = steady_now();
+  loop_.board_.clock().spend(now - loop_.charged_until_);
+  loop_.charged_until_ = now;
+  const DeferReopen defer(loop_.board_.left_recovery(), loop_.board_.right_recovery());
+  const hal::PairResult got = loop_.grabber_.next(0);
+  if (got.status == hal::PairStatus::timeout) return std::nullopt;
+  result = got;
+  if (got.status != hal::PairStatus::ok) return std::nullopt;
+  return Images{got.pair.left.gray, got.pair.right.gray, got.pair.left.sequence};
+}
+
+// The pair taken ahead while the one before was processed (or the camera it found lost), else
+// the next one from the cameras.
+hal::PairResult FrameLoop::next_pair() {
+  if (ahead_.result) {
+    const hal::PairResult got = *ahead_.result;
+    ahead_.result.reset();
+    return got;
+  }
+  return grabber_.next(config_.cameras.timeout);
+}
+
 // The freshest pair from what the grabber gave: older ones that waited behind it are skipped (and
 // counted stale). False when there is none to process: a timeout, a camera lost (its reopen
 // unmapped the buffers a held pair's frames are in: that pair goes too).
@@ -418,9 +457,10 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   const hal::Nanoseconds waited =
       same_clock ? clock.now() - std::max(pair.left.timestamp, pair.right.timestamp) : 0;
   const hal::Nanoseconds t0 = steady_now();
-  const FrameResult& r =
-      pipeline_.process(pair.left.gray, pair.right.gray, pair.left.sequence, trigger.ns, stages_);
-  clock.spend(steady_now() - t0);
+  charged_until_ = t0;
+  const FrameResult& r = pipeline_.process(pair.left.gray, pair.right.gray, pair.left.sequence,
+                                           trigger.ns, stages_, &ahead_);
+  clock.spend(steady_now() - charged_until_);
   const hal::Nanoseconds t1 = steady_now();
   publish(r, clock.now() - trigger.ns, trigger.from_capture);
   const hal::Nanoseconds t2 = steady_now();
@@ -453,13 +493,15 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
          (max_frames == 0 || summary_.frames < max_frames)) {
     apply_commands();
     answer_snapshots();
-    hal::PairResult got = grabber_.next(config_.cameras.timeout);
+    hal::PairResult got = next_pair();
     tick();  // before the new pair is recorded: the health window that ended holds those before
     if (!take_freshest(got)) continue;
     process_pair(got.pair);
     grabber_.release(got.pair);
   }
   finish();
+  summary_.taken_ahead = pipeline_.pairs_rectified_ahead();
+  summary_.rectified_ahead = pipeline_.pairs_used_ahead();
   summary_.pairing = grabber_.pairer().counters();
   summary_.faults = faults();
   summary_.link = link_.counters();

@@ -154,7 +154,12 @@ Pipeline::Pipeline(const BoardConfig& board,
             "calibration ", board.calibration.string(), " is for ", calibration->width, "x",
             calibration->height, " images but the cameras deliver ", board.width(), "x",
             board.height());
-    stages_->rectifiers.emplace(make_stereo_rectifiers(*calibration, path));
+    stages_->rectifiers.emplace(
+        make_stereo_rectifiers(*calibration, path, 0, /*own_output=*/false));
+    for (std::size_t slot = 0; slot < 2; ++slot) {
+      rectified_left_[slot] = GrayImage(board.width(), board.height());
+      rectified_right_[slot] = GrayImage(board.width(), board.height());
+    }
     available_ |= stage_bit(Stage::rectify);
     // Only point() and depth() are used: no point image is needed.
     triangulator_ = std::make_unique<calib::Triangulator>(calibration->Q, 1, 1);
@@ -206,8 +211,12 @@ Pipeline::~Pipeline() = default;
 void Pipeline::add_memory(MemoryReport& report) const {
   const auto name = [](Stage s) { return std::string(protocol::stage_info(s).name); };
   if (stages_->rectifiers) {
+    std::size_t images = 0;
+    for (std::size_t slot = 0; slot < 2; ++slot) {
+      images += rectified_left_[slot].size_bytes() + rectified_right_[slot].size_bytes();
+    }
     report.add(name(Stage::rectify), stages_->rectifiers->left.working_set_bytes() +
-                                         stages_->rectifiers->right.working_set_bytes());
+                                         stages_->rectifiers->right.working_set_bytes() + images);
   }
   report.add(name(Stage::corners), stages_->corners_left.working_set_bytes() +
                                        stages_->corners_right.working_set_bytes());
@@ -224,13 +233,44 @@ void Pipeline::add_memory(MemoryReport& report) const {
   }
 }
 
+bool Pipeline::PairAhead::matches(GrayView left, GrayView right, std::uint32_t frame) const {
+  const auto same = [](GrayView a, GrayView b) {
+    return a.data() == b.data() && a.width() == b.width() && a.height() == b.height() &&
+           a.stride() == b.stride();
+  };
+  return ready && images.frame == frame && same(images.left, left) && same(images.right, right);
+}
+
+// Both images into `slot`, in as many row bands each as there are workers.
+void Pipeline::rectify_now(FrameResult& r, int slot) {
+  StereoRectifiers& rectifiers = *stages_->rectifiers;
+  const MutableGrayView left = rectified_left_[static_cast<std::size_t>(slot)].view();
+  const MutableGrayView right = rectified_right_[static_cast<std::size_t>(slot)].view();
+  const int bands = pool_->threads();
+  const int height = left.height();
+  pool_->run(2 * bands, [&](int task, int) {
+    const int band = task / 2;
+    const int first = band * height / bands;
+    const int end = (band + 1) * height / bands;
+    if (task % 2 == 0) {
+      rectifiers.left.rectify_rows(r.left_raw, left, first, end);
+    } else {
+      rectifiers.right.rectify_rows(r.right_raw, right, first, end);
+    }
+  });
+  r.left = left;
+  r.right = right;
+}
+
 // The stages of a pair on the one pool: the rectification of both images first, in row bands
-// (every other stage reads it), then one batch of tasks in the order they should start: the corners
-// of both images, the disparity's stripes, the sparse matching (once the corners are there), the
-// disparity's end (speckles, obstacles), the cascade's pyramid levels (largest first, so the
-// small ones fill the workers' last gaps). The detections' depths join after all.
+// (every other stage reads it), unless it was done ahead; then one batch of tasks in the order
+// they should start: the corners of both images, the disparity's stripes, the sparse matching
+// (once the corners are there), the disparity's end (speckles, obstacles), the cascade's pyramid
+// levels (largest first, so the small ones fill the workers' last gaps), and last the next pair's
+// rectification (in the gaps that are left). The detections' depths join after all.
 const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_t frame,
-                                     hal::Nanoseconds trigger_ns, StageMask enabled) {
+                                     hal::Nanoseconds trigger_ns, StageMask enabled,
+                                     NextPair* next) {
   FrameResult& r = result_;
   r = FrameResult{};
   r.frame = frame;
@@ -248,24 +288,18 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
     return r.times[static_cast<std::size_t>(s)];
   };
 
-  if (protocol::has_stage(run, Stage::rectify)) {
+  const bool rectify = protocol::has_stage(run, Stage::rectify);
+  const bool was_ahead = ahead_.matches(left, right, frame);
+  ahead_.ready = false;
+  if (rectify && was_ahead) {
+    slot_ = ahead_.slot;
+    r.left = rectified_left_[static_cast<std::size_t>(slot_)].view();
+    r.right = rectified_right_[static_cast<std::size_t>(slot_)].view();
+    time_of(Stage::rectify) = ahead_.rectify_ns;
+    ++ahead_used_;
+  } else if (rectify) {
     const hal::Nanoseconds start = steady_now();
-    // Both images in as many row bands as there are workers.
-    StereoRectifiers& rectifiers = *stages_->rectifiers;
-    const int bands = pool_->threads();
-    const int height = rectifiers.left.config().height;
-    pool_->run(2 * bands, [&](int task, int) {
-      const int band = task / 2;
-      const int first = band * height / bands;
-      const int end = (band + 1) * height / bands;
-      if (task % 2 == 0) {
-        const GrayView rectified = rectifiers.left.rectify_rows(r.left_raw, first, end);
-        if (band == 0) r.left = rectified;
-      } else {
-        const GrayView rectified = rectifiers.right.rectify_rows(r.right_raw, first, end);
-        if (band == 0) r.right = rectified;
-      }
-    });
+    rectify_now(r, slot_);
     time_of(Stage::rectify) = steady_now() - start;
   }
   r.stages = run & (stage_bit(Stage::capture) | stage_bit(Stage::rectify));
@@ -292,20 +326,52 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   };
   auto sparse = [&](int, int) { match_sparse(r); };
   auto level = [&](int i, int worker) { detector_->search_level(i, worker); };
+  // The next pair, when it is there and of the images' size (one that is not is rectified, and
+  // refused, when it is processed itself), into the other slot.
+  const int ahead_slot = 1 - slot_;
+  auto take_next = [&](int, int) {
+    const std::optional<NextPair::Images> images = next->take();
+    const auto fits = [&](GrayView image) {
+      return image.width() == left.width() && image.height() == left.height();
+    };
+    if (images && fits(images->left) && fits(images->right)) {
+      ahead_.images = *images;
+      ahead_.slot = ahead_slot;
+      ahead_.ready = true;
+    }
+  };
+  auto rectify_next = [&](int image, int) {
+    if (!ahead_.ready) return;
+    StereoRectifiers& rectifiers = *stages_->rectifiers;
+    const std::size_t slot = static_cast<std::size_t>(ahead_slot);
+    if (image == 0) {
+      rectifiers.left.rectify(ahead_.images.left, rectified_left_[slot].view());
+    } else {
+      rectifiers.right.rectify(ahead_.images.right, rectified_right_[slot].view());
+    }
+  };
   TaskBatch& batch = batch_;
   batch.clear();
   int corners_part = TaskBatch::kNoPart;
   int stripes_part = TaskBatch::kNoPart;
   int sparse_part = TaskBatch::kNoPart;
   int levels_part = TaskBatch::kNoPart;
+  int ahead_part = TaskBatch::kNoPart;
   if (protocol::has_stage(run, Stage::corners)) corners_part = batch.add(2, corners);
   if (protocol::has_stage(run, Stage::disparity)) stripes_part = batch.add(stripes, stripe);
   if (protocol::has_stage(run, Stage::sparse)) sparse_part = batch.add(1, sparse, corners_part);
   if (protocol::has_stage(run, Stage::detect)) levels_part = batch.add(levels, level);
+  if (next != nullptr && rectify) {
+    ahead_part = batch.add(2, rectify_next, batch.add(1, take_next));
+  }
   batch.run(*pool_);
   time_of(Stage::corners) = batch.span_ns(corners_part, corners_part);
   time_of(Stage::disparity) = batch.span_ns(stripes_part, stripes_part);
   time_of(Stage::sparse) = batch.span_ns(sparse_part, sparse_part);
+  if (ahead_.ready) {
+    ahead_.rectify_ns = batch.span_ns(ahead_part, ahead_part);
+    ++ahead_rectified_;
+  }
   if (protocol::has_stage(run, Stage::detect)) {
     const hal::Nanoseconds start = steady_now();
     r.detections = detector_->finish();

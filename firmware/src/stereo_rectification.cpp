@@ -10,11 +10,12 @@ vision::RemapMap to_remap_map(const calib::FixedPointMap& map) {
 namespace {
 
 vision::Rectifier make_rectifier(const calib::StereoCalibration& calibration, calib::Side side,
-                                 SimdPath path, std::uint8_t border) {
+                                 SimdPath path, std::uint8_t border, bool own_output) {
   vision::RectifierConfig config;
   config.source_width = config.width = calibration.width;
   config.source_height = config.height = calibration.height;
   config.border = border;
+  config.own_output = own_output;
   return vision::Rectifier(config, to_remap_map(calib::build_fixed_point_map(calibration, side)),
                            path);
 }
@@ -22,9 +23,9 @@ vision::Rectifier make_rectifier(const calib::StereoCalibration& calibration, ca
 }  // namespace
 
 StereoRectifiers make_stereo_rectifiers(const calib::StereoCalibration& calibration, SimdPath path,
-                                        std::uint8_t border) {
-  return {make_rectifier(calibration, calib::Side::left, path, border),
-          make_rectifier(calibration, calib::Side::right, path, border)};
+                                        std::uint8_t border, bool own_output) {
+  return {make_rectifier(calibration, calib::Side::left, path, border, own_output),
+          make_rectifier(calibration, calib::Side::right, path, border, own_output)};
 }
 
 }  // namespace epipole::firmware

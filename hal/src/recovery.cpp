@@ -78,6 +78,7 @@ void RecoveringCamera::set_exposure(Nanoseconds exposure, double gain) {
 AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {
   const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
   if (lost_) {
+    if (defer_reopen_) return {AcquireStatus::device_lost, {}};
     if (!backoff_.due(clock_.now())) {
       clock_.sleep_until(std::min(deadline, backoff_.next_attempt()));
       if (!backoff_.due(clock_.now())) return {AcquireStatus::device_lost, {}};
@@ -108,7 +109,7 @@ AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {
   lost_ = true;
   timeouts_in_a_row_ = 0;
   backoff_.succeeded();  // the first attempt is immediate, then the delays grow
-  try_reopen();
+  if (!defer_reopen_) try_reopen();
   return {AcquireStatus::device_lost, {}};
 }
 

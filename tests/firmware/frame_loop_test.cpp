@@ -295,6 +295,11 @@ TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
   for (std::size_t i = 1; i < recorder.frames.size(); ++i) {
     EXPECT_GT(recorder.frames[i].frame, recorder.frames[i - 1].frame);
   }
+  // Pairs came while the one before was processed: the next was taken and rectified then (and
+  // used when no fresher one had come by the time it was processed).
+  EXPECT_GT(s.taken_ahead, 0u);
+  EXPECT_LE(s.rectified_ahead, s.taken_ahead);
+  EXPECT_LE(s.taken_ahead - s.rectified_ahead, t.stale + 1u) << "an unused one is stale";
 }
 
 TEST(FrameLoop, HealthSaysHowBusyTheLoopIsAndHowLongPairsWaitedForIt) {

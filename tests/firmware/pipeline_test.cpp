@@ -6,8 +6,11 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
 #include <span>
+#include <utility>
 
+#include "epipole/core/error.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "sim_rig.hpp"
@@ -24,7 +27,8 @@ bool same(std::span<const T> a, std::span<const T> b) {
                     [](const T& x, const T& y) { return std::memcmp(&x, &y, sizeof(T)) == 0; });
 }
 
-bool same_image(ImageView<const std::int16_t> a, ImageView<const std::int16_t> b) {
+template <typename T>
+bool same_image(ImageView<const T> a, ImageView<const T> b) {
   if (a.width() != b.width() || a.height() != b.height()) return false;
   for (int y = 0; y < a.height(); ++y) {
     if (!std::equal(a.row(y), a.row(y) + a.width(), b.row(y))) return false;
@@ -39,13 +43,19 @@ bool same_depths(std::span<const DetectionDepth> a, std::span<const DetectionDep
          });
 }
 
+// The rig's board with every stage on (sparse matching too, and a random cascade).
+BoardConfig every_stage(const test::SimRig& rig, int threads) {
+  BoardConfig config = rig.parse(cat("threads: {count: ", threads, "}\n"));
+  config.stages |= stage_bit(protocol::Stage::sparse);
+  rig.add_cascade(config);
+  return config;
+}
+
 // Two and three threads: the matcher on two and three stripes (its own documented difference
 // near the stripe borders); everything else one thread's, and the depths those of the disparity.
 TEST(Pipeline, StagesSharingThePoolGiveWhatOneThreadGives) {
   test::SimRig rig(160, 120, 8);
-  BoardConfig config = rig.parse("threads: {count: 1}\n");
-  config.stages |= stage_bit(protocol::Stage::sparse);
-  rig.add_cascade(config);
+  const BoardConfig config = every_stage(rig, 1);
   const auto calibration = load_board_calibration(config);
   ASSERT_TRUE(calibration.has_value());
   BoardConfig two = config;
@@ -112,6 +122,92 @@ TEST(Pipeline, StagesSharingThePoolGiveWhatOneThreadGives) {
   }
   EXPECT_GT(detections, 0) << "the random cascade fires on the textured images";
   EXPECT_GT(with_depth, 0);
+}
+
+// A NextPair that hands out the images it is told to, once.
+class GivenNextPair final : public NextPair {
+ public:
+  void give(GrayView left, GrayView right, std::uint32_t frame) {
+    images_ = Images{left, right, frame};
+  }
+  std::optional<Images> take() override {
+    ++calls;
+    return std::exchange(images_, std::nullopt);
+  }
+  int calls = 0;
+
+ private:
+  std::optional<Images> images_;
+};
+
+// The next pair rectified while the current one ends (the frame loop's pipelining across pairs)
+// is the pair rectified when it is processed, to the bit, and every later stage's result with
+// it. A pair taken ahead but not processed next (a fresher one came), one of another size, or
+// one processed without rectification leaves nothing behind.
+TEST(Pipeline, PairsRectifiedAheadGiveWhatPairByPairGives) {
+  test::SimRig rig(160, 120, 8);
+  const BoardConfig config = every_stage(rig, 2);
+  const auto calibration = load_board_calibration(config);
+  ASSERT_TRUE(calibration.has_value());
+  Pipeline by_pair(config, calibration);
+  Pipeline ahead(config, calibration);
+  const SceneImages images = rig.images(3);
+  GivenNextPair next;
+  const auto process = [&](Pipeline& p, std::size_t i, std::uint32_t frame, StageMask stages,
+                           NextPair* n) -> const FrameResult& {
+    return p.process(images.left[i].view(), images.right[i].view(), frame, 0, stages, n);
+  };
+  const StageMask all = config.stages;
+  const auto expect_same = [&](std::size_t i, std::uint32_t frame, StageMask stages) {
+    const FrameResult& a = process(by_pair, i, frame, stages, nullptr);
+    const FrameResult& b = process(ahead, i, frame, stages, &next);
+    EXPECT_EQ(a.stages, b.stages);
+    EXPECT_TRUE(same_image(a.left, b.left));
+    EXPECT_TRUE(same_image(a.right, b.right));
+    EXPECT_TRUE(same(a.corners_left, b.corners_left));
+    EXPECT_TRUE(same(a.matches, b.matches));
+    EXPECT_TRUE(same_image(a.disparity, b.disparity));
+    EXPECT_TRUE(same(a.detections, b.detections));
+    EXPECT_EQ(protocol::has_stage(b.stages, protocol::Stage::rectify),
+              b.times[static_cast<std::size_t>(protocol::Stage::rectify)] > 0);
+  };
+  std::uint32_t frame = 0;
+  for (int round = 0; round < 2; ++round) {
+    for (std::size_t i = 0; i < images.left.size(); ++i, ++frame) {
+      SCOPED_TRACE(frame);
+      const std::size_t n = (i + 1) % images.left.size();
+      next.give(images.left[n].view(), images.right[n].view(), frame + 1);
+      expect_same(i, frame, all);
+    }
+  }
+  EXPECT_EQ(next.calls, 6);
+  EXPECT_EQ(ahead.pairs_rectified_ahead(), 6u);
+  EXPECT_EQ(ahead.pairs_used_ahead(), 5u) << "the first pair was rectified when processed";
+
+  // Pair 6 was taken ahead; pair 7 is, but pair 8 is processed instead.
+  next.give(images.left[1].view(), images.right[1].view(), 7);
+  expect_same(0, 6, all);
+  expect_same(2, 8, all);
+  EXPECT_EQ(ahead.pairs_used_ahead(), 6u);
+  // The same buffers again but another frame: not the pair taken ahead.
+  next.give(images.left[0].view(), images.right[0].view(), 10);
+  expect_same(1, 9, all);
+  expect_same(0, 11, all);
+  EXPECT_EQ(ahead.pairs_used_ahead(), 6u);
+  // A next pair of another size is not taken up; the current pair is not disturbed.
+  const GrayImage small(80, 60);
+  next.give(small.view(), small.view(), 13);
+  expect_same(1, 12, all);
+  EXPECT_EQ(ahead.pairs_rectified_ahead(), 8u);
+  // Rectification off for the pair taken ahead: the raw images go on.
+  next.give(images.left[2].view(), images.right[2].view(), 15);
+  expect_same(0, 14, all);
+  expect_same(2, 15, all & ~stage_bit(protocol::Stage::rectify));
+  EXPECT_EQ(ahead.pairs_used_ahead(), 6u);
+  // Rectification off for the current pair: nothing is taken ahead.
+  const int calls = next.calls;
+  expect_same(2, 16, all & ~stage_bit(protocol::Stage::rectify));
+  EXPECT_EQ(next.calls, calls);
 }
 
 // The temporal filter blends each disparity with the pairs before; after a gap (the frame loop

@@ -341,6 +341,48 @@ TEST(Recovery, CorruptFramesAreCountedApartAndNeverReopen) {
   EXPECT_GE(frames, 24);
 }
 
+// A loss found while reopening is deferred (frames lent before it are still being read) is
+// reported at once and often, without a reopen or a wait; the first acquire after the deferral
+// reopens the device, and frames flow again.
+TEST(Recovery, ADeferredLossIsReopenedOnlyOnceAllowed) {
+  Rig rig;
+  rig.left.inject({.kind = SimFaultKind::disconnect, .sequence = 5, .value = 0});
+  RecoveringCamera left(rig.left, rig.board.clock, {});
+  left.defer_reopen(true);
+  AcquireResult lent{};
+  int frames = 0;
+  for (;;) {
+    const AcquireResult r = left.acquire(2 * kPeriod);
+    if (r.status != AcquireStatus::ok) {
+      ASSERT_EQ(r.status, AcquireStatus::device_lost);
+      break;
+    }
+    ++frames;
+    if (lent.frame.valid()) left.release(lent.frame);
+    lent = r;  // the last frame stays lent across the loss
+  }
+  EXPECT_EQ(frames, 5);
+  EXPECT_TRUE(left.recovering());
+  EXPECT_EQ(left.counters().losses, 1u);
+  EXPECT_EQ(left.counters().reopen_attempts, 0u);
+  const Nanoseconds before = rig.board.clock.now();
+  EXPECT_EQ(left.acquire(2 * kPeriod).status, AcquireStatus::device_lost);
+  EXPECT_EQ(rig.board.clock.now(), before) << "a deferred loss does not wait";
+  EXPECT_EQ(left.counters().reopen_attempts, 0u);
+
+  left.release(lent.frame);
+  left.defer_reopen(false);
+  AcquireResult back = left.acquire(2 * kPeriod);
+  EXPECT_EQ(left.counters().reopen_attempts, 1u);
+  EXPECT_EQ(left.counters().reopens, 1u);
+  EXPECT_FALSE(left.recovering());
+  for (int i = 0; i < 3 && back.status == AcquireStatus::timeout; ++i) {
+    back = left.acquire(2 * kPeriod);  // the stream starts again at the next trigger
+  }
+  ASSERT_EQ(back.status, AcquireStatus::ok);
+  left.release(back.frame);
+}
+
 TEST(StereoPairing, DelaysAndSkewedTimestamps) {
   Rig rig;
   rig.left.inject({.kind = SimFaultKind::delay, .sequence = 5, .duration = 3 * kPeriod});

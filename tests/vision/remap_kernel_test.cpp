@@ -248,6 +248,33 @@ TEST(Rectifier, RowBandsMakeTheWholeImage) {
   EXPECT_THROW(banded.rectify_rows(image.cview(), -1, 5), Error);
 }
 
+// A rectifier without an image of its own fills the caller's, in bands as well; it refuses to
+// rectify into an image it does not have, and says so in its working set.
+TEST(Rectifier, FillsTheCallersImageInBands) {
+  test::BufferImage image(100, 60, 107, 3);
+  test::fill(image.view(), test::Pattern::blobs, 7);
+  const RemapMap map = mixed_map(90, 70, 100, 60, 9);
+  RectifierConfig config{
+      .source_width = 100, .source_height = 60, .width = 90, .height = 70, .border = 9};
+  Rectifier whole(config, map.clone());
+  config.own_output = false;
+  Rectifier borrowing(config, map.clone(), SimdPath::neon);
+  const GrayView expected = whole.rectify(image.cview());
+  test::BufferImage into(90, 70, 93, 5);  // odd stride, unaligned rows
+  for (const auto& [first, end] : {std::pair{31, 70}, std::pair{0, 31}}) {
+    borrowing.rectify_rows(image.cview(), into.view(), first, end);
+  }
+  for (int y = 0; y < 70; ++y) {
+    for (int x = 0; x < 90; ++x) ASSERT_EQ(into.cview()(x, y), expected(x, y)) << x << "," << y;
+  }
+  EXPECT_THROW(borrowing.rectify(image.cview()), Error);
+  EXPECT_THROW(borrowing.rectify_rows(image.cview(), 0, 10), Error);
+  EXPECT_THROW(borrowing.rectify_rows(image.cview(), into.view(), 69, 71), Error);
+  test::BufferImage small(89, 70, 93, 0);
+  EXPECT_THROW(borrowing.rectify_rows(image.cview(), small.view(), 0, 10), Error);
+  EXPECT_EQ(borrowing.working_set_bytes(), whole.working_set_bytes() - 70u * 128);
+}
+
 TEST(Rectifier, StatesItsWorkingSet) {
   Rectifier rectifier({.source_width = 640, .source_height = 480, .width = 640, .height = 480},
                       RemapMap(640, 480));

@@ -146,7 +146,7 @@ Rectifier::Rectifier(const RectifierConfig& config, RemapMap map, SimdPath path)
   require(map_.width() == config.width && map_.height() == config.height, "rectifier map is ",
           map_.width(), "x", map_.height(), " but the output is ", config.width, "x",
           config.height);
-  output_ = GrayImage(config.width, config.height);
+  if (config.own_output) output_ = GrayImage(config.width, config.height);
 }
 
 std::size_t Rectifier::working_set_bytes() const {
@@ -154,8 +154,13 @@ std::size_t Rectifier::working_set_bytes() const {
 }
 
 GrayView Rectifier::rectify(GrayView source) {
+  check_own_output();
   rectify(source, output_.view());
   return output_.view();
+}
+
+void Rectifier::check_own_output() const {
+  require(config_.own_output, "this rectifier has no image of its own: give it one to fill");
 }
 
 void Rectifier::check_source(GrayView source) const {
@@ -164,11 +169,24 @@ void Rectifier::check_source(GrayView source) const {
           " sources was given a ", source.width(), "x", source.height(), " image");
 }
 
-void Rectifier::rectify(GrayView source, MutableGrayView destination) {
+void Rectifier::rectify(GrayView source, MutableGrayView destination) const {
+  rectify_rows(source, destination, 0, config_.height);
+}
+
+GrayView Rectifier::rectify_rows(GrayView source, int first_row, int end_row) {
+  check_own_output();
+  rectify_rows(source, output_.view(), first_row, end_row);
+  return output_.view();
+}
+
+void Rectifier::rectify_rows(GrayView source, MutableGrayView destination, int first_row,
+                             int end_row) const {
   check_source(source);
   require(destination.width() == config_.width && destination.height() == config_.height,
           "rectifier output is ", config_.width, "x", config_.height, ", not ", destination.width(),
           "x", destination.height());
+  require(0 <= first_row && first_row <= end_row && end_row <= config_.height, "rows ", first_row,
+          "..", end_row, " are not within the rectified image's ", config_.height);
   // Byte ranges [first, last] of both images; std::less gives a total order on pointers.
   const std::uint8_t* source_end = source.row(source.height() - 1) + source.width();
   const std::uint8_t* destination_begin = destination.data();
@@ -177,16 +195,7 @@ void Rectifier::rectify(GrayView source, MutableGrayView destination) {
   const std::less<const std::uint8_t*> before;
   require(!before(destination_begin, source_end) || !before(source.data(), destination_end),
           "rectifier output overlaps its source");
-
-  remap_rows(source, destination, 0, config_.height);
-}
-
-GrayView Rectifier::rectify_rows(GrayView source, int first_row, int end_row) {
-  check_source(source);
-  require(0 <= first_row && first_row <= end_row && end_row <= config_.height, "rows ", first_row,
-          "..", end_row, " are not within the rectified image's ", config_.height);
-  remap_rows(source, output_.view(), first_row, end_row);
-  return output_.view();
+  remap_rows(source, destination, first_row, end_row);
 }
 
 void Rectifier::remap_rows(GrayView source, MutableGrayView destination, int first_row,

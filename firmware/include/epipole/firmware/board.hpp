@@ -46,6 +46,8 @@ class Board {
   hal::Clock& clock() { return hardware_.clock(); }
   hal::CameraSource& left() { return left_; }
   hal::CameraSource& right() { return right_; }
+  hal::RecoveringCamera& left_recovery() { return left_; }
+  hal::RecoveringCamera& right_recovery() { return right_; }
   const hal::RecoveringCamera& left_recovery() const { return left_; }
   const hal::RecoveringCamera& right_recovery() const { return right_; }
   hal::TriggerLine* trigger() { return hardware_.trigger(); }

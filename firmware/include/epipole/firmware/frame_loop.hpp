@@ -33,6 +33,10 @@ struct RunSummary {
   std::uint64_t frames = 0;    // pairs processed
   std::uint64_t stale = 0;     // pairs skipped because a newer one was already there
   std::uint64_t timeouts = 0;  // waits for a pair that timed out
+  // Pairs that came while the one before was processed, taken and rectified then (in the
+  // workers' last gaps), and of those the ones processed (the others were stale by then).
+  std::uint64_t taken_ahead = 0;
+  std::uint64_t rectified_ahead = 0;
   std::uint64_t health_messages = 0;
   std::uint64_t commands = 0;
   hal::PairingCounters pairing;
@@ -93,6 +97,7 @@ class FrameLoop {
   void tick();
   void publish_health();
   void say_device_changes();
+  hal::PairResult next_pair();
   bool take_freshest(hal::PairResult& got);
   struct TriggerTime {
     hal::Nanoseconds ns;
@@ -106,6 +111,19 @@ class FrameLoop {
     return not_calibrated_ ? mavlink::kMavStateCalibrating : mavlink::kMavStateActive;
   }
 
+  // The pair after the one in process, when it came meanwhile (the pipeline's NextPair): taken
+  // on one of the pipeline's workers, with the cameras' reopening deferred, since the current
+  // pair's frames may still be read.
+  class GrabAhead final : public NextPair {
+   public:
+    explicit GrabAhead(FrameLoop& loop) : loop_(loop) {}
+    std::optional<Images> take() override;
+    std::optional<hal::PairResult> result;  // what take() got: a pair, or a camera lost
+
+   private:
+    FrameLoop& loop_;
+  };
+
   const BoardConfig& config_;
   Board& board_;
   Pipeline& pipeline_;
@@ -117,6 +135,10 @@ class FrameLoop {
   StageMask stages_;
   bool not_calibrated_;  // the board's calibration file does not exist yet
   bool no_cascade_;      // nor its compiled cascade, with detection on
+  GrabAhead ahead_{*this};
+  // The host's time up to which the pair's compute was charged to the board's clock (a virtual
+  // clock that charges compute moves on before the next pair is looked for, as time would).
+  hal::Nanoseconds charged_until_ = 0;
   FrameObserver* observer_ = nullptr;
   std::function<void()> heartbeat_;
   RunSummary summary_;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -67,6 +68,22 @@ std::filesystem::path opencv_cascade_xml(const std::filesystem::path& compiled);
 // opencv_cascade_xml() when it is there.
 std::string cascade_compile_command(const std::filesystem::path& compiled);
 
+// Where the pipeline finds the pair after the one it is working on (pipelining across pairs):
+// the frame loop's grabber. take() returns the next pair's images when it has arrived, without
+// waiting; process() calls it at most once, on one of the pool's workers, once every task of the
+// current pair has started, and rectifies what it gets into its second set of images while the
+// current pair's last tasks run. The images must stay as they are until they are given to
+// process() (or dropped for a fresher pair).
+class NextPair {
+ public:
+  struct Images {
+    GrayView left, right;
+    std::uint32_t frame = 0;
+  };
+  virtual ~NextPair() = default;
+  virtual std::optional<Images> take() = 0;
+};
+
 // The vision stages of the frame loop, built once from the board configuration (and the rig's
 // calibration, when there is one) with all their memory; process() never allocates.
 class Pipeline {
@@ -83,8 +100,12 @@ class Pipeline {
   Pipeline& operator=(const Pipeline&) = delete;
 
   // Runs the enabled stages (a stage whose inputs are off does not run) on a captured pair.
+  // With `next`, the pair after it is taken and rectified ahead, in the workers' last gaps; a
+  // later process() of exactly those images (the same buffers and frame) uses that result, which
+  // is the same as rectifying them then. Its time is the rectification's of that pair.
   const FrameResult& process(GrayView left, GrayView right, std::uint32_t frame,
-                             hal::Nanoseconds trigger_ns, StageMask enabled);
+                             hal::Nanoseconds trigger_ns, StageMask enabled,
+                             NextPair* next = nullptr);
 
   // The next pair starts a new sequence: what filters over time (the disparity's temporal
   // filter) forgets the pairs before it. The frame loop calls it when a camera is lost; a pair
@@ -101,8 +122,20 @@ class Pipeline {
   const ObstacleSectors* obstacle_sectors() const { return obstacles_.get(); }
   // Every stage's buffers, one part per stage (as the table of stages names them).
   void add_memory(MemoryReport& report) const;
+  // Pairs rectified ahead (NextPair), and how many of them process() then used.
+  std::uint64_t pairs_rectified_ahead() const { return ahead_rectified_; }
+  std::uint64_t pairs_used_ahead() const { return ahead_used_; }
 
  private:
+  // The pair after the current one, rectified into the other set of images.
+  struct PairAhead {
+    NextPair::Images images;
+    int slot = 0;
+    hal::Nanoseconds rectify_ns = 0;
+    bool ready = false;
+    bool matches(GrayView left, GrayView right, std::uint32_t frame) const;
+  };
+  void rectify_now(FrameResult& r, int slot);
   void finish_dense(FrameResult& r);
   void match_sparse(FrameResult& r);
   void attach_depths(FrameResult& r);
@@ -124,6 +157,12 @@ class Pipeline {
   calib::CalibrationHealth calibration_health_;
   int max_points_ = 0;
   StageMask available_ = 0;
+  // Two rectified images per camera (with a calibration): the current pair's and the one ahead.
+  std::array<GrayImage, 2> rectified_left_, rectified_right_;
+  int slot_ = 0;  // the current pair's
+  PairAhead ahead_;
+  std::uint64_t ahead_rectified_ = 0;
+  std::uint64_t ahead_used_ = 0;
   FrameResult result_;
 };
 

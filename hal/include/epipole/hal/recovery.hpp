@@ -70,6 +70,12 @@ class RecoveringCamera final : public CameraSource {
   void reopen() override;
   void set_exposure(Nanoseconds exposure, double gain) override;
 
+  // While deferred, a loss that acquire() finds is reported (device_lost) but the device is not
+  // reopened, nor waited for: a reopen unmaps the buffers of frames lent before it, which their
+  // holder may still be reading (the frame loop, looking for the next pair while the current one
+  // is processed). The first acquire() after defer_reopen(false) reopens it.
+  void defer_reopen(bool defer) { defer_reopen_ = defer; }
+
   const RecoveryCounters& counters() const { return counters_; }
   bool recovering() const { return lost_; }
   const std::string& last_error() const { return last_error_; }
@@ -84,6 +90,7 @@ class RecoveringCamera final : public CameraSource {
   RecoveryCounters counters_;
   int timeouts_in_a_row_ = 0;
   bool lost_ = false;
+  bool defer_reopen_ = false;
   bool exposure_set_ = false;  // set_exposure() was called: its values outlive a reopen
   Nanoseconds exposure_ = 0;
   double gain_ = 0.0;

@@ -67,6 +67,9 @@ struct RectifierConfig {
   int width = 0;  // size of the rectified image: the map's size
   int height = 0;
   std::uint8_t border = 0;  // value of every source pixel outside the image
+  // False: the rectifier has no image of its own and rectifies only into the caller's (the
+  // frame loop's pipeline keeps two per camera, one for the pair ahead).
+  bool own_output = true;
 };
 
 // Bilinear remap of 8-bit gray images with a fixed map, the same result as
@@ -90,15 +93,18 @@ class Rectifier {
   Rectifier(const RectifierConfig& config, RemapMap map, SimdPath path = best_simd_path());
 
   // Rectifies a source image into the rectifier's own image; the view stays valid until the
-  // next call. Throws Error if the source size differs from the configuration.
+  // next call. Throws Error if the source size differs from the configuration, or the
+  // rectifier has no image of its own.
   GrayView rectify(GrayView source);
   // Rectifies into a caller's image of the configured (destination) size, which must not
   // overlap the source. Throws Error on a size mismatch or overlap.
-  void rectify(GrayView source, MutableGrayView destination);
+  void rectify(GrayView source, MutableGrayView destination) const;
   // Rectifies rows [first_row, end_row) of the rectifier's own image only (row bands of one
   // image on several threads at once: the bands must not overlap); returns the whole image.
-  // Throws Error on a size mismatch or rows outside the image.
+  // Throws Error on a size mismatch, rows outside the image, or no image of its own.
   GrayView rectify_rows(GrayView source, int first_row, int end_row);
+  // The same into a caller's image, as rectify(source, destination) checks it.
+  void rectify_rows(GrayView source, MutableGrayView destination, int first_row, int end_row) const;
 
   std::size_t working_set_bytes() const;
   const RectifierConfig& config() const { return config_; }
@@ -108,6 +114,7 @@ class Rectifier {
  private:
   // Throws Error for a source of another size than the configuration's.
   void check_source(GrayView source) const;
+  void check_own_output() const;
   void remap_rows(GrayView source, MutableGrayView destination, int first_row, int end_row) const;
 
   RectifierConfig config_;

@@ -27,6 +27,9 @@ struct BenchOptions {
   std::vector<std::string> overrides;  // KEY=VALUE set over the board file's (--set)
   int pairs = 30;
   int warmup = 3;
+  // Each pair's rectification done while the one before ends, as the firmware's loop does when
+  // the next pair is there (the trigger above what the loop follows); false: pair by pair.
+  bool rectify_ahead = true;
   bool epipole = true;  // false: OpenCV's side only (--opencv-only: one side's instruction count)
   bool opencv = true;
   bool json = false;
