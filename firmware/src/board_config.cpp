@@ -56,11 +56,27 @@ class BoardReader {
   BoardConfig read(const std::string& text) {
     const YAML::Node root = f_.parse(text);
     f_.require_map(root, "");
-    f_.only_keys(
-        root, "",
-        {"version", "name", "cameras", "trigger", "pairing", "serial", "calibration", "stages",
-         "corners", "stereo", "sparse", "detector", "obstacles", "threads", "memory_budget_mb",
-         "snapshot_directory", "snapshot_limit", "snapshot_min_free_mb", "sim"});
+    f_.only_keys(root, "",
+                 {"version",
+                  "name",
+                  "cameras",
+                  "trigger",
+                  "pairing",
+                  "serial",
+                  "calibration",
+                  "stages",
+                  "corners",
+                  "stereo",
+                  "sparse",
+                  "detector",
+                  "obstacles",
+                  "depth_grid",
+                  "threads",
+                  "memory_budget_mb",
+                  "snapshot_directory",
+                  "snapshot_limit",
+                  "snapshot_min_free_mb",
+                  "sim"});
     const int version = f_.integer(f_.child(root, "", "version"), "version");
     if (version < 1 || version > BoardConfig::kVersion) {
       f_.fail("version", cat(version, " is not a board file version this firmware reads (1..",
@@ -82,6 +98,7 @@ class BoardReader {
     read_sparse(root, c);
     read_detector(root, c);
     read_obstacles(root, c);
+    read_depth_grid(root, c);
     read_threads(root, c);
     if (const YAML::Node n = f_.optional_child(root, "", "memory_budget_mb"); n.IsDefined()) {
       const double mb = f_.number(n, "memory_budget_mb");
@@ -418,6 +435,27 @@ class BoardReader {
     integer(n, "obstacles", "min_confidence", o.min_confidence, 0, 255);
     if (o.max_depth_m <= o.min_depth_m) {
       f_.fail("obstacles.max_depth_m", "must be greater than min_depth_m");
+    }
+  }
+
+  void read_depth_grid(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n = section(
+        root, "depth_grid", {"columns", "rows", "min_depth_m", "max_depth_m", "min_confidence"});
+    BoardConfig::DepthGrid& g = c.depth_grid;
+    integer(n, "depth_grid", "columns", g.columns, 0, protocol::kMaxGridCells);
+    integer(n, "depth_grid", "rows", g.rows, 0, protocol::kMaxGridCells);
+    if ((g.columns == 0) != (g.rows == 0)) {
+      f_.fail("depth_grid", "columns and rows are both 0 (no grid) or both at least 1");
+    }
+    if (g.columns * g.rows > protocol::kMaxGridCells) {
+      f_.fail("depth_grid", cat(g.columns, "x", g.rows, " cells is more than the ",
+                                protocol::kMaxGridCells, " a message holds"));
+    }
+    number(n, "depth_grid", "min_depth_m", g.min_depth_m, 0.0, 1000.0);
+    number(n, "depth_grid", "max_depth_m", g.max_depth_m, 0.001, 65.5);
+    integer(n, "depth_grid", "min_confidence", g.min_confidence, 0, 255);
+    if (g.max_depth_m <= g.min_depth_m) {
+      f_.fail("depth_grid.max_depth_m", "must be greater than min_depth_m");
     }
   }
 

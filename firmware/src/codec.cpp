@@ -73,12 +73,21 @@ struct Reader {
   bool ok() const { return valid && in.ok(); }
 };
 
+// What the fields alone cannot say: a grid's cells fill whole rows.
+template <class M>
+bool well_formed(const M&) {
+  return true;
+}
+bool well_formed(const DepthGrid& grid) {
+  return grid.columns >= 1 && grid.count % grid.columns == 0;
+}
+
 template <class M>
 std::optional<Message> read_as(std::span<const std::uint8_t> body) {
   Reader reader{ByteReader(body)};
   M message{};
   fields(reader, message);
-  if (!reader.ok() || reader.in.remaining() != 0) return std::nullopt;
+  if (!reader.ok() || reader.in.remaining() != 0 || !well_formed(message)) return std::nullopt;
   return Message(message);
 }
 
@@ -91,6 +100,7 @@ bool is_known(std::uint8_t type) {
     case MessageType::points:
     case MessageType::calibration_health:
     case MessageType::command_ack:
+    case MessageType::depth_grid:
     case MessageType::set_trigger_rate:
     case MessageType::set_exposure:
     case MessageType::set_stages:
@@ -107,7 +117,7 @@ MessageType type_of(const Message& message) {
       MessageType::health,      MessageType::frame_summary,    MessageType::detections,
       MessageType::obstacles,   MessageType::points,           MessageType::calibration_health,
       MessageType::command_ack, MessageType::set_trigger_rate, MessageType::set_exposure,
-      MessageType::set_stages,  MessageType::snapshot};
+      MessageType::set_stages,  MessageType::snapshot,         MessageType::depth_grid};
   static_assert(std::size(kTypes) == std::variant_size_v<Message>);
   return kTypes[message.index()];
 }
@@ -128,6 +138,8 @@ const char* name_of(MessageType type) {
       return "calibration";
     case MessageType::command_ack:
       return "ack";
+    case MessageType::depth_grid:
+      return "depth_grid";
     case MessageType::set_trigger_rate:
       return "set_trigger_rate";
     case MessageType::set_exposure:
@@ -156,6 +168,8 @@ std::optional<Message> decode_body(MessageType type, std::span<const std::uint8_
       return read_as<CalibrationHealth>(body);
     case MessageType::command_ack:
       return read_as<CommandAck>(body);
+    case MessageType::depth_grid:
+      return read_as<DepthGrid>(body);
     case MessageType::set_trigger_rate:
       return read_as<SetTriggerRate>(body);
     case MessageType::set_exposure:

@@ -113,6 +113,7 @@ void FrameLoop::finish() {
     grabber_.release(ahead_.result->pair);  // taken ahead, not processed
   }
   ahead_.result.reset();
+  pipeline_.drop_pair_ahead();
   if (trigger_) trigger_->stop();
   board_.left().stop();
   board_.right().stop();
@@ -310,6 +311,7 @@ void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool tri
   send(m.summary);
   if (m.detections) send(*m.detections);
   if (m.obstacles) send(*m.obstacles);
+  if (m.depth_grid) send(*m.depth_grid);
   if (m.points) send(*m.points);
 }
 
@@ -385,6 +387,12 @@ std::optional<NextPair::Images> FrameLoop::GrabAhead::take() {
       right.defer_reopen(false);
     }
   };
+  // With two buffers a camera has none left while two pairs are held: the next one is taken
+  // when the current one is done.
+  if (loop_.board_.left().config().buffer_count < 3 ||
+      loop_.board_.right().config().buffer_count < 3) {
+    return std::nullopt;
+  }
   const hal::Nanoseconds now = steady_now();
   loop_.board_.clock().spend(now - loop_.charged_until_);
   loop_.charged_until_ = now;
@@ -417,11 +425,13 @@ bool FrameLoop::take_freshest(hal::PairResult& got) {
   }
   if (got.status == hal::PairStatus::device_lost) {
     grabber_.pairer().reset(got.lost_side);
+    pipeline_.drop_pair_ahead();
     return false;
   }
   const auto skip = [&] {
     grabber_.pairer().ledger().stale(got.pair.left.sequence);
     grabber_.release(got.pair);
+    pipeline_.drop_pair_ahead();  // it may be the pair taken ahead
     ++summary_.stale;
   };
   for (;;) {
@@ -500,8 +510,8 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
     grabber_.release(got.pair);
   }
   finish();
-  summary_.taken_ahead = pipeline_.pairs_rectified_ahead();
-  summary_.rectified_ahead = pipeline_.pairs_used_ahead();
+  summary_.rectified_ahead = pipeline_.pairs_rectified_ahead();
+  summary_.used_ahead = pipeline_.pairs_used_ahead();
   summary_.pairing = grabber_.pairer().counters();
   summary_.faults = faults();
   summary_.link = link_.counters();

@@ -83,6 +83,7 @@ PairMessages pair_messages(const FrameResult& r, hal::Nanoseconds latency,
   m.summary = summary_of(r, latency, trigger_from_capture);
   if (protocol::has_stage(r.stages, protocol::Stage::detect)) m.detections = detections_of(r);
   if (r.obstacles != nullptr) m.obstacles = *r.obstacles;
+  if (r.depth_grid != nullptr) m.depth_grid = *r.depth_grid;
   if (!r.best_points.empty()) m.points = points_of(r);
   return m;
 }

@@ -168,19 +168,33 @@ Pipeline::Pipeline(const BoardConfig& board,
   stereo.width = board.width();
   stereo.height = board.height();
   if (calibration) {
+    const auto cells = [&](DepthCellsConfig& c, double min_depth_m, double max_depth_m,
+                           int min_confidence) {
+      c.width = board.width();
+      c.height = board.height();
+      c.max_disparity = stereo.max_disparity;
+      c.min_depth_m = min_depth_m;
+      c.max_depth_m = max_depth_m;
+      c.min_confidence = min_confidence;
+    };
+    const BoardConfig::Obstacles& sectors = board.obstacles;
     ObstacleConfig o;
-    o.width = board.width();
-    o.height = board.height();
-    o.max_disparity = stereo.max_disparity;
-    o.sectors = board.obstacles.sectors;
-    o.band_top = board.obstacles.band_top;
-    o.band_bottom = board.obstacles.band_bottom;
-    o.min_depth_m = board.obstacles.min_depth_m;
-    o.max_depth_m = board.obstacles.max_depth_m;
-    o.min_confidence = board.obstacles.min_confidence;
-    stereo.confidence = o.min_confidence > 0;
+    cells(o, sectors.min_depth_m, sectors.max_depth_m, sectors.min_confidence);
+    o.columns = sectors.sectors;
+    o.band_top = sectors.band_top;
+    o.band_bottom = sectors.band_bottom;
+    const BoardConfig::DepthGrid& grid = board.depth_grid;
+    stereo.confidence = sectors.min_confidence > 0 || (grid.columns > 0 && grid.min_confidence > 0);
     const auto& P1 = calibration->left.projection;
     obstacles_ = std::make_unique<ObstacleSectors>(o, *triangulator_, P1(0, 0), P1(0, 2));
+    if (grid.columns > 0) {
+      DepthCellsConfig g;
+      cells(g, grid.min_depth_m, grid.max_depth_m, grid.min_confidence);
+      g.columns = grid.columns;
+      g.rows = grid.rows;
+      depth_grid_ = std::make_unique<DepthGrid>(
+          g, *triangulator_, RectifiedPinhole{P1(0, 0), P1(0, 2), P1(1, 1), P1(1, 2)});
+    }
   }
   // The detector, when the board has a cascade (or one is given) and detection is on; a
   // compiled cascade that was not made yet leaves detection off until it is.
@@ -221,7 +235,8 @@ void Pipeline::add_memory(MemoryReport& report) const {
   report.add(name(Stage::corners), stages_->corners_left.working_set_bytes() +
                                        stages_->corners_right.working_set_bytes());
   report.add(name(Stage::disparity), stages_->matcher->working_set_bytes() +
-                                         (obstacles_ ? obstacles_->working_set_bytes() : 0));
+                                         (obstacles_ ? obstacles_->working_set_bytes() : 0) +
+                                         (depth_grid_ ? depth_grid_->working_set_bytes() : 0));
   report.add(name(Stage::sparse),
              stages_->sparse.working_set_bytes() + points_.capacity() * sizeof(SparsePoint) +
                  point_order_.capacity() * sizeof(std::uint32_t) +
@@ -327,8 +342,11 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   auto sparse = [&](int, int) { match_sparse(r); };
   auto level = [&](int i, int worker) { detector_->search_level(i, worker); };
   // The next pair, when it is there and of the images' size (one that is not is rectified, and
-  // refused, when it is processed itself), into the other slot.
+  // refused, when it is processed itself), into the other slot, in as many row bands per image as
+  // there are workers. It counts as rectified ahead only once the whole batch has run.
   const int ahead_slot = 1 - slot_;
+  const int ahead_bands = pool_->threads();
+  bool took_next = false;
   auto take_next = [&](int, int) {
     const std::optional<NextPair::Images> images = next->take();
     const auto fits = [&](GrayView image) {
@@ -336,18 +354,21 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
     };
     if (images && fits(images->left) && fits(images->right)) {
       ahead_.images = *images;
-      ahead_.slot = ahead_slot;
-      ahead_.ready = true;
+      took_next = true;
     }
   };
-  auto rectify_next = [&](int image, int) {
-    if (!ahead_.ready) return;
+  auto rectify_next = [&](int task, int) {
+    if (!took_next) return;
     StereoRectifiers& rectifiers = *stages_->rectifiers;
     const std::size_t slot = static_cast<std::size_t>(ahead_slot);
-    if (image == 0) {
-      rectifiers.left.rectify(ahead_.images.left, rectified_left_[slot].view());
+    const int band = task / 2;
+    const int height = left.height();
+    const int first = band * height / ahead_bands;
+    const int end = (band + 1) * height / ahead_bands;
+    if (task % 2 == 0) {
+      rectifiers.left.rectify_rows(ahead_.images.left, rectified_left_[slot].view(), first, end);
     } else {
-      rectifiers.right.rectify(ahead_.images.right, rectified_right_[slot].view());
+      rectifiers.right.rectify_rows(ahead_.images.right, rectified_right_[slot].view(), first, end);
     }
   };
   TaskBatch& batch = batch_;
@@ -362,14 +383,16 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   if (protocol::has_stage(run, Stage::sparse)) sparse_part = batch.add(1, sparse, corners_part);
   if (protocol::has_stage(run, Stage::detect)) levels_part = batch.add(levels, level);
   if (next != nullptr && rectify) {
-    ahead_part = batch.add(2, rectify_next, batch.add(1, take_next));
+    ahead_part = batch.add(2 * ahead_bands, rectify_next, batch.add(1, take_next));
   }
   batch.run(*pool_);
   time_of(Stage::corners) = batch.span_ns(corners_part, corners_part);
   time_of(Stage::disparity) = batch.span_ns(stripes_part, stripes_part);
   time_of(Stage::sparse) = batch.span_ns(sparse_part, sparse_part);
-  if (ahead_.ready) {
+  if (took_next) {
+    ahead_.slot = ahead_slot;
     ahead_.rectify_ns = batch.span_ns(ahead_part, ahead_part);
+    ahead_.ready = true;
     ++ahead_rectified_;
   }
   if (protocol::has_stage(run, Stage::detect)) {
@@ -393,6 +416,9 @@ void Pipeline::finish_dense(FrameResult& r) {
       valid * 1000 / (static_cast<std::uint64_t>(r.disparity.width()) * r.disparity.height()));
   if (obstacles_) {
     r.obstacles = &obstacles_->measure(r.disparity, r.frame, stages_->matcher->confidence());
+  }
+  if (depth_grid_) {
+    r.depth_grid = &depth_grid_->measure(r.disparity, r.frame, stages_->matcher->confidence());
   }
 }
 

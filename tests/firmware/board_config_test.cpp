@@ -39,6 +39,7 @@ TEST(BoardConfig, ReadsEveryKey) {
       "pairing: {tolerance_us: 1500}\n"
       "obstacles: {sectors: 36, band: [0.1, 0.9], min_depth_m: 0.5, max_depth_m: 12, "
       "min_confidence: 96}\n"
+      "depth_grid: {columns: 16, rows: 12, min_depth_m: 0.3, max_depth_m: 8, min_confidence: 64}\n"
       "threads: {count: 3, affinity: [0, 1], realtime_priority: 10, lock_memory: true}\n"
       "detector: {cascade: face.bin, scale_factor: 1.2, min_neighbors: 4, min_size: 40}\n"
       "memory_budget_mb: 8\n"
@@ -65,6 +66,11 @@ TEST(BoardConfig, ReadsEveryKey) {
   EXPECT_EQ(c.obstacles.band_top, 0.1);
   EXPECT_EQ(c.obstacles.max_depth_m, 12.0);
   EXPECT_EQ(c.obstacles.min_confidence, 96);
+  EXPECT_EQ(c.depth_grid.columns, 16);
+  EXPECT_EQ(c.depth_grid.rows, 12);
+  EXPECT_EQ(c.depth_grid.min_depth_m, 0.3);
+  EXPECT_EQ(c.depth_grid.max_depth_m, 8.0);
+  EXPECT_EQ(c.depth_grid.min_confidence, 64);
   EXPECT_EQ(c.threads.count, 3);
   EXPECT_EQ(c.threads.affinity, (std::vector<int>{0, 1}));
   EXPECT_EQ(c.threads.realtime_priority, 10);
@@ -159,6 +165,12 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
        "obstacles.min_confidence: 300 is outside"},
       {"band", "", "obstacles: {band: [0.8, 0.2]}\n",
        "obstacles.band: expected [top, bottom] with 0 <= top < bottom <= 1"},
+      {"grid half off", "", "depth_grid: {columns: 8}\n",
+       "depth_grid: columns and rows are both 0 (no grid) or both at least 1"},
+      {"grid too big", "", "depth_grid: {columns: 16, rows: 16}\n",
+       "depth_grid: 16x16 cells is more than the 240 a message holds"},
+      {"grid range", "", "depth_grid: {columns: 4, rows: 3, min_depth_m: 5, max_depth_m: 2}\n",
+       "depth_grid.max_depth_m: must be greater than min_depth_m"},
       {"affinity", "", "threads: {affinity: [0.5]}\n", "threads.affinity: 0.5 is not a CPU number"},
       {"boolean", "sparse: false", "sparse: maybe", "stages.sparse: expected true or false"},
       {"an always-on stage", "sparse: false", "sparse: false, publish: false",

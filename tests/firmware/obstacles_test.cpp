@@ -1,4 +1,5 @@
 #include "epipole/firmware/obstacles.hpp"
+#include "epipole/firmware/depth_grid.hpp"
 
 #include <gtest/gtest.h>
 
@@ -28,12 +29,23 @@ struct Fixture {
       for (int x = x0; x < x1; ++x) disparity.view()(x, y) = static_cast<std::int16_t>(d16);
     }
   }
+  DepthCellsConfig grid(int columns, int rows) const {
+    DepthCellsConfig c;
+    c.width = kW;
+    c.height = kH;
+    c.max_disparity = 32;
+    c.columns = columns;
+    c.rows = rows;
+    return c;
+  }
+  // The rig's rectified camera: fx = fy, the principal point in the middle.
+  static RectifiedPinhole camera() { return {kF, (kW - 1) / 2.0, kF, (kH - 1) / 2.0}; }
   ObstacleConfig config(int sectors) const {
     ObstacleConfig c;
     c.width = kW;
     c.height = kH;
     c.max_disparity = 32;
-    c.sectors = sectors;
+    c.columns = sectors;
     return c;
   }
 };
@@ -122,6 +134,78 @@ TEST(ObstacleSectors, BadInputIsAnError) {
   ObstacleSectors sectors(c, f.triangulator, kF, 80);
   Image<std::int16_t> small(10, 10);
   EXPECT_THROW(sectors.measure(small.view(), 0), Error);
+}
+
+// A 4 x 3 grid over the whole view splits it evenly by angle: column edges at -38.7, -19.3, 0,
+// 19.3 and 38.7 degrees (pixel columns 0..114 | 115..159 for the last), row edges at -25.6, -8.6,
+// 8.6 and 25.6 degrees (rows 0..32 | 33..62 | 63..95). A box in columns 120..149, rows 30..69
+// is in the last column's three cells; the wall behind it is in every other.
+TEST(DepthGrid, NearestDepthPerCellByAngleBothWays) {
+  Fixture f;
+  f.fill(0, kW, 0, kH, 4 * 16 + 8);   // a wall at 4.5 px: 2.22 m
+  f.fill(120, 150, 30, 70, 20 * 16);  // a box at 20 px: 0.5 m
+  DepthGrid grid(f.grid(4, 3), f.triangulator, Fixture::camera());
+  const protocol::DepthGrid& g = grid.measure(f.disparity.view(), 7);
+  EXPECT_EQ(g.frame, 7u);
+  EXPECT_EQ(g.columns, 4);
+  EXPECT_EQ(g.count, 12);
+  const auto centideg = [](double half_pixels) {
+    return static_cast<int>(
+        std::lround(2 * std::atan(half_pixels / kF) * 180 / 3.14159265358979 * 100));
+  };
+  EXPECT_EQ(g.field_of_view_centideg, centideg(80));
+  EXPECT_EQ(g.vertical_field_of_view_centideg, centideg(48));
+  const auto wall = static_cast<std::uint16_t>(std::lround(kF * kB / 4.5 * 1000));
+  const auto box = static_cast<std::uint16_t>(std::lround(kF * kB / 20.0 * 1000));
+  for (int row = 0; row < 3; ++row) {
+    for (int column = 0; column < 4; ++column) {
+      EXPECT_EQ(g.nearest_mm[static_cast<std::size_t>(row * 4 + column)], column == 3 ? box : wall)
+          << column << "," << row;
+    }
+  }
+  // Taller than the box's top rows (30..32 are 90 pixels of the top cell): a box moved down
+  // below row 33 leaves the top row to the wall.
+  f.fill(0, kW, 0, kH, 4 * 16 + 8);
+  f.fill(120, 150, 40, 70, 20 * 16);
+  const protocol::DepthGrid& lower = grid.measure(f.disparity.view(), 8);
+  EXPECT_EQ(lower.nearest_mm[3], wall);
+  EXPECT_EQ(lower.nearest_mm[7], box);
+  EXPECT_EQ(lower.nearest_mm[11], box);
+}
+
+// The grid takes the board's minimum confidence as the sectors do.
+TEST(DepthGrid, PixelsBelowTheMinimumConfidenceAreLeftOut) {
+  Fixture f;
+  f.fill(0, kW, 0, kH, 4 * 16);
+  f.fill(0, 60, 0, 40, 20 * 16);  // a doubtful near patch in the top left cell
+  Image<std::uint8_t> confidence(kW, kH);
+  for (int y = 0; y < kH; ++y) {
+    for (int x = 0; x < kW; ++x) confidence.view()(x, y) = x < 60 && y < 40 ? 40 : 200;
+  }
+  const auto wall = static_cast<std::uint16_t>(std::lround(kF * kB / 4.0 * 1000));
+  DepthCellsConfig c = f.grid(2, 2);
+  DepthGrid every_pixel(c, f.triangulator, Fixture::camera());
+  EXPECT_NE(every_pixel.measure(f.disparity.view(), 1, confidence.view()).nearest_mm[0], wall);
+  c.min_confidence = 64;
+  DepthGrid trusted(c, f.triangulator, Fixture::camera());
+  const protocol::DepthGrid& g = trusted.measure(f.disparity.view(), 1, confidence.view());
+  for (int cell = 0; cell < 4; ++cell)
+    EXPECT_EQ(g.nearest_mm[static_cast<std::size_t>(cell)], wall);
+  EXPECT_THROW(trusted.measure(f.disparity.view(), 1), Error) << "no confidence given";
+}
+
+TEST(DepthGrid, BadInputIsAnError) {
+  Fixture f;
+  EXPECT_THROW(DepthGrid(f.grid(0, 3), f.triangulator, Fixture::camera()), Error);
+  EXPECT_THROW(DepthGrid(f.grid(16, 16), f.triangulator, Fixture::camera()), Error)
+      << "more cells than a message holds";
+  EXPECT_THROW(DepthGrid(f.grid(4, 3), f.triangulator, {kF, 80, 0, 48}), Error) << "no fy";
+  DepthCellsConfig far = f.grid(4, 3);
+  far.max_depth_m = 70;
+  EXPECT_THROW(DepthGrid(far, f.triangulator, Fixture::camera()), Error);
+  DepthGrid grid(f.grid(16, 15), f.triangulator, Fixture::camera());
+  Image<std::int16_t> small(10, 10);
+  EXPECT_THROW(grid.measure(small.view(), 0), Error);
 }
 
 }  // namespace

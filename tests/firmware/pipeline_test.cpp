@@ -165,9 +165,17 @@ TEST(Pipeline, PairsRectifiedAheadGiveWhatPairByPairGives) {
     EXPECT_TRUE(same_image(a.left, b.left));
     EXPECT_TRUE(same_image(a.right, b.right));
     EXPECT_TRUE(same(a.corners_left, b.corners_left));
+    EXPECT_TRUE(same(a.corners_right, b.corners_right));
     EXPECT_TRUE(same(a.matches, b.matches));
+    EXPECT_TRUE(same(a.points, b.points));
     EXPECT_TRUE(same_image(a.disparity, b.disparity));
+    ASSERT_EQ(a.obstacles == nullptr, b.obstacles == nullptr);
+    if (a.obstacles != nullptr) {
+      EXPECT_EQ(*a.obstacles, *b.obstacles);
+    }
+    EXPECT_EQ(a.calibration_health.has_value(), b.calibration_health.has_value());
     EXPECT_TRUE(same(a.detections, b.detections));
+    EXPECT_TRUE(same_depths(a.detection_depths, b.detection_depths));
     EXPECT_EQ(protocol::has_stage(b.stages, protocol::Stage::rectify),
               b.times[static_cast<std::size_t>(protocol::Stage::rectify)] > 0);
   };
@@ -199,6 +207,15 @@ TEST(Pipeline, PairsRectifiedAheadGiveWhatPairByPairGives) {
   next.give(small.view(), small.view(), 13);
   expect_same(1, 12, all);
   EXPECT_EQ(ahead.pairs_rectified_ahead(), 8u);
+  // A pair taken ahead and dropped (its buffers went back): the same buffers and number later
+  // are another pair.
+  next.give(images.left[2].view(), images.right[2].view(), 13);
+  expect_same(1, 12, all);
+  ahead.drop_pair_ahead();
+  by_pair.drop_pair_ahead();
+  expect_same(2, 13, all);
+  EXPECT_EQ(ahead.pairs_rectified_ahead(), 9u);
+  EXPECT_EQ(ahead.pairs_used_ahead(), 6u);
   // Rectification off for the pair taken ahead: the raw images go on.
   next.give(images.left[2].view(), images.right[2].view(), 15);
   expect_same(0, 14, all);

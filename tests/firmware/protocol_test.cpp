@@ -104,6 +104,13 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
   obstacles.field_of_view_centideg = 9000;
   obstacles.count = kMaxSectors;
   for (auto& n : obstacles.nearest_mm) n = u16();
+  DepthGrid grid;
+  grid.frame = rng();
+  grid.field_of_view_centideg = 7732;
+  grid.vertical_field_of_view_centideg = 5129;
+  grid.columns = 16;
+  grid.count = kMaxGridCells;
+  for (auto& n : grid.nearest_mm) n = u16();
   Points points;
   points.frame = rng();
   points.count = 5;
@@ -121,7 +128,8 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
           SetTriggerRate{30'000},
           SetExposure{5000, 120},
           SetStages{0x3F},
-          Snapshot{}};
+          Snapshot{},
+          grid};
 }
 
 Bytes frame_of(const Message& message, std::uint16_t sequence) {
@@ -399,6 +407,16 @@ TEST(Protocol, BodiesWithWrongLengthsOrCountsAreRejected) {
   EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 2}));     // version 2's ack
   EXPECT_TRUE(decode_body(MessageType::command_ack, Bytes{1, 0, 3, 0}));
   EXPECT_TRUE(decode_body(MessageType::command_ack, Bytes{1, 0, 1, 6}));
+  // A depth grid's cells fill whole rows: frame, two fields of view, columns, count, cells.
+  const auto grid = [](std::uint8_t columns, std::uint8_t count) {
+    Bytes body{1, 0, 0, 0, 0x20, 0x1e, 0x10, 0x14, columns, count};
+    for (int i = 0; i < count; ++i) body.insert(body.end(), {0xE8, 0x03});
+    return body;
+  };
+  EXPECT_TRUE(decode_body(MessageType::depth_grid, grid(3, 6)));
+  EXPECT_FALSE(decode_body(MessageType::depth_grid, grid(4, 6)));     // a row and a half
+  EXPECT_FALSE(decode_body(MessageType::depth_grid, grid(0, 0)));     // no columns
+  EXPECT_FALSE(decode_body(MessageType::depth_grid, grid(15, 255)));  // over 240 cells
 }
 
 TEST(Protocol, EncodingRejectsImpossibleMessages) {

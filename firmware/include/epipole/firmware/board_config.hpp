@@ -93,6 +93,15 @@ struct BoardConfig {
     int min_confidence = 0;  // 1..255: pixels the disparity trusts less are left out; 0 off
   } obstacles;
 
+  // The nearest depth in a grid of cells over the whole view, sent with each pair (0 x 0: off).
+  struct DepthGrid {
+    int columns = 0;
+    int rows = 0;
+    double min_depth_m = 0.2;
+    double max_depth_m = 20.0;
+    int min_confidence = 0;  // as the obstacles'
+  } depth_grid;
+
   struct Threads {
     // The vision stages' pool (and the disparity's row stripes). Not given: the CPUs the
     // firmware may run on (affinity's, else the process's).

@@ -35,8 +35,8 @@ struct RunSummary {
   std::uint64_t timeouts = 0;  // waits for a pair that timed out
   // Pairs that came while the one before was processed, taken and rectified then (in the
   // workers' last gaps), and of those the ones processed (the others were stale by then).
-  std::uint64_t taken_ahead = 0;
   std::uint64_t rectified_ahead = 0;
+  std::uint64_t used_ahead = 0;
   std::uint64_t health_messages = 0;
   std::uint64_t commands = 0;
   hal::PairingCounters pairing;

@@ -16,6 +16,7 @@ struct PairMessages {
   protocol::FrameSummary summary;
   std::optional<protocol::Detections> detections;  // when the detector ran (maybe none found)
   std::optional<protocol::Obstacles> obstacles;    // with the disparity and a calibration
+  std::optional<protocol::DepthGrid> depth_grid;   // the same, with the board's depth_grid
   std::optional<protocol::Points> points;          // when the pair has 3-D points to send
 };
 

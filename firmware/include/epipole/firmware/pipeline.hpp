@@ -17,6 +17,7 @@
 #include "epipole/core/task_batch.hpp"
 #include "epipole/core/thread_pool.hpp"
 #include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/depth_grid.hpp"
 #include "epipole/firmware/detection_depth.hpp"
 #include "epipole/firmware/health_monitor.hpp"
 #include "epipole/firmware/memory_report.hpp"
@@ -45,9 +46,10 @@ struct FrameResult {
   std::span<const vision::Corner> corners_left, corners_right;
   ImageView<const std::int16_t> disparity;  // x16, vision::kInvalidDisparity; empty when off
   int valid_disparity_permille = 0;
-  const protocol::Obstacles* obstacles = nullptr;  // null without disparity or calibration
-  std::span<const vision::SparseMatch> matches;    // sparse matches along the rows
-  std::span<const SparsePoint> points;             // their 3-D points (with a calibration)
+  const protocol::Obstacles* obstacles = nullptr;   // null without disparity or calibration
+  const protocol::DepthGrid* depth_grid = nullptr;  // the same, or without the board's grid
+  std::span<const vision::SparseMatch> matches;     // sparse matches along the rows
+  std::span<const SparsePoint> points;              // their 3-D points (with a calibration)
   // The matches to send as 3-D points (sparse.max_points, smallest descriptor distance first):
   // indices into `points`.
   std::span<const std::uint32_t> best_points;
@@ -110,7 +112,14 @@ class Pipeline {
   // The next pair starts a new sequence: what filters over time (the disparity's temporal
   // filter) forgets the pairs before it. The frame loop calls it when a camera is lost; a pair
   // after one without disparity starts a new sequence by itself.
-  void reset_history() { disparity_ran_last_ = false; }
+  void reset_history() {
+    disparity_ran_last_ = false;
+    drop_pair_ahead();
+  }
+  // The pair taken ahead (NextPair) will not be processed: its buffers went back to the cameras,
+  // and a later pair in the same buffers with the same number (a camera's count restarted) must
+  // not be taken for it.
+  void drop_pair_ahead() { ahead_.ready = false; }
 
   // The stages this pipeline can run (rectification needs a calibration, and so on).
   StageMask available() const { return available_; }
@@ -146,6 +155,7 @@ class Pipeline {
   TaskBatch batch_;
   std::unique_ptr<calib::Triangulator> triangulator_;
   std::unique_ptr<ObstacleSectors> obstacles_;
+  std::unique_ptr<DepthGrid> depth_grid_;
   bool disparity_ran_last_ = false;  // false: the next disparity starts a new sequence
   std::vector<SparsePoint> points_;
   std::vector<std::uint32_t> point_order_;

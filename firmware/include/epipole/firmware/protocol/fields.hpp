@@ -77,6 +77,17 @@ void fields(Io& io, M& m) {
 }
 
 template <class Io, class M>
+requires std::is_same_v<std::remove_const_t<M>, DepthGrid>
+void fields(Io& io, M& m) {
+  io("frame", m.frame);
+  io("field_of_view_centideg", m.field_of_view_centideg);
+  io("vertical_field_of_view_centideg", m.vertical_field_of_view_centideg);
+  io("columns", m.columns);
+  io.list("nearest_mm", m.count, kMaxGridCells, m.nearest_mm,
+          [](Io& item_io, auto& nearest) { item_io("mm", nearest); });
+}
+
+template <class Io, class M>
 requires std::is_same_v<std::remove_const_t<M>, Points>
 void fields(Io& io, M& m) {
   io("frame", m.frame);

@@ -22,6 +22,7 @@ enum class MessageType : std::uint8_t {
   points = 0x05,
   calibration_health = 0x06,
   command_ack = 0x07,
+  depth_grid = 0x08,
   // robot -> firmware
   set_trigger_rate = 0x80,
   set_exposure = 0x81,
@@ -112,6 +113,20 @@ struct Obstacles {
   friend bool operator==(const Obstacles&, const Obstacles&) = default;
 };
 
+// The nearest depth in each cell of a grid over the whole rectified left view (the board's
+// depth_grid): cells left to right, then top to bottom, splitting the horizontal and the vertical
+// field of view evenly by angle. count is columns x rows.
+inline constexpr int kMaxGridCells = 240;
+struct DepthGrid {
+  std::uint32_t frame = 0;
+  std::uint16_t field_of_view_centideg = 0;  // horizontal
+  std::uint16_t vertical_field_of_view_centideg = 0;
+  std::uint8_t columns = 0;
+  std::uint8_t count = 0;
+  std::array<std::uint16_t, kMaxGridCells> nearest_mm{};  // kUnknownDepth: nothing seen
+  friend bool operator==(const DepthGrid&, const DepthGrid&) = default;
+};
+
 struct Point {
   std::uint16_t u_x16 = 0, v_x16 = 0;         // rectified left image position x 16
   std::int32_t x_mm = 0, y_mm = 0, z_mm = 0;  // left camera frame
@@ -171,8 +186,9 @@ struct Snapshot {
   friend bool operator==(const Snapshot&, const Snapshot&) = default;
 };
 
-using Message = std::variant<Health, FrameSummary, Detections, Obstacles, Points, CalibrationHealth,
-                             CommandAck, SetTriggerRate, SetExposure, SetStages, Snapshot>;
+using Message =
+    std::variant<Health, FrameSummary, Detections, Obstacles, Points, CalibrationHealth, CommandAck,
+                 SetTriggerRate, SetExposure, SetStages, Snapshot, DepthGrid>;
 
 MessageType type_of(const Message& message);
 const char* name_of(MessageType type);
