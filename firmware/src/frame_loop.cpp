@@ -466,6 +466,11 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   const bool same_clock = pair.left.clock == clock.id() && pair.right.clock == clock.id();
   const hal::Nanoseconds waited =
       same_clock ? clock.now() - std::max(pair.left.timestamp, pair.right.timestamp) : 0;
+  // Settled as published before the next pair is looked for while this one is processed: the
+  // ledger's window follows the newest frame seen, and with a loop far behind the trigger it
+  // would otherwise settle this pair as dropped first. No health message goes out before its
+  // summary.
+  grabber_.pairer().ledger().published(pair.left.sequence);
   const hal::Nanoseconds t0 = steady_now();
   charged_until_ = t0;
   const FrameResult& r = pipeline_.process(pair.left.gray, pair.right.gray, pair.left.sequence,
@@ -480,7 +485,6 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   times[static_cast<std::size_t>(Stage::publish)] = t2 - t1;
   times[static_cast<std::size_t>(Stage::total)] = t2 - t0;
   health_.record(clock.now() - trigger.ns, times, waited);
-  grabber_.pairer().ledger().published(pair.left.sequence);
   if (snapshot_pending_) {
     snapshot_pending_ = false;
     if (!snapshots_.take(r, snapshot_sequence_)) {  // the disk filled meanwhile
