@@ -256,25 +256,21 @@ bool Pipeline::PairAhead::matches(GrayView left, GrayView right, std::uint32_t f
   return ready && images.frame == frame && same(images.left, left) && same(images.right, right);
 }
 
-// Both images into `slot`, in as many row bands each as there are workers.
-void Pipeline::rectify_now(FrameResult& r, int slot) {
+// Task `task` of 2 x threads rectifying a pair into `slot`: one row band of one image (even
+// tasks the left, odd the right), as many bands per image as there are workers.
+void Pipeline::rectify_band(GrayView left_raw, GrayView right_raw, int slot, int task) {
   StereoRectifiers& rectifiers = *stages_->rectifiers;
-  const MutableGrayView left = rectified_left_[static_cast<std::size_t>(slot)].view();
-  const MutableGrayView right = rectified_right_[static_cast<std::size_t>(slot)].view();
+  const auto s = static_cast<std::size_t>(slot);
   const int bands = pool_->threads();
-  const int height = left.height();
-  pool_->run(2 * bands, [&](int task, int) {
-    const int band = task / 2;
-    const int first = band * height / bands;
-    const int end = (band + 1) * height / bands;
-    if (task % 2 == 0) {
-      rectifiers.left.rectify_rows(r.left_raw, left, first, end);
-    } else {
-      rectifiers.right.rectify_rows(r.right_raw, right, first, end);
-    }
-  });
-  r.left = left;
-  r.right = right;
+  const int band = task / 2;
+  const int height = rectified_left_[s].height();
+  const int first = band * height / bands;
+  const int end = (band + 1) * height / bands;
+  if (task % 2 == 0) {
+    rectifiers.left.rectify_rows(left_raw, rectified_left_[s].view(), first, end);
+  } else {
+    rectifiers.right.rectify_rows(right_raw, rectified_right_[s].view(), first, end);
+  }
 }
 
 // The stages of a pair on the one pool: the rectification of both images first, in row bands
@@ -314,7 +310,10 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
     ++ahead_used_;
   } else if (rectify) {
     const hal::Nanoseconds start = steady_now();
-    rectify_now(r, slot_);
+    pool_->run(2 * pool_->threads(),
+               [&](int task, int) { rectify_band(left, right, slot_, task); });
+    r.left = rectified_left_[static_cast<std::size_t>(slot_)].view();
+    r.right = rectified_right_[static_cast<std::size_t>(slot_)].view();
     time_of(Stage::rectify) = steady_now() - start;
   }
   r.stages = run & (stage_bit(Stage::capture) | stage_bit(Stage::rectify));
@@ -345,7 +344,6 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   // refused, when it is processed itself), into the other slot, in as many row bands per image as
   // there are workers. It counts as rectified ahead only once the whole batch has run.
   const int ahead_slot = 1 - slot_;
-  const int ahead_bands = pool_->threads();
   bool took_next = false;
   auto take_next = [&](int, int) {
     const std::optional<NextPair::Images> images = next->take();
@@ -358,18 +356,7 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
     }
   };
   auto rectify_next = [&](int task, int) {
-    if (!took_next) return;
-    StereoRectifiers& rectifiers = *stages_->rectifiers;
-    const std::size_t slot = static_cast<std::size_t>(ahead_slot);
-    const int band = task / 2;
-    const int height = left.height();
-    const int first = band * height / ahead_bands;
-    const int end = (band + 1) * height / ahead_bands;
-    if (task % 2 == 0) {
-      rectifiers.left.rectify_rows(ahead_.images.left, rectified_left_[slot].view(), first, end);
-    } else {
-      rectifiers.right.rectify_rows(ahead_.images.right, rectified_right_[slot].view(), first, end);
-    }
+    if (took_next) rectify_band(ahead_.images.left, ahead_.images.right, ahead_slot, task);
   };
   TaskBatch& batch = batch_;
   batch.clear();
@@ -383,7 +370,7 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
   if (protocol::has_stage(run, Stage::sparse)) sparse_part = batch.add(1, sparse, corners_part);
   if (protocol::has_stage(run, Stage::detect)) levels_part = batch.add(levels, level);
   if (next != nullptr && rectify) {
-    ahead_part = batch.add(2 * ahead_bands, rectify_next, batch.add(1, take_next));
+    ahead_part = batch.add(2 * pool_->threads(), rectify_next, batch.add(1, take_next));
   }
   batch.run(*pool_);
   time_of(Stage::corners) = batch.span_ns(corners_part, corners_part);

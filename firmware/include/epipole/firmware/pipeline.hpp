@@ -144,7 +144,7 @@ class Pipeline {
     bool ready = false;
     bool matches(GrayView left, GrayView right, std::uint32_t frame) const;
   };
-  void rectify_now(FrameResult& r, int slot);
+  void rectify_band(GrayView left_raw, GrayView right_raw, int slot, int task);
   void finish_dense(FrameResult& r);
   void match_sparse(FrameResult& r);
   void attach_depths(FrameResult& r);
