@@ -89,8 +89,6 @@ bool StereoPairer::push(Side side, const Frame& camera_frame) {
 
 void StereoPairer::take_fronts() {
   pair_ = {left_q_.front(), right_q_.front()};
-  has_pair_number_ = true;
-  last_pair_number_ = pair_.left.sequence;
   left_q_.head = (left_q_.head + 1) % kCapacity;
   --left_q_.size;
   right_q_.head = (right_q_.head + 1) % kCapacity;
@@ -176,10 +174,9 @@ bool StereoPairer::renumber() {
   const std::uint32_t l = left_q_.front().sequence;
   const std::uint32_t r = right_q_.front().sequence;
   if (!left_q_.numbered && !right_q_.numbered) {
-    // Both reopened, no record: the pairs' numbers go on after the last one.
-    const std::uint32_t next = has_pair_number_ ? last_pair_number_ + 1 : 0;
+    // Both reopened, no record: the pairs' numbers go on after the last the ledger counted.
+    const std::uint32_t next = ledger_.restart();
     numbers_are_the_triggers_ = false;
-    ledger_.restart(next);
     number(Side::left, next - l);
     number(Side::right, next - r);
   } else if (!left_q_.numbered) {

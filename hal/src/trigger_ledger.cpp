@@ -1,5 +1,7 @@
 #include "epipole/hal/trigger_ledger.hpp"
 
+#include <algorithm>
+
 namespace epipole::hal {
 
 namespace {
@@ -28,11 +30,13 @@ void TriggerLedger::published(std::uint32_t number) {
   at_published_ = account_;
 }
 
-void TriggerLedger::restart(std::uint32_t next) {
-  for (Slot& slot : slots_) {
-    if (slot.marks != 0) settle(slot, slot.number);
+std::uint32_t TriggerLedger::restart() {
+  std::int64_t newest = -1;  // how far the newest marked number is past next_
+  for (const Slot& slot : slots_) {
+    if (slot.marks != 0) newest = std::max(newest, ahead(slot.number, next_));
   }
-  next_ = next;
+  settle_before(next_ + static_cast<std::uint32_t>(newest + 1));
+  return next_;
 }
 
 void TriggerLedger::mark(std::uint32_t number, std::uint8_t marks) {

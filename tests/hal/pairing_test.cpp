@@ -979,7 +979,8 @@ TEST(StereoPairing, AReopenedSideIsNumberedAgainByTheOtherSide) {
 }
 
 // Both cameras reopened (a module reload): with the trigger's record, each side is numbered by
-// the edge of its frames' time; without one, the pairs' numbers go on after the last pair.
+// the edge of its frames' time; without one, the pairs' numbers go on after the newest frame
+// the trigger ledger counted.
 TEST(StereoPairing, BothSidesReopenedAreNumberedByTheTriggerOrContinue) {
   HandCamera l("left"), r("right");
   TriggerRecord record;
@@ -1012,20 +1013,23 @@ TEST(StereoPairing, BothSidesReopenedAreNumberedByTheTriggerOrContinue) {
   EXPECT_FALSE(without.push(Side::left, hand_frame(500, 0)));
   ASSERT_TRUE(without.push(Side::right, hand_frame(500, kMs)));
   without.release(without.take());
+  // Left's 501 came before the cameras went: the ledger counts it dropped, so the pairs go on
+  // after it, not from 501 (which would count that trigger twice).
+  EXPECT_FALSE(without.push(Side::left, hand_frame(501, kPeriod)));
   without.reset(Side::left);
   without.reset(Side::right);
   EXPECT_FALSE(without.push(Side::right, hand_frame(0, 10 * kPeriod)));
   ASSERT_TRUE(without.push(Side::left, hand_frame(7, 10 * kPeriod + kMs)));
   p = without.take();
-  EXPECT_EQ(p.left.sequence, 501u);
-  EXPECT_EQ(p.right.sequence, 501u);
+  EXPECT_EQ(p.left.sequence, 502u);
+  EXPECT_EQ(p.right.sequence, 502u);
   EXPECT_FALSE(without.numbers_are_the_triggers());
   EXPECT_TRUE(with_record.numbers_are_the_triggers());
   without.release(p);
   EXPECT_FALSE(without.push(Side::left, hand_frame(8, 11 * kPeriod)));
   ASSERT_TRUE(without.push(Side::right, hand_frame(1, 11 * kPeriod)));
   p = without.take();
-  EXPECT_EQ(p.left.sequence, 502u);
+  EXPECT_EQ(p.left.sequence, 503u);
   without.release(p);
 }
 

@@ -81,7 +81,7 @@ struct PairingConfig {
 // until one matches, by time within the tolerance, a frame of the other side (or, both sides
 // reopened and a trigger record given, an edge of the record): the difference of the two
 // numbers is then added to each of its frames, and they pair by sequence again. With both sides
-// reopened and no record, the first match continues the pairs' numbering.
+// reopened and no record, the first match numbers on after the newest frame the ledger counted.
 class StereoPairer {
  public:
   // `trigger`: the edges of the trigger line (optional; it must outlive the pairer). Without it,
@@ -108,8 +108,8 @@ class StereoPairer {
   void set_trigger_period(Nanoseconds period);
   std::size_t waiting(Side side) const { return queue(side).size; }
   // Whether a pair's number is still its trigger's: false from the time both sides were numbered
-  // anew without a trigger record (their numbers go on from the last pair), until both are
-  // numbered by the record again. Pairing by time: the left camera's numbers, as they come.
+  // anew without a trigger record (their numbers go on after the newest frame before), until both
+  // are numbered by the record again. Pairing by time: the left camera's numbers, as they come.
   bool numbers_are_the_triggers() const { return numbers_are_the_triggers_; }
   const PairingCounters& counters() const { return counters_; }
   const PairingConfig& config() const { return config_; }
@@ -155,8 +155,6 @@ class StereoPairer {
   StereoPair pair_{};
   bool ready_ = false;
   bool numbers_are_the_triggers_ = true;
-  bool has_pair_number_ = false;
-  std::uint32_t last_pair_number_ = 0;
   PairingCounters counters_{};
   TriggerLedger ledger_;
 };
