@@ -431,7 +431,8 @@ class BoardReader {
       }
     }
     number(n, "obstacles", "min_depth_m", o.min_depth_m, 0.0, 1000.0);
-    number(n, "obstacles", "max_depth_m", o.max_depth_m, 0.001, 655.0);
+    // Depths are measured in millimetres held in 16 bits.
+    number(n, "obstacles", "max_depth_m", o.max_depth_m, 0.001, 65.5);
     integer(n, "obstacles", "min_confidence", o.min_confidence, 0, 255);
     if (o.max_depth_m <= o.min_depth_m) {
       f_.fail("obstacles.max_depth_m", "must be greater than min_depth_m");

@@ -190,6 +190,8 @@ std::size_t encode_frame(const Message& message, std::uint16_t sequence,
   writer.out.u8(static_cast<std::uint8_t>(type_of(message)));
   writer.out.u16(sequence);
   std::visit([&writer](const auto& m) { fields(writer, m); }, message);
+  require(std::visit([](const auto& m) { return well_formed(m); }, message),
+          "protocol: a depth grid whose cells do not fill whole rows");
   require(writer.ok() && writer.out.size() + kCrcSize <= payload.size(),
           "protocol: message body larger than ", kMaxBodySize, " bytes");
   const std::size_t covered = writer.out.size();

@@ -76,7 +76,7 @@ double DepthCells::column_centre_deg(int column) const {
 
 std::size_t DepthCells::working_set_bytes() const {
   return horizontal_.cell_of.size() + vertical_.cell_of.size() + histogram_.size() * 4 +
-         sums_.size() * 4 + cell_pixels_.size() * 4;
+         sums_.size() * sizeof(std::uint64_t) + cell_pixels_.size() * 4;
 }
 
 void DepthCells::measure(ImageView<const std::int16_t> disparity,
@@ -94,7 +94,7 @@ void DepthCells::measure(ImageView<const std::int16_t> disparity,
           " cells");
   const int D = config_.max_disparity;
   std::fill(histogram_.begin(), histogram_.end(), 0u);
-  std::fill(sums_.begin(), sums_.end(), 0u);
+  std::fill(sums_.begin(), sums_.end(), std::uint64_t{0});
   std::fill(cell_pixels_.begin(), cell_pixels_.end(), 0u);
   for (int y = band_first_; y < band_end_; ++y) {
     const std::int16_t* row = disparity.row(y);
@@ -109,12 +109,12 @@ void DepthCells::measure(ImageView<const std::int16_t> disparity,
       if (trust != nullptr && trust[x] < config_.min_confidence) continue;
       const auto bin = static_cast<std::size_t>(c * D + d);
       ++histogram_[bin];
-      sums_[bin] += static_cast<std::uint32_t>(row[x]);
+      sums_[bin] += static_cast<std::uint64_t>(row[x]);
     }
   }
   for (std::size_t c = 0; c < cells; ++c) {
     const std::uint32_t* h = &histogram_[c * static_cast<std::size_t>(D)];
-    const std::uint32_t* sum = &sums_[c * static_cast<std::size_t>(D)];
+    const std::uint64_t* sum = &sums_[c * static_cast<std::size_t>(D)];
     const double needed = std::max<double>(config_.min_pixels, config_.min_share * cell_pixels_[c]);
     std::uint32_t reached = 0;
     int nearest = 0;  // integer disparity; 0: nothing

@@ -9,7 +9,9 @@ namespace epipole::firmware {
 namespace {
 
 DepthCellsConfig whole_view(DepthCellsConfig c) {
-  require(c.columns >= 1 && c.rows >= 1 && c.columns * c.rows <= protocol::kMaxGridCells,
+  // Each way first: their product must not overflow.
+  require(c.columns >= 1 && c.rows >= 1 && c.columns <= protocol::kMaxGridCells &&
+              c.rows <= protocol::kMaxGridCells && c.columns * c.rows <= protocol::kMaxGridCells,
           "depth_grid: ", c.columns, "x", c.rows, " cells is not within 1..",
           protocol::kMaxGridCells, " cells");
   c.band_top = 0;

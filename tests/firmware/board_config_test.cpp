@@ -165,6 +165,8 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
        "obstacles.min_confidence: 300 is outside"},
       {"band", "", "obstacles: {band: [0.8, 0.2]}\n",
        "obstacles.band: expected [top, bottom] with 0 <= top < bottom <= 1"},
+      {"sector range", "", "obstacles: {max_depth_m: 100}\n",
+       "obstacles.max_depth_m: 100 is outside"},
       {"grid half off", "", "depth_grid: {columns: 8}\n",
        "depth_grid: columns and rows are both 0 (no grid) or both at least 1"},
       {"grid too big", "", "depth_grid: {columns: 16, rows: 16}\n",

@@ -194,6 +194,23 @@ TEST(DepthGrid, PixelsBelowTheMinimumConfidenceAreLeftOut) {
   EXPECT_THROW(trusted.measure(f.disparity.view(), 1), Error) << "no confidence given";
 }
 
+// One cell over a large view: its nearest bin's sum of disparities (x16) passes 2^32.
+TEST(DepthGrid, OneCellOverALargeViewAtTheLargestDisparity) {
+  constexpr int kW2 = 1920, kH2 = 1080;
+  const calib::Triangulator triangulator{test::ideal_rig(kW2, kH2, 1000, kB).Q, 1, 1};
+  Image<std::int16_t> disparity(kW2, kH2);
+  for (int y = 0; y < kH2; ++y)
+    std::fill_n(disparity.view().row(y), kW2, std::int16_t{255 * 16 + 8});
+  DepthCellsConfig c;
+  c.width = kW2;
+  c.height = kH2;
+  c.max_disparity = 256;
+  DepthGrid grid(c, triangulator, {1000, (kW2 - 1) / 2.0, 1000, (kH2 - 1) / 2.0});
+  const protocol::DepthGrid& g = grid.measure(disparity.view(), 3);
+  ASSERT_EQ(g.count, 1);
+  EXPECT_EQ(g.nearest_mm[0], static_cast<std::uint16_t>(std::lround(1000 * kB / 255.5 * 1000)));
+}
+
 TEST(DepthGrid, BadInputIsAnError) {
   Fixture f;
   EXPECT_THROW(DepthGrid(f.grid(0, 3), f.triangulator, Fixture::camera()), Error);
@@ -203,6 +220,8 @@ TEST(DepthGrid, BadInputIsAnError) {
   DepthCellsConfig far = f.grid(4, 3);
   far.max_depth_m = 70;
   EXPECT_THROW(DepthGrid(far, f.triangulator, Fixture::camera()), Error);
+  EXPECT_THROW(DepthGrid(f.grid(1 << 16, 1 << 16), f.triangulator, Fixture::camera()), Error)
+      << "columns x rows overflows an int";
   DepthGrid grid(f.grid(16, 15), f.triangulator, Fixture::camera());
   Image<std::int16_t> small(10, 10);
   EXPECT_THROW(grid.measure(small.view(), 0), Error);

@@ -119,6 +119,22 @@ TEST(PairMessages, ObstaclesAreSentAsTheSectorsMeasuredThem) {
   EXPECT_EQ(d.distances_cm[2], 80);
 }
 
+TEST(PairMessages, TheDepthGridIsSentAsMeasured) {
+  FrameResult r = nothing_ran(9, 0);
+  EXPECT_FALSE(pair_messages(r, 0, false).depth_grid) << "no grid measured, none sent";
+  protocol::DepthGrid g;
+  g.frame = 9;
+  g.field_of_view_centideg = 9000;
+  g.vertical_field_of_view_centideg = 6000;
+  g.columns = 2;
+  g.count = 4;
+  g.nearest_mm = {1200, protocol::kUnknownDepth, 800, 650};
+  r.depth_grid = &g;
+  const PairMessages m = pair_messages(r, 0, false);
+  ASSERT_TRUE(m.depth_grid);
+  EXPECT_EQ(*m.depth_grid, g);
+}
+
 TEST(PairMessages, CalibrationHealthInHundredthsOfAPixel) {
   const protocol::CalibrationHealth c = calibration_health_message({812, 0.184, 0.4449, -0.1});
   EXPECT_EQ(c, (protocol::CalibrationHealth{812, 18, 44}));

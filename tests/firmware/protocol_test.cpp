@@ -426,6 +426,15 @@ TEST(Protocol, EncodingRejectsImpossibleMessages) {
   EXPECT_THROW(encode_frame(detections, 0, out), Error);
   Bytes small(8);
   EXPECT_THROW(encode_frame(Health{}, 0, small), Error);
+  DepthGrid grid;
+  grid.columns = 4;
+  grid.count = 6;  // a row and a half: the peer would refuse it
+  EXPECT_THROW(encode_frame(grid, 0, out), Error);
+  grid.columns = 0;
+  grid.count = 0;
+  EXPECT_THROW(encode_frame(grid, 0, out), Error);
+  grid.columns = 3;
+  EXPECT_NO_THROW(encode_frame(grid, 0, out)) << "an empty grid of 3 columns";
 }
 
 }  // namespace

@@ -60,6 +60,14 @@ void native_seeds(const fs::path& dir) {
   append(pair, detections, 3);
   append(pair, obstacles, 4);
   append(pair, points, 5);
+  protocol::DepthGrid grid;
+  grid.frame = 7;
+  grid.field_of_view_centideg = 9000;
+  grid.vertical_field_of_view_centideg = 6000;
+  grid.columns = 3;
+  grid.count = 6;
+  grid.nearest_mm = {1200, protocol::kUnknownDepth, 800, 20000, 650, 3000};
+  append(pair, grid, 6);
   write(dir / "frame_detections_obstacles_points", pair);
 
   Bytes commands;

@@ -80,7 +80,8 @@ class DepthCells {
   int band_end_ = 0;
   Axis horizontal_, vertical_;
   std::vector<std::uint32_t> histogram_;  // cells x max_disparity: pixel counts
-  std::vector<std::uint32_t> sums_;       // and the sums of their disparities x16
+  std::vector<std::uint64_t> sums_;       // and the sums of their disparities x16 (a 1x1 grid of a
+                                          // large image overflows 32 bits in one bin)
   std::vector<std::uint32_t> cell_pixels_;
 };
 
