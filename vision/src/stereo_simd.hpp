@@ -178,11 +178,15 @@ class WtaPixels {
     // The same test, and the lowest sum outside best - 1 .. best + 1 for the confidence: those
     // three are set to kNoCost (never below the limit) while the sums are counted and their
     // minimum taken.
-    const int first = std::max(best - 1, 0);
-    const int end = std::min(best + 2, D);
-    std::uint16_t near[3];
-    std::copy(s + first, s + end, near);
-    std::fill(s + first, s + end, kNoCost);
+    // One by one, not std::copy and std::fill: those became calls to memcpy and memset.
+    const bool has_below = best > 0;
+    const bool has_above = best < D - 1;
+    const std::uint16_t below = has_below ? s[best - 1] : kNoCost;
+    const std::uint16_t at = s[best];
+    const std::uint16_t above = has_above ? s[best + 1] : kNoCost;
+    if (has_below) s[best - 1] = kNoCost;
+    s[best] = kNoCost;
+    if (has_above) s[best + 1] = kNoCost;
     H count = V::splath(0);
     H others = V::splath(kNoCost);
     for (int d = 0; d < D; d += 16) {
@@ -190,7 +194,9 @@ class WtaPixels {
       count = V::subh(count, V::gth(l, v));
       others = V::minh(others, v);
     }
-    std::copy(near, near + (end - first), s + first);
+    if (has_below) s[best - 1] = below;
+    s[best] = at;
+    if (has_above) s[best + 1] = above;
     store_winner(row_, x, V::hsumh(count) == 0 ? best : -1, s, D, V::hminh(others));
   }
 
