@@ -1,7 +1,8 @@
 # The instruction-counting plugin under qemu-user: the probe's counts for N, 2N and 3N loop runs
 # step by the same amount (the count is exact: nothing of the machine's load gets in), a multiple
 # of N; its profile (profile=FILE) adds up to the count and puts the step in `main`, the function
-# of the loop; an unknown plugin argument stops QEMU.
+# of the loop; its block profile (blocks=FILE) puts the loop's block in `main` first, executed
+# once a run more for each run more; an unknown plugin argument stops QEMU.
 #
 #   cmake -DEMULATOR=a|b|c -DPLUGIN=path -DPROBE=path -DOUT=folder -P this file
 string(REPLACE "|" ";" emulator "${EMULATOR}")
@@ -11,13 +12,27 @@ foreach(times 1 2 3)
   math(EXPR runs "${n} * ${times}")
   set(file ${OUT}/insn-count-${runs})
   set(profile ${OUT}/insn-profile-${runs})
-  file(REMOVE ${file} ${profile})
-  execute_process(COMMAND ${emulator} -plugin ${PLUGIN},out=${file},profile=${profile} ${PROBE}
-                          ${runs}
+  set(blocks ${OUT}/insn-blocks-${runs})
+  file(REMOVE ${file} ${profile} ${blocks})
+  execute_process(COMMAND ${emulator} -plugin ${PLUGIN},out=${file},profile=${profile},blocks=${blocks}
+                          ${PROBE} ${runs}
                   RESULT_VARIABLE status ERROR_VARIABLE err)
-  if(NOT status EQUAL 0 OR NOT EXISTS ${file} OR NOT EXISTS ${profile})
+  if(NOT status EQUAL 0 OR NOT EXISTS ${file} OR NOT EXISTS ${profile} OR NOT EXISTS ${blocks})
     message(FATAL_ERROR "insn_count_probe ${runs} under the plugin: exit ${status}\n${err}")
   endif()
+  # The blocks: "INSTRUCTIONS EXECUTIONS SIZE VADDR SYMBOL", the hottest the loop's, in main.
+  file(STRINGS ${blocks} block_lines)
+  list(GET block_lines 0 hottest)
+  if(NOT hottest MATCHES "^([0-9]+) ([0-9]+) ([0-9]+) ([0-9a-f]+) main$")
+    message(FATAL_ERROR "the hottest block '${hottest}' is not INSTRUCTIONS EXECUTIONS SIZE "
+                        "VADDR main")
+  endif()
+  math(EXPR product "${CMAKE_MATCH_2} * ${CMAKE_MATCH_3}")
+  if(NOT product EQUAL CMAKE_MATCH_1)
+    message(FATAL_ERROR "the hottest block: ${CMAKE_MATCH_2} executions of ${CMAKE_MATCH_3} "
+                        "instructions are not ${CMAKE_MATCH_1}")
+  endif()
+  list(APPEND loop_executions ${CMAKE_MATCH_2})
   file(STRINGS ${file} count)
   if(NOT count MATCHES "^[0-9]+$")
     message(FATAL_ERROR "the plugin wrote '${count}', not a count")
@@ -63,6 +78,15 @@ math(EXPR main_step "${m2} - ${m1}")
 if(NOT main_step EQUAL step1)
   message(FATAL_ERROR "the profile's main: ${m1}, ${m2} for ${n} and 2 x ${n} runs; the count "
                       "grew by ${step1}")
+endif()
+
+list(GET loop_executions 0 e1)
+list(GET loop_executions 1 e2)
+list(GET loop_executions 2 e3)
+math(EXPR loop_step1 "${e2} - ${e1}")
+math(EXPR loop_step2 "${e3} - ${e2}")
+if(NOT loop_step1 EQUAL n OR NOT loop_step2 EQUAL n)
+  message(FATAL_ERROR "the loop's block ran ${e1}, ${e2}, ${e3} times for ${n} x 1, 2, 3 runs")
 endif()
 
 execute_process(COMMAND ${emulator} -plugin ${PLUGIN},colour=blue ${PROBE} 1
