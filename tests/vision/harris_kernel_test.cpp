@@ -158,6 +158,84 @@ INSTANTIATE_TEST_SUITE_P(Shapes, HarrisKernel,
                                   std::to_string(c.offset);
                          });
 
+// The largest response: the NEON kernel's bits are the reference's, at odd widths and strides
+// from unaligned rows, with NaNs (passed over), zeros of both signs (+0 when the largest) and
+// nothing but NaNs (-inf).
+TEST(HarrisMaxResponse, NeonEqualsReference) {
+  std::uint32_t state = 777;
+  const auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return state >> 8;
+  };
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float values[] = {-5.0f, -1.0f, -0.0f, 0.0f, 2.0f, 9.5f, nan};
+  for (const Case& c : {Case{1, 1, 0, 0}, Case{3, 2, 1, 1}, Case{4, 3, 0, 0}, Case{7, 5, 3, 1},
+                        Case{17, 4, 2, 3}, Case{64, 9, 0, 0}, Case{101, 7, 5, 2}}) {
+    for (int round = 0; round < 30; ++round) {
+      FloatBuffer r(c.width, c.height, c.width + c.extra_stride, nan);
+      for (int y = 0; y < c.height; ++y) {
+        for (int x = 0; x < c.width; ++x) {
+          // Round 0: NaNs only; odd rounds: no positive value, so zeros are the largest.
+          const std::size_t pick = next() % (round % 2 == 1 ? 4 : std::size(values));
+          r.view()(x, y) = round == 0 ? nan : values[pick];
+        }
+      }
+      const float ref = kernels::harris_max_response_ref(r.view());
+      const float neon = kernels::harris_max_response_neon(r.view());
+      EXPECT_EQ(std::bit_cast<std::uint32_t>(neon), std::bit_cast<std::uint32_t>(ref))
+          << c.width << "x" << c.height << ", round " << round << ": " << neon << " vs " << ref;
+      if (round == 0) {
+        EXPECT_EQ(ref, -std::numeric_limits<float>::infinity());
+      }
+    }
+  }
+}
+
+// The candidate scan: the NEON kernel's candidates are the reference's, at every width around its
+// blocks of eight, from unaligned rows, with values drawn from a few so that ties with the
+// threshold and between neighbours are common, for thresholds negative, zero and positive.
+TEST(HarrisCandidates, NeonEqualsReference) {
+  std::uint32_t state = 12345;
+  const auto next = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return state >> 8;
+  };
+  const float values[] = {-2.0f, -0.0f, 0.0f, 0.5f, 1.0f, 1.0f, 2.0f, 3.0f, 7.5f};
+  const float quiet_nan = std::numeric_limits<float>::quiet_NaN();
+  std::size_t found = 0;
+  for (const int width : {1, 2, 3, 8, 9, 10, 11, 16, 17, 18, 25, 33, 64, 101, 640}) {
+    for (const float threshold : {-1.0f, 0.0f, 0.75f, 1.0f, 2.5f}) {
+      for (int round = 0; round < 20; ++round) {
+        std::vector<float> rows(3 * static_cast<std::size_t>(width) + 4);
+        for (float& v : rows) v = values[next() % std::size(values)];
+        if (round == 0 && width > 3) rows[1 + width + 2] = quiet_nan;  // never a candidate
+        // Sparse rounds: most blocks of eight have nothing above the threshold.
+        if (round % 2 == 1) {
+          for (float& v : rows) v = next() % 16 == 0 ? v : -3.0f;
+        }
+        const float* above = rows.data() + 1;  // unaligned
+        const float* row = above + width + 1;
+        const float* below = row + width + 1;
+        std::vector<std::uint32_t> ref(static_cast<std::size_t>(width) + 1, 77);
+        std::vector<std::uint32_t> neon(ref.size(), 77);
+        const std::size_t n_ref = kernels::harris_candidates_row_ref(above, row, below, width,
+                                                                     threshold, 1000, ref.data());
+        const std::size_t n_neon = kernels::harris_candidates_row_neon(
+            above, row, below, width, threshold, 1000, neon.data());
+        ASSERT_EQ(n_neon, n_ref) << "width " << width << ", threshold " << threshold;
+        found += n_ref;
+        EXPECT_EQ(neon, ref) << "width " << width << ", threshold " << threshold;
+        for (std::size_t i = 0; i < n_ref; ++i) {
+          const int x = static_cast<int>(ref[i] - 1000);
+          ASSERT_TRUE(x >= 1 && x < width - 1);
+          EXPECT_GT(row[x], threshold);
+        }
+      }
+    }
+  }
+  EXPECT_GT(found, 1000u) << "the rows must hold candidates to compare";
+}
+
 // cv::goodFeaturesToTrack's selection, written the slow and obvious way from a response map.
 std::vector<Corner> brute_force_corners(ImageView<const float> r, double quality,
                                         double min_distance, int max_corners) {

@@ -133,6 +133,39 @@ void harris_response_ref(GrayView image, int block_size, float k, std::int32_t* 
   harris_response_rows(image, block_size, k, workspace, response, kRows);
 }
 
+float harris_max_response_ref(ImageView<const float> response) {
+  float max_r = -std::numeric_limits<float>::infinity();
+  for (int y = 0; y < response.height(); ++y) {
+    const float* row = response.row(y);
+    for (int x = 0; x < response.width(); ++x) max_r = std::max(max_r, row[x]);
+  }
+  return max_r == 0.0f ? 0.0f : max_r;
+}
+
+HarrisMaxResponseKernel* harris_max_response_kernel(SimdPath path) {
+  static constexpr KernelSet<HarrisMaxResponseKernel> kKernels{harris_max_response_ref,
+                                                               harris_max_response_neon, nullptr};
+  return kKernels.pick(path);
+}
+
+std::size_t harris_candidates_row_ref(const float* above, const float* row, const float* below,
+                                      int width, float threshold, std::uint32_t row_offset,
+                                      std::uint32_t* out) {
+  std::size_t n = 0;
+  for (int x = 1; x < width - 1; ++x) {
+    if (harris_is_candidate(above, row, below, x, threshold)) {
+      out[n++] = row_offset + static_cast<std::uint32_t>(x);
+    }
+  }
+  return n;
+}
+
+HarrisCandidatesRowKernel* harris_candidates_row_kernel(SimdPath path) {
+  static constexpr KernelSet<HarrisCandidatesRowKernel> kKernels{
+      harris_candidates_row_ref, harris_candidates_row_neon, nullptr};
+  return kKernels.pick(path);
+}
+
 HarrisResponseKernel* harris_response_kernel(SimdPath path) {
   static constexpr KernelSet<HarrisResponseKernel> kKernels{harris_response_ref,
                                                             harris_response_neon, nullptr};
@@ -213,35 +246,22 @@ std::span<const Corner> HarrisDetector::detect(GrayView image) {
   const int width = config_.width;
   const int height = config_.height;
 
-  float max_r = -std::numeric_limits<float>::infinity();
-  for (int y = 0; y < height; ++y) {
-    const float* row = r.row(y);
-    for (int x = 0; x < width; ++x) max_r = std::max(max_r, row[x]);
-  }
+  const float max_r = kernels::harris_max_response_kernel(path_)(r);
   max_response_ = max_r;
   // As cv::threshold(THRESH_TOZERO) with a float threshold: kept when R > threshold.
   threshold_ = static_cast<float>(static_cast<double>(max_r) * config_.quality_level);
   const float t = threshold_;
-  const auto kept = [t](float v) { return v > t ? v : 0.0f; };
 
   // Candidates: kept, non-zero and the maximum of the kept values of their 3x3 neighbourhood.
   // They are kept as offsets y * stride + x into the response.
+  kernels::HarrisCandidatesRowKernel* const candidates_row =
+      kernels::harris_candidates_row_kernel(path_);
   std::size_t n = 0;
   std::uint32_t* candidates = candidates_.get();
   for (int y = 1; y < height - 1; ++y) {
-    const float* above = r.row(y - 1);
     const float* row = r.row(y);
-    const float* below = r.row(y + 1);
-    for (int x = 1; x < width - 1; ++x) {
-      const float v = row[x];
-      if (!(v > t) || v == 0.0f) continue;
-      if (v < kept(above[x - 1]) || v < kept(above[x]) || v < kept(above[x + 1]) ||
-          v < kept(row[x - 1]) || v < kept(row[x + 1]) || v < kept(below[x - 1]) ||
-          v < kept(below[x]) || v < kept(below[x + 1])) {
-        continue;
-      }
-      candidates[n++] = static_cast<std::uint32_t>(row + x - r.data());
-    }
+    n += candidates_row(r.row(y - 1), row, r.row(y + 1), width, t,
+                        static_cast<std::uint32_t>(row - r.data()), candidates + n);
   }
   // OpenCV's order: larger response first, and among equal responses the later pixel first.
   const float* base = r.data();

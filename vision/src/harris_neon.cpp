@@ -7,6 +7,9 @@
 // the scalar VFP code does not; none can occur here: every non-zero a, b, c is at least
 // scale2 >= 1e-9, a non-zero a c - b b at least an ulp of a number >= 1e-18, and k is 0 or
 // >= 1e-6 (the detector checks it), so k trace trace is 0 or >= 1e-24.
+#include <algorithm>
+#include <limits>
+
 #include "epipole/core/neon.hpp"
 #include "harris_kernels.hpp"
 #include "harris_rows.hpp"
@@ -49,11 +52,16 @@ void products_row_neon(const std::uint8_t* above, const std::uint8_t* row,
   harris_products_columns_ref(above, row, below, width, x, width, xx, xy, yy);
 }
 
-void column_sums_neon(const std::int32_t* const* rows, int count, int width, std::int32_t* sums) {
+// kCount > 0: that many rows, known when compiled (the window of 3, the default, unrolled);
+// 0: `count` of them.
+template <int kCount>
+void column_sums_rows(const std::int32_t* const* rows, int count, int width, std::int32_t* sums) {
+  if constexpr (kCount > 0) count = kCount;
   int x = 0;
   for (; x + 8 <= width; x += 8) {
     int32x4_t lo = vld1q_s32(rows[0] + x);
     int32x4_t hi = vld1q_s32(rows[0] + x + 4);
+#pragma GCC unroll 8
     for (int i = 1; i < count; ++i) {
       lo = vaddq_s32(lo, vld1q_s32(rows[i] + x));
       hi = vaddq_s32(hi, vld1q_s32(rows[i] + x + 4));
@@ -68,9 +76,20 @@ void column_sums_neon(const std::int32_t* const* rows, int count, int width, std
   }
 }
 
-void box_response_row_neon(const std::int32_t* sxx, const std::int32_t* sxy,
-                           const std::int32_t* syy, int width, int block_size, float scale2,
-                           float k, float* out) {
+void column_sums_neon(const std::int32_t* const* rows, int count, int width, std::int32_t* sums) {
+  if (count == 3) {
+    column_sums_rows<3>(rows, count, width, sums);
+  } else {
+    column_sums_rows<0>(rows, count, width, sums);
+  }
+}
+
+// kBlock > 0: the window's width, known when compiled (3, the default, unrolled); 0:
+// `block_size`.
+template <int kBlock>
+void box_response(const std::int32_t* sxx, const std::int32_t* sxy, const std::int32_t* syy,
+                  int width, int block_size, float scale2, float k, float* out) {
+  if constexpr (kBlock > 0) block_size = kBlock;
   const int radius = block_size / 2;
   const float32x4_t vscale = vdupq_n_f32(scale2);
   const float32x4_t vk = vdupq_n_f32(k);
@@ -81,6 +100,7 @@ void box_response_row_neon(const std::int32_t* sxx, const std::int32_t* sxy,
     int32x4_t sa = vld1q_s32(sxx + first);
     int32x4_t sb = vld1q_s32(sxy + first);
     int32x4_t sc = vld1q_s32(syy + first);
+#pragma GCC unroll 8
     for (int i = 1; i < block_size; ++i) {
       sa = vaddq_s32(sa, vld1q_s32(sxx + first + i));
       sb = vaddq_s32(sb, vld1q_s32(sxy + first + i));
@@ -97,7 +117,63 @@ void box_response_row_neon(const std::int32_t* sxx, const std::int32_t* sxy,
   harris_box_response_columns_ref(sxx, sxy, syy, x, width, block_size, scale2, k, out);
 }
 
+void box_response_row_neon(const std::int32_t* sxx, const std::int32_t* sxy,
+                           const std::int32_t* syy, int width, int block_size, float scale2,
+                           float k, float* out) {
+  if (block_size == 3) {
+    box_response<3>(sxx, sxy, syy, width, block_size, scale2, k, out);
+  } else {
+    box_response<0>(sxx, sxy, syy, width, block_size, scale2, k, out);
+  }
+}
+
 }  // namespace
+
+// Four lanes of running maxima with std::max's rule (the new value only when strictly greater,
+// so NaNs are passed over), then the lanes and the columns left over the same way.
+float harris_max_response_neon(ImageView<const float> response) {
+  const float none = -std::numeric_limits<float>::infinity();
+  float32x4_t lanes = vdupq_n_f32(none);
+  float max_r = none;
+  for (int y = 0; y < response.height(); ++y) {
+    const float* row = response.row(y);
+    int x = 0;
+    for (; x + 4 <= response.width(); x += 4) {
+      const float32x4_t v = vld1q_f32(row + x);
+      lanes = vbslq_f32(vcltq_f32(lanes, v), v, lanes);
+    }
+    for (; x < response.width(); ++x) max_r = std::max(max_r, row[x]);
+  }
+  max_r = std::max(max_r, vgetq_lane_f32(lanes, 0));
+  max_r = std::max(max_r, vgetq_lane_f32(lanes, 1));
+  max_r = std::max(max_r, vgetq_lane_f32(lanes, 2));
+  max_r = std::max(max_r, vgetq_lane_f32(lanes, 3));
+  return max_r == 0.0f ? 0.0f : max_r;
+}
+
+// Eight responses at a time: most are not above the threshold (1 % of the largest, by default),
+// and a block of eight with none above it is passed over; the others are tested one by one.
+std::size_t harris_candidates_row_neon(const float* above, const float* row, const float* below,
+                                       int width, float threshold, std::uint32_t row_offset,
+                                       std::uint32_t* out) {
+  const float32x4_t t = vdupq_n_f32(threshold);
+  std::size_t n = 0;
+  const auto test = [&](int x) {
+    if (harris_is_candidate(above, row, below, x, threshold)) {
+      out[n++] = row_offset + static_cast<std::uint32_t>(x);
+    }
+  };
+  int x = 1;
+  for (; x + 8 <= width - 1; x += 8) {
+    const uint32x4_t low = vcgtq_f32(vld1q_f32(row + x), t);
+    const uint32x4_t high = vcgtq_f32(vld1q_f32(row + x + 4), t);
+    const uint16x4_t any = vmovn_u32(vorrq_u32(low, high));
+    if (vget_lane_u64(vreinterpret_u64_u16(any), 0) == 0) continue;
+    for (int i = 0; i < 8; ++i) test(x + i);
+  }
+  for (; x < width - 1; ++x) test(x);
+  return n;
+}
 
 void harris_response_neon(GrayView image, int block_size, float k, std::int32_t* workspace,
                           ImageView<float> response) {
