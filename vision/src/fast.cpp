@@ -21,8 +21,9 @@ constexpr int kArc = 9;  // contiguous circle pixels that make a corner
 }  // namespace
 
 void fast_circle_offsets(std::ptrdiff_t stride, std::ptrdiff_t offsets[25]) {
-  for (int k = 0; k < 16; ++k) offsets[k] = kCircle[k][0] + kCircle[k][1] * stride;
-  for (int k = 16; k < 25; ++k) offsets[k] = offsets[k - 16];
+  // Unrolled: the row kernels call this once a row.
+#pragma GCC unroll 25
+  for (int k = 0; k < 25; ++k) offsets[k] = kCircle[k & 15][0] + kCircle[k & 15][1] * stride;
 }
 
 int fast_score(const std::uint8_t* p, const std::ptrdiff_t* circle, int threshold) {

@@ -3,15 +3,17 @@
 // FAST-9 for one row, V::kLanesB pixels at a time, segment test and score together; written once
 // over the byte lanes of the vector vocabulary (simd/neon.hpp, simd/avx2.hpp).
 //
-// For a pixel v with circle pixels p_k, let below_k = max(v - p_k, 0) and
-// above_k = max(p_k - v, 0), and let contrast = the largest, over the 16 arcs of 9 contiguous
-// circle pixels and over both sides, of the smallest below_k (above_k) on the arc. Then:
+// For a pixel v with circle pixels p_k, let the bright contrast be the largest, over the 16 arcs
+// of 9 contiguous circle pixels, of max(min over the arc of p_k - v, 0), and the dark contrast
+// the largest of max(v - max over the arc of p_k, 0); contrast is the larger of the two. Then:
 //   - the pixel is a corner at threshold t exactly when contrast > t (some arc has every
-//     p_k < v - t, or every p_k > v + t), and
+//     p_k > v + t, or every p_k < v - t), and
 //   - for a corner, OpenCV's score (the largest threshold at which it is still a corner) is
 //     contrast - 1.
 // Saturation cannot change either answer: it only clips values <= 0, and a corner's contrast
 // is > t >= 0. So these results equal fast_row_ref (OpenCV's formulation) bit for bit.
+// Because v - x and x - v are monotonic in x, the arcs' extremes are taken over the pixels
+// themselves and v is subtracted once.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -22,22 +24,25 @@
 
 namespace epipole::vision::kernels {
 
-// max over the 16 circular arcs of 9 of the min over the arc, per lane. Arc minima are built by
-// doubling: pairs, fours, eights, then one more pixel.
-template <class V>
-inline typename V::B fast_best_arc(const typename V::B d[16]) {
+// Per lane, the largest over the 16 circular arcs of 9 of the smallest p[k] on the arc (Min and
+// Max are V::minb and V::maxb), or with the roles of Min and Max swapped, the smallest of the
+// largest. The two arcs that share the 8 pixels from an even k, those starting at k and k - 1,
+// are taken together: their extremes differ only in p[k + 8] and p[k - 1].
+template <class V, typename V::B (*Min)(typename V::B, typename V::B),
+          typename V::B (*Max)(typename V::B, typename V::B)>
+inline typename V::B fast_best_arc(const typename V::B p[16]) {
   using B = typename V::B;
-  B m2[22];
-#pragma GCC unroll 22
-  for (int k = 0; k < 22; ++k) m2[k] = V::minb(d[k & 15], d[(k + 1) & 15]);
-  B m4[20];
-#pragma GCC unroll 20
-  for (int k = 0; k < 20; ++k) m4[k] = V::minb(m2[k], m2[k + 2]);
-  B best = V::splatb(0);
-#pragma GCC unroll 16
-  for (int k = 0; k < 16; ++k) {
-    const B m8 = V::minb(m4[k], m4[k + 4]);
-    best = V::maxb(best, V::minb(m8, d[(k + 8) & 15]));
+  B m2[8];  // m2[j]: pixels 2j, 2j + 1
+#pragma GCC unroll 8
+  for (int j = 0; j < 8; ++j) m2[j] = Min(p[2 * j], p[2 * j + 1]);
+  B m4[8];  // m4[j]: pixels 2j .. 2j + 3
+#pragma GCC unroll 8
+  for (int j = 0; j < 8; ++j) m4[j] = Min(m2[j], m2[(j + 1) & 7]);
+  B best = Min(Min(m4[0], m4[2]), Max(p[15], p[8]));
+#pragma GCC unroll 7
+  for (int j = 1; j < 8; ++j) {
+    const B m8 = Min(m4[j], m4[(j + 2) & 7]);  // pixels 2j .. 2j + 7
+    best = Max(best, Min(m8, Max(p[2 * j - 1], p[(2 * j + 8) & 15])));
   }
   return best;
 }
@@ -79,27 +84,24 @@ int fast_row_simd(const std::uint8_t* row, std::ptrdiff_t stride, int width, int
     const B b4 = V::gtb(c4, bright_above), d4 = V::ltb(c4, dark_below);
     const B b8 = V::gtb(c8, bright_above), d8 = V::ltb(c8, dark_below);
     const B b12 = V::gtb(c12, bright_above), d12 = V::ltb(c12, dark_below);
-    const B bright_pairs = V::orb(V::orb(V::andb(b0, b4), V::andb(b4, b8)),
-                                  V::orb(V::andb(b8, b12), V::andb(b12, b0)));
-    const B dark_pairs = V::orb(V::orb(V::andb(d0, d4), V::andb(d4, d8)),
-                                V::orb(V::andb(d8, d12), V::andb(d12, d0)));
+    // (0 or 8) and (4 or 12): one of the pairs 0-4, 4-8, 8-12, 12-0.
+    const B bright_pairs = V::andb(V::orb(b0, b8), V::orb(b4, b12));
+    const B dark_pairs = V::andb(V::orb(d0, d8), V::orb(d4, d12));
     const bool maybe_bright = V::anyb(bright_pairs);
     const bool maybe_dark = V::anyb(dark_pairs);
     if (!maybe_bright && !maybe_dark) continue;
 
     // Only the sides that passed the quick test are measured; the other contributes 0, which
     // no corner's contrast (> t >= 0) can be beaten by.
-    B d[16];
+    B circle_pixels[16];
+#pragma GCC unroll 16
+    for (int k = 0; k < 16; ++k) circle_pixels[k] = V::loadb(p + circle[k]);
     B contrast = V::splatb(0);
     if (maybe_dark) {
-#pragma GCC unroll 16
-      for (int k = 0; k < 16; ++k) d[k] = V::subsb(v, V::loadb(p + circle[k]));
-      contrast = fast_best_arc<V>(d);
+      contrast = V::subsb(v, fast_best_arc<V, V::maxb, V::minb>(circle_pixels));
     }
     if (maybe_bright) {
-#pragma GCC unroll 16
-      for (int k = 0; k < 16; ++k) d[k] = V::subsb(V::loadb(p + circle[k]), v);
-      contrast = V::maxb(contrast, fast_best_arc<V>(d));
+      contrast = V::maxb(contrast, V::subsb(fast_best_arc<V, V::minb, V::maxb>(circle_pixels), v));
     }
     const B is_corner = V::gtb(contrast, t);
     std::uint32_t corners = V::bitsb(is_corner) >> (next - x) << (next - x);

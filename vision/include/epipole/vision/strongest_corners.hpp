@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <span>
 
@@ -12,9 +13,10 @@ namespace epipole::vision {
 // grid_columns x grid_rows grid over the image (bucketing, so that corners spread over the
 // view instead of piling up on one textured patch). Each cell keeps at most
 // max_corners / (grid_columns * grid_rows); "strongest" is the higher score, ties going to the
-// corner earlier in raster order. Corners come out in raster order.
+// corner earlier in raster order. Corners come out in raster order. Corners offered must lie in
+// the image, which is at most 65535 pixels wide and high.
 //
-// Working set: max_corners * sizeof(Corner) + cells * sizeof(int) bytes.
+// Working set: max_corners * (sizeof(Corner) + 8) + (cells + width + height) * sizeof(int) bytes.
 class StrongestCorners {
  public:
   StrongestCorners(int width, int height, int max_corners, int grid_columns = 1, int grid_rows = 1);
@@ -37,8 +39,14 @@ class StrongestCorners {
   int grid_columns_;
   int grid_rows_;
   int cell_capacity_;
-  std::unique_ptr<Corner[]> corners_;  // cell i owns [i * cell_capacity_, (i + 1) * ...)
+  // A kept corner is one 64-bit key whose order is "stronger": the score's bits made to order as
+  // unsigned integers above the complement of its raster position (y * 65536 + x). So a heap
+  // step is one integer comparison.
+  std::unique_ptr<std::uint64_t[]> keys_;  // cell i owns [i * cell_capacity_, (i + 1) * ...)
   std::unique_ptr<int[]> counts_;
+  std::unique_ptr<Corner[]> corners_;      // what finish() returns
+  std::unique_ptr<int[]> cell_of_column_;  // x -> the grid column of x
+  std::unique_ptr<int[]> cell_of_row_;     // y -> the first cell of y's grid row
   bool truncated_ = false;
 };
 
