@@ -48,6 +48,28 @@ LbpTerms lbp_terms(const LbpFeature& f, const IntegralLayout& layout) {
   return t;
 }
 
+// An entry offset as a byte offset, for the stumps of the SIMD kernels.
+std::int32_t in_bytes(std::int32_t entries) {
+  constexpr auto kEntry = static_cast<std::int64_t>(sizeof(std::uint32_t));
+  const std::int64_t bytes = entries * kEntry;
+  require(bytes >= std::numeric_limits<std::int32_t>::min() &&
+              bytes <= std::numeric_limits<std::int32_t>::max(),
+          "cascade: an integral offset of ", entries, " entries does not fit 32 bits in bytes");
+  return static_cast<std::int32_t>(bytes);
+}
+
+HaarTerms in_bytes(HaarTerms t) {
+  for (auto& rect : t.offsets) {
+    for (std::int32_t& o : rect) o = in_bytes(o);
+  }
+  return t;
+}
+
+LbpTerms in_bytes(LbpTerms t) {
+  for (std::int32_t& o : t.offsets) o = in_bytes(o);
+  return t;
+}
+
 // The smallest shift that makes v * 2^shift an integer (floats carry 24 significant bits).
 int exact_shift(float v) {
   if (v == 0.0f) return 0;
@@ -149,10 +171,10 @@ void CascadeProgram::build_fixed_point() {
       base += right_fixed;
       if (type == CascadeFeatureType::haar) {
         haar_stumps.push_back(
-            {haar[nodes[i].feature], nodes[i].threshold, left_fixed - right_fixed});
+            {in_bytes(haar[nodes[i].feature]), nodes[i].threshold, left_fixed - right_fixed});
       } else {
         LbpStump stump;
-        stump.terms = lbp[nodes[i].feature];
+        stump.terms = in_bytes(lbp[nodes[i].feature]);
         stump.delta = left_fixed - right_fixed;
         for (int word = 0; word < 8; ++word) {
           for (int byte = 0; byte < 4; ++byte) {

@@ -46,7 +46,8 @@ struct ProgramStage {
 };
 
 // Stumps in evaluation order, for the SIMD kernels. Taking the left leaf adds `delta` to the
-// stage's fixed-point sum (the right leaves are folded into the stage's threshold).
+// stage's fixed-point sum (the right leaves are folded into the stage's threshold). Their terms'
+// offsets are in bytes, not entries (see cascade_simd.hpp).
 struct HaarStump {
   HaarTerms terms;
   float threshold = 0.0f;

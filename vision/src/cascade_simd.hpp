@@ -25,19 +25,28 @@ typename V::I corner_sum(const std::uint32_t* w, const std::int32_t* o) {
                  V::loadi(w + o[3]));
 }
 
+// A rectangle sum of a stump: its offsets are in bytes (CascadeProgram), since AArch64's vector
+// loads scale a register offset only by the vector's size and entry offsets cost a shift a load.
 template <typename V>
-typename V::M haar_stage(const ProgramStage& stage, const HaarStump* stumps, const std::uint32_t* w,
+typename V::I stump_corner_sum(const std::uint8_t* w, const std::int32_t* o) {
+  return V::addi(V::subi(V::subi(V::loadi_bytes(w + o[0]), V::loadi_bytes(w + o[1])),
+                         V::loadi_bytes(w + o[2])),
+                 V::loadi_bytes(w + o[3]));
+}
+
+template <typename V>
+typename V::M haar_stage(const ProgramStage& stage, const HaarStump* stumps, const std::uint8_t* w,
                          typename V::F factor) {
   typename V::Acc acc = V::acc_zero();
   for (int k = 0; k < stage.weak_count; ++k) {
     const HaarStump& s = stumps[k];
     const HaarTerms& t = s.terms;
     typename V::F value =
-        V::addf(V::mulf(V::splatf(t.weights[0]), V::tof(corner_sum<V>(w, t.offsets[0]))),
-                V::mulf(V::splatf(t.weights[1]), V::tof(corner_sum<V>(w, t.offsets[1]))));
+        V::addf(V::mulf(V::splatf(t.weights[0]), V::tof(stump_corner_sum<V>(w, t.offsets[0]))),
+                V::mulf(V::splatf(t.weights[1]), V::tof(stump_corner_sum<V>(w, t.offsets[1]))));
     if (t.rect_count == 3) {
-      value =
-          V::addf(value, V::mulf(V::splatf(t.weights[2]), V::tof(corner_sum<V>(w, t.offsets[2]))));
+      value = V::addf(
+          value, V::mulf(V::splatf(t.weights[2]), V::tof(stump_corner_sum<V>(w, t.offsets[2]))));
     }
     V::acc_add(acc, V::ltf(V::mulf(value, factor), V::splatf(s.threshold)), s.delta);
   }
@@ -48,7 +57,7 @@ typename V::M haar_stage(const ProgramStage& stage, const HaarStump* stumps, con
 // then each band of three blocks as the difference of two rows' differences (the same integer
 // sums as OpenCV's p0 - p1 - p2 + p3), so few vectors are live at a time.
 template <typename V>
-typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const std::uint32_t* w) {
+typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const std::uint8_t* w) {
   using I = typename V::I;
   typename V::Acc acc = V::acc_zero();
   for (int k = 0; k < stage.weak_count; ++k) {
@@ -57,10 +66,10 @@ typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const
     I above[3];
     I below[3];
     const auto differences = [&](int r, I* d) {
-      const I c0 = V::loadi(w + o[4 * r]);
-      const I c1 = V::loadi(w + o[4 * r + 1]);
-      const I c2 = V::loadi(w + o[4 * r + 2]);
-      const I c3 = V::loadi(w + o[4 * r + 3]);
+      const I c0 = V::loadi_bytes(w + o[4 * r]);
+      const I c1 = V::loadi_bytes(w + o[4 * r + 1]);
+      const I c2 = V::loadi_bytes(w + o[4 * r + 2]);
+      const I c3 = V::loadi_bytes(w + o[4 * r + 3]);
       d[0] = V::subi(c0, c1);
       d[1] = V::subi(c1, c2);
       d[2] = V::subi(c2, c3);
@@ -111,11 +120,12 @@ int cascade_row_simd(const CascadeProgram& p, const std::uint32_t* row, int posi
                   variance_ok);
       ok &= V::bitsm(variance_ok);
     }
+    const auto* w_bytes = reinterpret_cast<const std::uint8_t*>(w);
     const auto run_stage = [&](int s) {
       const ProgramStage& st = p.stages[s];
       const auto first_stump = static_cast<std::size_t>(st.first_weak);
-      return lbp ? V::bitsm(lbp_stage<V>(st, &p.lbp_stumps[first_stump], w))
-                 : V::bitsm(haar_stage<V>(st, &p.haar_stumps[first_stump], w, factor));
+      return lbp ? V::bitsm(lbp_stage<V>(st, &p.lbp_stumps[first_stump], w_bytes))
+                 : V::bitsm(haar_stage<V>(st, &p.haar_stumps[first_stump], w_bytes, factor));
     };
     unsigned alive = 0;
     if (ok != 0) {

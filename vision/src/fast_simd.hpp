@@ -54,17 +54,21 @@ int fast_row_simd(const std::uint8_t* row, std::ptrdiff_t stride, int width, int
   constexpr int kLanes = V::kLanesB;
   std::ptrdiff_t circle[25];
   fast_circle_offsets(stride, circle);
-  std::memset(scores, 0, static_cast<std::size_t>(width));
   if (width - 6 < kLanes) {  // narrower than one vector plus the borders
+    std::memset(scores, 0, static_cast<std::size_t>(width));
     return fast_columns_ref(row, circle, 3, width - 3, threshold, scores, columns);
   }
+  // Every vector stores its lanes' scores (0 where no corner); the borders get theirs here.
+  std::memset(scores, 0, 3);
+  std::memset(scores + width - 3, 0, 3);
 
   const B t = V::splatb(static_cast<std::uint8_t>(threshold));
   const B one = V::splatb(1);
+  const B zero = V::splatb(0);
   int count = 0;
   // A vector at x reads columns x-3 .. x+kLanes+2, all of which must lie inside the row. The
   // last vector is moved left to end at the last interior column; lanes already done are
-  // skipped.
+  // scored again (to the same scores) but not listed again.
   const int last_start = width - 3 - kLanes;
   for (int next = 3; next < width - 3; next += kLanes) {
     const int x = std::min(next, last_start);
@@ -89,14 +93,17 @@ int fast_row_simd(const std::uint8_t* row, std::ptrdiff_t stride, int width, int
     const B dark_pairs = V::andb(V::orb(d0, d8), V::orb(d4, d12));
     const bool maybe_bright = V::anyb(bright_pairs);
     const bool maybe_dark = V::anyb(dark_pairs);
-    if (!maybe_bright && !maybe_dark) continue;
+    if (!maybe_bright && !maybe_dark) {
+      V::storeb(scores + x, zero);
+      continue;
+    }
 
     // Only the sides that passed the quick test are measured; the other contributes 0, which
     // no corner's contrast (> t >= 0) can be beaten by.
     B circle_pixels[16];
 #pragma GCC unroll 16
     for (int k = 0; k < 16; ++k) circle_pixels[k] = V::loadb(p + circle[k]);
-    B contrast = V::splatb(0);
+    B contrast = zero;
     if (maybe_dark) {
       contrast = V::subsb(v, fast_best_arc<V, V::maxb, V::minb>(circle_pixels));
     }
@@ -104,16 +111,11 @@ int fast_row_simd(const std::uint8_t* row, std::ptrdiff_t stride, int width, int
       contrast = V::maxb(contrast, V::subsb(fast_best_arc<V, V::minb, V::maxb>(circle_pixels), v));
     }
     const B is_corner = V::gtb(contrast, t);
-    std::uint32_t corners = V::bitsb(is_corner) >> (next - x) << (next - x);
-    if (corners == 0) continue;
-    std::uint8_t lane_scores[kLanes];
-    V::storeb(lane_scores, V::subb(contrast, one));
-    do {
-      const int lane = __builtin_ctz(corners);
-      scores[x + lane] = lane_scores[lane];
-      columns[count++] = x + lane;
-      corners &= corners - 1;
-    } while (corners != 0);
+    V::storeb(scores + x, V::andb(is_corner, V::subb(contrast, one)));
+    for (std::uint32_t corners = V::bitsb(is_corner) >> (next - x) << (next - x); corners != 0;
+         corners &= corners - 1) {
+      columns[count++] = x + __builtin_ctz(corners);
+    }
   }
   return count;
 }

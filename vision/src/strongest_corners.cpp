@@ -1,7 +1,6 @@
 #include "epipole/vision/strongest_corners.hpp"
 
 #include <algorithm>
-#include <bit>
 #include <functional>
 
 #include "epipole/core/error.hpp"
@@ -10,23 +9,8 @@ namespace epipole::vision {
 
 namespace {
 
-// The score's bits as an unsigned integer of the same order (-0 taken as +0): negative floats
-// order in reverse as integers, so theirs are complemented; the others get the sign bit.
-std::uint32_t ordered_bits(float score) {
-  if (score == 0.0f) score = 0.0f;
-  const auto bits = std::bit_cast<std::uint32_t>(score);
-  return (bits & 0x8000'0000u) != 0 ? ~bits : bits | 0x8000'0000u;
-}
-
 float score_of(std::uint32_t ordered) {
   return std::bit_cast<float>((ordered & 0x8000'0000u) != 0 ? ordered & 0x7fff'ffffu : ~ordered);
-}
-
-// Higher score, then earlier in raster order, is a larger key.
-std::uint64_t key_of(const Corner& corner) {
-  const auto position =
-      static_cast<std::uint32_t>(corner.y) << 16 | static_cast<std::uint32_t>(corner.x);
-  return static_cast<std::uint64_t>(ordered_bits(corner.score)) << 32 | ~position;
 }
 
 Corner corner_of(std::uint64_t key) {
@@ -35,19 +19,11 @@ Corner corner_of(std::uint64_t key) {
           score_of(static_cast<std::uint32_t>(key >> 32))};
 }
 
-// A cell's keys once full: a heap whose front is the smallest key (the weakest corner).
-// Replaces the front by the larger `key` and restores the heap in one pass down.
-void replace_weakest(std::uint64_t* heap, int count, std::uint64_t key) {
-  int hole = 0;
-  for (;;) {
-    int child = 2 * hole + 1;
-    if (child >= count) break;
-    if (child + 1 < count && heap[child + 1] < heap[child]) ++child;
-    if (key <= heap[child]) break;
-    heap[hole] = heap[child];
-    hole = child;
-  }
-  heap[hole] = key;
+// Keeps the `capacity` largest of a cell's `count` keys at its front, in any order; returns the
+// smallest of them.
+std::uint64_t keep_largest(std::uint64_t* keys, int count, int capacity) {
+  std::nth_element(keys, keys + capacity - 1, keys + count, std::greater<>{});
+  return keys[capacity - 1];
 }
 
 }  // namespace
@@ -66,8 +42,9 @@ StrongestCorners::StrongestCorners(int width, int height, int max_corners, int g
           " image: at most 65535 pixels wide and high");
   cell_capacity_ = max_corners / cells;
   const auto kept = static_cast<std::size_t>(cell_capacity_) * cells;
-  keys_ = std::make_unique<std::uint64_t[]>(kept);
+  keys_ = std::make_unique<std::uint64_t[]>(2 * kept);
   counts_ = std::make_unique<int[]>(static_cast<std::size_t>(cells));
+  floors_ = std::make_unique<std::uint64_t[]>(static_cast<std::size_t>(cells));
   corners_ = std::make_unique<Corner[]>(kept);
   cell_of_column_ = std::make_unique<int[]>(static_cast<std::size_t>(width));
   for (int x = 0; x < width; ++x)
@@ -80,28 +57,27 @@ StrongestCorners::StrongestCorners(int width, int height, int max_corners, int g
 
 void StrongestCorners::clear() {
   std::fill_n(counts_.get(), grid_columns_ * grid_rows_, 0);
+  std::fill_n(floors_.get(), grid_columns_ * grid_rows_, 0);  // every key is above 0
   truncated_ = false;
 }
 
 std::size_t StrongestCorners::working_set_bytes() const {
   const auto cells = static_cast<std::size_t>(grid_columns_) * grid_rows_;
-  return static_cast<std::size_t>(cell_capacity_) * cells *
-             (sizeof(Corner) + sizeof(std::uint64_t)) +
-         cells * sizeof(int);
+  const auto kept = static_cast<std::size_t>(cell_capacity_) * cells;
+  return kept * (2 * sizeof(std::uint64_t) + sizeof(Corner)) +
+         cells * (sizeof(int) + sizeof(std::uint64_t)) +
+         (static_cast<std::size_t>(width_) + height_) * sizeof(int);
 }
 
-void StrongestCorners::offer(const Corner& corner) {
-  const int cell = cell_of_row_[corner.y] + cell_of_column_[corner.x];
-  std::uint64_t* begin = keys_.get() + static_cast<std::ptrdiff_t>(cell) * cell_capacity_;
-  const std::uint64_t key = key_of(corner);
+void StrongestCorners::keep(int cell, std::uint64_t key) {
+  std::uint64_t* keys = keys_.get() + 2 * static_cast<std::ptrdiff_t>(cell) * cell_capacity_;
   int& count = counts_[cell];
-  if (count < cell_capacity_) {
-    begin[count++] = key;
-    if (count == cell_capacity_) std::make_heap(begin, begin + count, std::greater<>{});
-    return;
+  keys[count++] = key;
+  if (count == 2 * cell_capacity_) {
+    floors_[cell] = keep_largest(keys, count, cell_capacity_);
+    count = cell_capacity_;
+    truncated_ = true;
   }
-  truncated_ = true;
-  if (key > begin[0]) replace_weakest(begin, count, key);
 }
 
 std::span<const Corner> StrongestCorners::finish() {
@@ -110,11 +86,18 @@ std::span<const Corner> StrongestCorners::finish() {
   // bits. Sorted in decreasing order, they are in raster order.
   std::uint64_t* out = keys_.get();
   for (int cell = 0; cell < cells; ++cell) {
-    const std::uint64_t* begin = keys_.get() + static_cast<std::ptrdiff_t>(cell) * cell_capacity_;
+    std::uint64_t* keys = keys_.get() + 2 * static_cast<std::ptrdiff_t>(cell) * cell_capacity_;
+    int count = counts_[cell];
+    if (count > cell_capacity_) {
+      keep_largest(keys, count, cell_capacity_);
+      count = cell_capacity_;
+      truncated_ = true;
+    }
     // Cells move towards the front in order, so a cell is never overwritten before it moves.
-    out = std::transform(begin, begin + counts_[cell], out,
+    out = std::transform(keys, keys + count, out,
                          [](std::uint64_t key) { return key << 32 | key >> 32; });
     counts_[cell] = 0;
+    floors_[cell] = 0;
   }
   // One cell that never filled is still in the order the corners came: raster order.
   if (cells > 1 || truncated_) std::sort(keys_.get(), out, std::greater<>{});

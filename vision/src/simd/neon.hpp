@@ -162,6 +162,8 @@ struct Neon {
 
   // Consecutive entries of an integral row.
   static I loadi(const std::uint32_t* p) { return vreinterpretq_s32_u32(vld1q_u32(p)); }
+  // The same from a byte address (a load at base + a byte offset needs no shift).
+  static I loadi_bytes(const std::uint8_t* p) { return vreinterpretq_s32_u8(vld1q_u8(p)); }
   static I addi(I a, I b) { return vaddq_s32(a, b); }
   static I subi(I a, I b) { return vsubq_s32(a, b); }
   static F tof(I a) { return vcvtq_f32_s32(a); }

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -16,14 +17,19 @@ namespace epipole::vision {
 // corner earlier in raster order. Corners come out in raster order. Corners offered must lie in
 // the image, which is at most 65535 pixels wide and high.
 //
-// Working set: max_corners * (sizeof(Corner) + 8) + (cells + width + height) * sizeof(int) bytes.
+// Working set: about max_corners * (sizeof(Corner) + 16) + (cells + width + height) * 4 bytes.
 class StrongestCorners {
  public:
   StrongestCorners(int width, int height, int max_corners, int grid_columns = 1, int grid_rows = 1);
 
   // A frame is clear(), offer() for each candidate, finish().
   void clear();
-  void offer(const Corner& corner);
+  // Inline: a detector offers every corner that survives its non-maximum suppression.
+  void offer(const Corner& corner) {
+    const int cell = cell_of_row_[corner.y] + cell_of_column_[corner.x];
+    const std::uint64_t key = key_of(corner);
+    if (key > floors_[cell]) keep(cell, key);  // else weaker than all a full cell kept
+  }
   // Ends the frame: returns the kept corners in raster order (valid until the next offer())
   // and empties the cells.
   std::span<const Corner> finish();
@@ -34,15 +40,33 @@ class StrongestCorners {
   std::size_t working_set_bytes() const;
 
  private:
+  // The score's bits as an unsigned integer of the same order (-0 taken as +0): negative floats
+  // order in reverse as integers, so theirs are complemented; the others get the sign bit.
+  static std::uint32_t ordered_bits(float score) {
+    if (score == 0.0f) score = 0.0f;
+    const auto bits = std::bit_cast<std::uint32_t>(score);
+    return (bits & 0x8000'0000u) != 0 ? ~bits : bits | 0x8000'0000u;
+  }
+  // Higher score, then earlier in raster order, is a larger key.
+  static std::uint64_t key_of(const Corner& corner) {
+    const auto position =
+        static_cast<std::uint32_t>(corner.y) << 16 | static_cast<std::uint32_t>(corner.x);
+    return static_cast<std::uint64_t>(ordered_bits(corner.score)) << 32 | ~position;
+  }
+  // Adds a key above the cell's floor; a cell at twice its capacity keeps its strongest.
+  void keep(int cell, std::uint64_t key);
+
   int width_;
   int height_;
   int grid_columns_;
   int grid_rows_;
   int cell_capacity_;
-  // A kept corner is one 64-bit key whose order is "stronger": the score's bits made to order as
-  // unsigned integers above the complement of its raster position (y * 65536 + x). So a heap
-  // step is one integer comparison.
-  std::unique_ptr<std::uint64_t[]> keys_;  // cell i owns [i * cell_capacity_, (i + 1) * ...)
+  // A corner is kept as one 64-bit key whose order is "stronger": the score's bits made to order
+  // as unsigned integers above the complement of its raster position (y * 65536 + x). A cell
+  // collects up to twice its capacity, then keeps its strongest (std::nth_element) and from then
+  // on takes only keys above the weakest it kept (its floor).
+  std::unique_ptr<std::uint64_t[]> keys_;  // cell i owns [2i * cell_capacity_, 2(i + 1) * ...)
+  std::unique_ptr<std::uint64_t[]> floors_;
   std::unique_ptr<int[]> counts_;
   std::unique_ptr<Corner[]> corners_;      // what finish() returns
   std::unique_ptr<int[]> cell_of_column_;  // x -> the grid column of x
