@@ -77,10 +77,10 @@ TEST_P(FastKernel, DetectorsAgree) {
 INSTANTIATE_TEST_SUITE_P(Shapes, FastKernel,
                          ::testing::Values(Case{7, 7, 0, 0}, Case{8, 9, 1, 1}, Case{21, 11, 0, 3},
                                            Case{22, 12, 3, 1}, Case{23, 13, 17, 2},
-                                           Case{35, 10, 0, 0}, Case{37, 9, 5, 7},
-                                           Case{64, 16, 0, 0}, Case{77, 21, 13, 5},
-                                           Case{129, 17, 1, 3}, Case{640, 24, 0, 0},
-                                           Case{641, 19, 63, 1}),
+                                           Case{35, 10, 0, 0}, Case{37, 9, 5, 7}, Case{38, 9, 0, 1},
+                                           Case{39, 8, 2, 0}, Case{64, 16, 0, 0},
+                                           Case{77, 21, 13, 5}, Case{129, 17, 1, 3},
+                                           Case{640, 24, 0, 0}, Case{641, 19, 63, 1}),
                          [](const ::testing::TestParamInfo<Case>& param_info) {
                            const Case& c = param_info.param;
                            return std::to_string(c.width) + "x" + std::to_string(c.height) +

@@ -116,6 +116,23 @@ TEST(StrongestCorners, EmptiesItsCellsAtFinish) {
   EXPECT_TRUE(strongest.finish().empty());
 }
 
+TEST(StrongestCorners, AFinishedFrameLeavesNoFloorBehind) {
+  // A full cell's floor rises to its weakest kept corner; after finish(), weaker corners are kept
+  // again, without a clear().
+  StrongestCorners strongest(16, 16, 2);
+  for (int x = 0; x < 8; ++x) strongest.offer({x, 0, 100.0f + static_cast<float>(x)});
+  const std::span<const Corner> kept = strongest.finish();
+  const std::vector<Corner> strong(kept.begin(), kept.end());
+  EXPECT_EQ(strong, (std::vector<Corner>{{6, 0, 106.0f}, {7, 0, 107.0f}}));
+  EXPECT_TRUE(strongest.truncated());
+  strongest.offer({1, 5, 1.0f});
+  strongest.offer({2, 5, 2.0f});
+  const std::span<const Corner> weak = strongest.finish();
+  ASSERT_EQ(weak.size(), 2u);
+  EXPECT_EQ(weak[0], (Corner{1, 5, 1.0f}));
+  EXPECT_EQ(weak[1], (Corner{2, 5, 2.0f}));
+}
+
 TEST(StrongestCorners, RefusesImagesItCannotNumber) {
   EXPECT_THROW(StrongestCorners(65536, 10, 10), Error);
   EXPECT_THROW(StrongestCorners(10, 65536, 10), Error);

@@ -3,6 +3,7 @@
 // predictCategorical(Stump)), written out for one window at a time.
 #include "cascade_program.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -48,14 +49,16 @@ LbpTerms lbp_terms(const LbpFeature& f, const IntegralLayout& layout) {
   return t;
 }
 
-// An entry offset as a byte offset, for the stumps of the SIMD kernels.
+// The stumps of the SIMD kernels hold byte offsets (cascade_simd.hpp): 4 per entry.
+constexpr std::int32_t kEntryBytes = sizeof(std::uint32_t);
+
+bool fits_in_bytes(std::int32_t entries) {
+  constexpr std::int32_t kLimit = std::numeric_limits<std::int32_t>::max() / kEntryBytes;
+  return entries >= -kLimit && entries <= kLimit;
+}
+
 std::int32_t in_bytes(std::int32_t entries) {
-  constexpr auto kEntry = static_cast<std::int64_t>(sizeof(std::uint32_t));
-  const std::int64_t bytes = entries * kEntry;
-  require(bytes >= std::numeric_limits<std::int32_t>::min() &&
-              bytes <= std::numeric_limits<std::int32_t>::max(),
-          "cascade: an integral offset of ", entries, " entries does not fit 32 bits in bytes");
-  return static_cast<std::int32_t>(bytes);
+  return entries * kEntryBytes;
 }
 
 HaarTerms in_bytes(HaarTerms t) {
@@ -152,6 +155,16 @@ CascadeProgram::CascadeProgram(const CascadeModel& model, IntegralLayout layout_
 
 // The stumps in fixed point for the SIMD kernels, when that is exact (fixed_point_exact).
 void CascadeProgram::build_fixed_point() {
+  // Integral images too large for 32-bit byte offsets are left to the reference kernel.
+  const auto fit = [](const std::int32_t* offsets, int count) {
+    return std::all_of(offsets, offsets + count, fits_in_bytes);
+  };
+  for (const HaarTerms& t : haar) {
+    if (!fit(&t.offsets[0][0], 12)) return;
+  }
+  for (const LbpTerms& t : lbp) {
+    if (!fit(t.offsets, 16)) return;
+  }
   for (const float v : leaves) fixed_shift = std::max(fixed_shift, exact_shift(v));
   fixed_point_exact = true;
   for (ProgramStage& stage : stages) {

@@ -48,10 +48,11 @@ StrongestCorners::StrongestCorners(int width, int height, int max_corners, int g
   corners_ = std::make_unique<Corner[]>(kept);
   cell_of_column_ = std::make_unique<int[]>(static_cast<std::size_t>(width));
   for (int x = 0; x < width; ++x)
-    cell_of_column_[x] = static_cast<int>(static_cast<long>(x) * grid_columns / width);
+    cell_of_column_[x] = static_cast<int>(static_cast<std::int64_t>(x) * grid_columns / width);
   cell_of_row_ = std::make_unique<int[]>(static_cast<std::size_t>(height));
   for (int y = 0; y < height; ++y)
-    cell_of_row_[y] = static_cast<int>(static_cast<long>(y) * grid_rows / height) * grid_columns;
+    cell_of_row_[y] =
+        static_cast<int>(static_cast<std::int64_t>(y) * grid_rows / height) * grid_columns;
   clear();
 }
 

@@ -162,7 +162,8 @@ struct Neon {
 
   // Consecutive entries of an integral row.
   static I loadi(const std::uint32_t* p) { return vreinterpretq_s32_u32(vld1q_u32(p)); }
-  // The same from a byte address (a load at base + a byte offset needs no shift).
+  // The same from a byte address (a load at base + a byte offset needs no shift; the lanes are
+  // the same as vld1q_u32's on little-endian ARM, which every supported board is).
   static I loadi_bytes(const std::uint8_t* p) { return vreinterpretq_s32_u8(vld1q_u8(p)); }
   static I addi(I a, I b) { return vaddq_s32(a, b); }
   static I subi(I a, I b) { return vsubq_s32(a, b); }

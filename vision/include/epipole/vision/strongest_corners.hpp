@@ -1,6 +1,7 @@
 #pragma once
 
 #include <bit>
+#include <cassert>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -15,9 +16,12 @@ namespace epipole::vision {
 // view instead of piling up on one textured patch). Each cell keeps at most
 // max_corners / (grid_columns * grid_rows); "strongest" is the higher score, ties going to the
 // corner earlier in raster order. Corners come out in raster order. Corners offered must lie in
-// the image, which is at most 65535 pixels wide and high.
+// the image, which is at most 65535 pixels wide and high (checked only by assert: offer() is on
+// the detectors' hot path). NaN scores are ordered too: a positive NaN above +inf, a negative
+// one below -inf.
 //
-// Working set: about max_corners * (sizeof(Corner) + 16) + (cells + width + height) * 4 bytes.
+// Working set: about max_corners * (sizeof(Corner) + 16) + cells * 12 + (width + height) * 4
+// bytes.
 class StrongestCorners {
  public:
   StrongestCorners(int width, int height, int max_corners, int grid_columns = 1, int grid_rows = 1);
@@ -26,6 +30,7 @@ class StrongestCorners {
   void clear();
   // Inline: a detector offers every corner that survives its non-maximum suppression.
   void offer(const Corner& corner) {
+    assert(corner.x >= 0 && corner.x < width_ && corner.y >= 0 && corner.y < height_);
     const int cell = cell_of_row_[corner.y] + cell_of_column_[corner.x];
     const std::uint64_t key = key_of(corner);
     if (key > floors_[cell]) keep(cell, key);  // else weaker than all a full cell kept
@@ -34,7 +39,8 @@ class StrongestCorners {
   // and empties the cells.
   std::span<const Corner> finish();
 
-  // True when some corner of the frame was dropped (readable until the next clear()).
+  // After finish(): true when some corner of the frame was dropped (readable until the next
+  // clear()). Before it, true only once a cell has collected twice its capacity.
   bool truncated() const { return truncated_; }
   int cell_capacity() const { return cell_capacity_; }
   std::size_t working_set_bytes() const;
