@@ -1,6 +1,7 @@
 #include "epipole/vision/strongest_corners.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <functional>
 
 #include "epipole/core/error.hpp"
@@ -42,7 +43,7 @@ StrongestCorners::StrongestCorners(int width, int height, int max_corners, int g
           " image: at most 65535 pixels wide and high");
   cell_capacity_ = max_corners / cells;
   const auto kept = static_cast<std::size_t>(cell_capacity_) * cells;
-  keys_ = std::make_unique<std::uint64_t[]>(2 * kept);
+  keys_ = std::make_unique<std::uint64_t[]>(kCollected * kept);
   counts_ = std::make_unique<int[]>(static_cast<std::size_t>(cells));
   floors_ = std::make_unique<std::uint64_t[]>(static_cast<std::size_t>(cells));
   corners_ = std::make_unique<Corner[]>(kept);
@@ -65,16 +66,20 @@ void StrongestCorners::clear() {
 std::size_t StrongestCorners::working_set_bytes() const {
   const auto cells = static_cast<std::size_t>(grid_columns_) * grid_rows_;
   const auto kept = static_cast<std::size_t>(cell_capacity_) * cells;
-  return kept * (2 * sizeof(std::uint64_t) + sizeof(Corner)) +
+  return kept * (kCollected * sizeof(std::uint64_t) + sizeof(Corner)) +
          cells * (sizeof(int) + sizeof(std::uint64_t)) +
          (static_cast<std::size_t>(width_) + height_) * sizeof(int);
 }
 
+std::uint64_t* StrongestCorners::cell_keys(int cell) {
+  return keys_.get() + kCollected * static_cast<std::ptrdiff_t>(cell) * cell_capacity_;
+}
+
 void StrongestCorners::keep(int cell, std::uint64_t key) {
-  std::uint64_t* keys = keys_.get() + 2 * static_cast<std::ptrdiff_t>(cell) * cell_capacity_;
+  std::uint64_t* keys = cell_keys(cell);
   int& count = counts_[cell];
   keys[count++] = key;
-  if (count == 2 * cell_capacity_) {
+  if (count == kCollected * cell_capacity_) {
     floors_[cell] = keep_largest(keys, count, cell_capacity_);
     count = cell_capacity_;
     truncated_ = true;
@@ -87,7 +92,7 @@ std::span<const Corner> StrongestCorners::finish() {
   // bits. Sorted in decreasing order, they are in raster order.
   std::uint64_t* out = keys_.get();
   for (int cell = 0; cell < cells; ++cell) {
-    std::uint64_t* keys = keys_.get() + 2 * static_cast<std::ptrdiff_t>(cell) * cell_capacity_;
+    std::uint64_t* keys = cell_keys(cell);
     int count = counts_[cell];
     if (count > cell_capacity_) {
       keep_largest(keys, count, cell_capacity_);
@@ -96,14 +101,14 @@ std::span<const Corner> StrongestCorners::finish() {
     }
     // Cells move towards the front in order, so a cell is never overwritten before it moves.
     out = std::transform(keys, keys + count, out,
-                         [](std::uint64_t key) { return key << 32 | key >> 32; });
+                         [](std::uint64_t key) { return std::rotl(key, 32); });
     counts_[cell] = 0;
     floors_[cell] = 0;
   }
   // One cell that never filled is still in the order the corners came: raster order.
   if (cells > 1 || truncated_) std::sort(keys_.get(), out, std::greater<>{});
   const Corner* end = std::transform(keys_.get(), out, corners_.get(), [](std::uint64_t swapped) {
-    return corner_of(swapped << 32 | swapped >> 32);
+    return corner_of(std::rotl(swapped, 32));
   });
   return {corners_.get(), static_cast<std::size_t>(end - corners_.get())};
 }

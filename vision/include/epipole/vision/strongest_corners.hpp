@@ -40,7 +40,7 @@ class StrongestCorners {
   std::span<const Corner> finish();
 
   // After finish(): true when some corner of the frame was dropped (readable until the next
-  // clear()). Before it, true only once a cell has collected twice its capacity.
+  // clear()). Before it, true only once a cell has collected kCollected times its capacity.
   bool truncated() const { return truncated_; }
   int cell_capacity() const { return cell_capacity_; }
   std::size_t working_set_bytes() const;
@@ -59,7 +59,11 @@ class StrongestCorners {
         static_cast<std::uint32_t>(corner.y) << 16 | static_cast<std::uint32_t>(corner.x);
     return static_cast<std::uint64_t>(ordered_bits(corner.score)) << 32 | ~position;
   }
-  // Adds a key above the cell's floor; a cell at twice its capacity keeps its strongest.
+  // A cell collects keys up to this many times its capacity before it keeps its strongest.
+  static constexpr int kCollected = 2;
+  std::uint64_t* cell_keys(int cell);
+  // Adds a key above the cell's floor; a cell at kCollected times its capacity keeps its
+  // strongest.
   void keep(int cell, std::uint64_t key);
 
   int width_;
@@ -69,9 +73,10 @@ class StrongestCorners {
   int cell_capacity_;
   // A corner is kept as one 64-bit key whose order is "stronger": the score's bits made to order
   // as unsigned integers above the complement of its raster position (y * 65536 + x). A cell
-  // collects up to twice its capacity, then keeps its strongest (std::nth_element) and from then
-  // on takes only keys above the weakest it kept (its floor).
-  std::unique_ptr<std::uint64_t[]> keys_;  // cell i owns [2i * cell_capacity_, 2(i + 1) * ...)
+  // collects up to kCollected times its capacity, then keeps its strongest (std::nth_element) and
+  // from then on takes only keys above the weakest it kept (its floor).
+  std::unique_ptr<std::uint64_t[]>
+      keys_;  // cell i owns kCollected * cell_capacity_ from cell_keys(i)
   std::unique_ptr<std::uint64_t[]> floors_;
   std::unique_ptr<int[]> counts_;
   std::unique_ptr<Corner[]> corners_;      // what finish() returns
