@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cascade_kernels.hpp"
+#include "cascade_program.hpp"
 #include "cascade_test_models.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/thread_pool.hpp"
@@ -275,8 +276,9 @@ TEST_P(CascadeDetection, EveryPathFindsTheSameWindows) {
 }
 
 test::RandomCascadeShape shape(CascadeFeatureType type, int w, int h, int nodes, bool tilted,
-                               double pass_rate = 0.75) {
+                               double pass_rate = 0.75, bool fractional_weights = false) {
   test::RandomCascadeShape s;
+  s.fractional_weights = fractional_weights;
   s.pass_rate = pass_rate;
   s.type = type;
   s.window_width = w;
@@ -291,12 +293,60 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         DetectionCase{"haar_stumps", shape(CascadeFeatureType::haar, 24, 24, 1, false), 97, 71},
         DetectionCase{"haar_tilted", shape(CascadeFeatureType::haar, 20, 24, 1, true), 83, 64},
+        DetectionCase{"haar_fractional_weights",
+                      shape(CascadeFeatureType::haar, 24, 24, 1, true, 0.9, true), 89, 67},
         DetectionCase{"haar_trees", shape(CascadeFeatureType::haar, 20, 20, 3, true), 61, 45},
         DetectionCase{"lbp", shape(CascadeFeatureType::lbp, 24, 24, 1, false), 101, 77},
         DetectionCase{"lbp_small_window", shape(CascadeFeatureType::lbp, 9, 12, 1, false), 33, 29},
         DetectionCase{"haar_minimum_image", shape(CascadeFeatureType::haar, 24, 24, 1, false), 24,
                       24, 2}),
     [](const ::testing::TestParamInfo<DetectionCase>& p) { return std::string(p.param.name); });
+
+// The SIMD kernels' stumps: a stage's two-rectangle stumps first, integer weights where OpenCV's
+// cascades have them, and each stage's deltas split into 32-bit parts that add up to the same
+// fixed-point sums without overflow.
+TEST(CascadeProgram, StumpsForTheSimdKernels) {
+  for (const bool fractional : {false, true}) {
+    for (const bool tilted : {false, true}) {
+      const CascadeModel model(
+          test::random_cascade(shape(CascadeFeatureType::haar, 24, 24, 1, tilted, 0.75, fractional),
+                               7),
+          "random");
+      const kernels::CascadeProgram p(model, {64, 0}, 64 * 30, 64 * 60);
+      ASSERT_TRUE(p.fixed_point_exact);
+      EXPECT_EQ(p.integer_weights, !fractional);
+      std::size_t next = 0;
+      for (const kernels::ProgramStage& stage : p.stages) {
+        int pairs = 0;
+        std::int64_t expected = 0;
+        for (int k = 0; k < stage.weak_count; ++k) {
+          const int i = stage.first_weak + k;
+          pairs += p.haar[static_cast<std::size_t>(p.nodes[i].feature)].rect_count == 2 ? 1 : 0;
+          expected += static_cast<std::int64_t>(std::ldexp(p.leaves[2 * i], p.fixed_shift)) -
+                      static_cast<std::int64_t>(std::ldexp(p.leaves[2 * i + 1], p.fixed_shift));
+        }
+        EXPECT_EQ(stage.pair_count, pairs);
+        const std::int64_t unit = std::int64_t{1} << stage.split_shift;
+        EXPECT_LE(stage.weak_count * (unit - 1), std::int64_t{INT32_MAX});
+        std::int64_t sum = 0;
+        std::int64_t high_magnitude = 0;
+        for (int k = 0; k < stage.weak_count; ++k, ++next) {
+          const kernels::HaarStump& s = p.haar_stumps[next];
+          EXPECT_GE(s.delta.low, 0);
+          EXPECT_LT(s.delta.low, unit);
+          sum += s.delta.high * unit + s.delta.low;
+          high_magnitude += std::abs(s.delta.high);
+          if (p.integer_weights) {
+            EXPECT_EQ(s.integer_weights[0], 1);
+          }
+        }
+        EXPECT_LE(high_magnitude, std::int64_t{INT32_MAX});
+        EXPECT_EQ(sum, expected);
+      }
+      EXPECT_EQ(next, p.haar_stumps.size());
+    }
+  }
+}
 
 TEST(CascadeDetector, BoundsAndLimits) {
   const CascadeModel model(

@@ -19,6 +19,9 @@ struct RandomCascadeShape {
   int first_stage_weaks = 3;  // stage s has first_stage_weaks + 2 s weak classifiers
   int max_nodes = 1;          // > 1: trees of 1..max_nodes nodes
   bool tilted = false;        // Haar: about a third of the features tilted
+  // Haar: weights like -1.3 and 2.6 instead of OpenCV's -1, 2, 3 and 9 (the kernels form
+  // integer weights' values in integers, other weights' in floats).
+  bool fractional_weights = false;
   // Stage thresholds: a random window passes a stage about this often.
   double pass_rate = 0.75;
 };
@@ -65,7 +68,11 @@ inline vision::CascadeData random_cascade(const RandomCascadeShape& shape, std::
           rect.x = pick(0, w - rect.width);
           rect.y = pick(0, h - rect.height);
         }
-        rect.weight = r == 0 ? -1.0f : static_cast<float>(pick(1, 3));
+        if (shape.fractional_weights) {
+          rect.weight = static_cast<float>(r == 0 ? -uniform(0.5, 1.5) : uniform(0.5, 3.5));
+        } else {
+          rect.weight = r == 0 ? -1.0f : static_cast<float>(pick(1, 3));
+        }
       }
       d.haar_features.push_back(f);
     }

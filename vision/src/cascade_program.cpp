@@ -61,13 +61,6 @@ std::int32_t in_bytes(std::int32_t entries) {
   return entries * kEntryBytes;
 }
 
-HaarTerms in_bytes(HaarTerms t) {
-  for (auto& rect : t.offsets) {
-    for (std::int32_t& o : rect) o = in_bytes(o);
-  }
-  return t;
-}
-
 LbpTerms in_bytes(LbpTerms t) {
   for (std::int32_t& o : t.offsets) o = in_bytes(o);
   return t;
@@ -112,6 +105,36 @@ inline int lbp_code(const LbpTerms& t, const std::uint32_t* w) {
          (block(w, o, 4, 5, 8, 9) >= centre ? 1 : 0);
 }
 
+// Whether a Haar feature's value can be formed in integers (CascadeProgram::integer_weights):
+// each rectangle lies inside the window (CascadeModel checks that), so its sum is at most 255
+// times the window's pixels.
+bool integer_weights_exact(const HaarTerms& t, int window_pixels) {
+  if (t.weights[0] != 1.0f && t.weights[0] != -1.0f) return false;
+  double bound = 0.0;
+  for (const float w : t.weights) {
+    if (w != std::trunc(w)) return false;
+    bound += std::abs(static_cast<double>(w)) * 255.0 * window_pixels;
+  }
+  return bound < 0x1p24;
+}
+
+// The largest shift for which the low parts of `count` deltas (each below 2^shift) cannot
+// overflow an int32 sum.
+int split_shift_for(int count) {
+  int shift = 0;
+  while (shift < 62 && static_cast<std::int64_t>(count) * ((std::int64_t{2} << shift) - 1) <=
+                           std::numeric_limits<std::int32_t>::max()) {
+    ++shift;
+  }
+  return shift;
+}
+
+SplitDelta split(std::int64_t delta, int shift) {
+  const std::int64_t high = delta >> shift;  // floor: the low part is not negative
+  return {static_cast<std::int32_t>(delta - high * (std::int64_t{1} << shift)),
+          static_cast<std::int32_t>(high)};
+}
+
 }  // namespace
 
 CascadeProgram::CascadeProgram(const CascadeModel& model, IntegralLayout layout_,
@@ -153,6 +176,24 @@ CascadeProgram::CascadeProgram(const CascadeModel& model, IntegralLayout layout_
   if (stump_based) build_fixed_point();
 }
 
+HaarStump CascadeProgram::haar_stump(int weak) const {
+  const HaarTerms& t = haar[nodes[weak].feature];
+  HaarStump s;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) s.offsets[r][c] = in_bytes(t.offsets[r][c]);
+    s.weights[r] = t.weights[r];
+    s.integer_weights[r] = static_cast<std::int32_t>(t.weights[r]);
+  }
+  if (integer_weights && t.weights[0] < 0.0f) {
+    // p1 - p0 - p3 + p2 = -(p0 - p1 - p2 + p3): the first weight becomes 1.
+    std::swap(s.offsets[0][0], s.offsets[0][1]);
+    std::swap(s.offsets[0][2], s.offsets[0][3]);
+    s.integer_weights[0] = 1;
+  }
+  s.threshold = nodes[weak].threshold;
+  return s;
+}
+
 // The stumps in fixed point for the SIMD kernels, when that is exact (fixed_point_exact).
 void CascadeProgram::build_fixed_point() {
   // Integral images too large for 32-bit byte offsets are left to the reference kernel.
@@ -165,11 +206,18 @@ void CascadeProgram::build_fixed_point() {
   for (const LbpTerms& t : lbp) {
     if (!fit(t.offsets, 16)) return;
   }
+  const int window_pixels = window_width * window_height;
+  integer_weights = type == CascadeFeatureType::haar &&
+                    std::all_of(haar.begin(), haar.end(), [&](const HaarTerms& t) {
+                      return integer_weights_exact(t, window_pixels);
+                    });
   for (const float v : leaves) fixed_shift = std::max(fixed_shift, exact_shift(v));
   fixed_point_exact = true;
+  std::vector<std::int64_t> deltas;
   for (ProgramStage& stage : stages) {
     double magnitude = 0.0;
     std::int64_t base = 0;
+    deltas.clear();
     for (int k = 0; k < stage.weak_count; ++k) {
       const int i = stage.first_weak + k;
       const double left = std::ldexp(static_cast<double>(leaves[2 * i]), fixed_shift);
@@ -177,35 +225,60 @@ void CascadeProgram::build_fixed_point() {
       magnitude += std::max(std::abs(left), std::abs(right));
       if (!(magnitude < 0x1p52)) {
         fixed_point_exact = false;
-        continue;
+        break;
       }
       const auto left_fixed = static_cast<std::int64_t>(left);
       const auto right_fixed = static_cast<std::int64_t>(right);
       base += right_fixed;
-      if (type == CascadeFeatureType::haar) {
-        haar_stumps.push_back(
-            {in_bytes(haar[nodes[i].feature]), nodes[i].threshold, left_fixed - right_fixed});
-      } else {
-        LbpStump stump;
-        stump.terms = in_bytes(lbp[nodes[i].feature]);
-        stump.delta = left_fixed - right_fixed;
-        for (int word = 0; word < 8; ++word) {
-          for (int byte = 0; byte < 4; ++byte) {
-            stump.subset[4 * word + byte] =
-                static_cast<std::uint8_t>(subsets[8 * i + word] >> (8 * byte));
-          }
-        }
-        lbp_stumps.push_back(stump);
-      }
+      deltas.push_back(left_fixed - right_fixed);
     }
     // sum < T  <=>  base + selected < ceil(T * 2^shift) for integer sums.
     const double threshold =
         std::ceil(std::ldexp(static_cast<double>(stage.threshold), fixed_shift));
-    if (!(std::abs(threshold) < 0x1p62)) {
+    if (!fixed_point_exact || !(std::abs(threshold) < 0x1p62)) {
       fixed_point_exact = false;
-      continue;
+      break;
     }
     stage.fixed_threshold = static_cast<std::int64_t>(threshold) - base;
+    stage.split_shift = split_shift_for(stage.weak_count);
+    std::int64_t high_magnitude = 0;
+    for (const std::int64_t d : deltas) {
+      high_magnitude += std::abs(split(d, stage.split_shift).high);
+    }
+    if (high_magnitude > std::numeric_limits<std::int32_t>::max()) {
+      fixed_point_exact = false;
+      break;
+    }
+    const auto stump_delta = [&](int k) {
+      return split(deltas[static_cast<std::size_t>(k)], stage.split_shift);
+    };
+    if (type == CascadeFeatureType::haar) {
+      // Two-rectangle stumps first: the kernels run a loop of each kind.
+      for (const int rects : {2, 3}) {
+        for (int k = 0; k < stage.weak_count; ++k) {
+          const int i = stage.first_weak + k;
+          if (haar[nodes[i].feature].rect_count != rects) continue;
+          HaarStump stump = haar_stump(i);
+          stump.delta = stump_delta(k);
+          haar_stumps.push_back(stump);
+          if (rects == 2) ++stage.pair_count;
+        }
+      }
+      continue;
+    }
+    for (int k = 0; k < stage.weak_count; ++k) {
+      const int i = stage.first_weak + k;
+      LbpStump stump;
+      stump.terms = in_bytes(lbp[nodes[i].feature]);
+      stump.delta = stump_delta(k);
+      for (int word = 0; word < 8; ++word) {
+        for (int byte = 0; byte < 4; ++byte) {
+          stump.subset[4 * word + byte] =
+              static_cast<std::uint8_t>(subsets[8 * i + word] >> (8 * byte));
+        }
+      }
+      lbp_stumps.push_back(stump);
+    }
   }
   // The SIMD kernels compute nf = area * squares - sum^2 exactly in int64 and convert it to
   // double; OpenCV's double arithmetic is exact too (so the two agree) while these fit 2^52.

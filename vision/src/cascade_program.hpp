@@ -43,21 +43,36 @@ struct ProgramStage {
   // Fixed point (see CascadeProgram): the stage passes when the sum of the selected deltas is
   // at least this.
   std::int64_t fixed_threshold = 0;
+  // The SIMD kernels' stumps of a Haar stage: the first pair_count have two rectangles, the
+  // others three (the sum does not depend on the order: it is exact).
+  int pair_count = 0;
+  // The SIMD kernels add each delta in two 32-bit lanes, delta = high * 2^split_shift + low with
+  // 0 <= low < 2^split_shift; the shift is chosen per stage so that neither sum can overflow.
+  int split_shift = 0;
 };
 
-// Stumps in evaluation order, for the SIMD kernels. Taking the left leaf adds `delta` to the
-// stage's fixed-point sum (the right leaves are folded into the stage's threshold). Their terms'
-// offsets are in bytes, not entries (see cascade_simd.hpp).
+struct SplitDelta {
+  std::int32_t low = 0;
+  std::int32_t high = 0;
+};
+
+// Stumps for the SIMD kernels, a stage's in the order they are evaluated. Taking the left leaf
+// adds `delta` to the stage's fixed-point sum (the right leaves are folded into the stage's
+// threshold). Offsets are in bytes, not entries (see cascade_simd.hpp).
 struct HaarStump {
-  HaarTerms terms;
+  std::int32_t offsets[3][4] = {};
+  float weights[3] = {};
+  // CascadeProgram::integer_weights: the weights as integers, with the first rectangle's corners
+  // ordered so that its weight is 1.
+  std::int32_t integer_weights[3] = {};
   float threshold = 0.0f;
-  std::int64_t delta = 0;
+  SplitDelta delta;
 };
 
 struct LbpStump {
   LbpTerms terms;
   std::uint8_t subset[32] = {};  // bit c & 7 of byte c >> 3: the left leaf for code c
-  std::int64_t delta = 0;
+  SplitDelta delta;
 };
 
 // Where integral entry (x, y) of a window lies relative to the window's (0, 0) entry. With
@@ -105,11 +120,16 @@ struct CascadeProgram {
   // to be small enough for exact variance sums: below about 600 x 600 pixels.)
   int fixed_shift = 0;
   bool fixed_point_exact = false;
+  // Haar: every rectangle weight is an integer, the first 1 or -1, and no weighted sum of a
+  // window's pixels reaches 2^24, so the SIMD kernels form the feature values in integers: the
+  // reference's float products and sums of such integers are exact, and equal.
+  bool integer_weights = false;
   std::vector<HaarStump> haar_stumps;
   std::vector<LbpStump> lbp_stumps;
 
  private:
   void build_fixed_point();
+  HaarStump haar_stump(int weak) const;
 };
 
 // The windows of one row of one pyramid level: window i (of `positions`) at x = i *

@@ -9,9 +9,11 @@
 // the same windows are evaluated as in cascade_row_ref.
 //
 // Arithmetic is the reference's: the same float operations in the same order for Haar feature
-// values (cascade_simd files are compiled with -ffp-contract=off), the same integer LBP codes,
-// and stage sums in int64 fixed point, which equal the reference's double sums exactly (see
-// CascadeProgram::fixed_point_exact; the detector uses this kernel only then).
+// values (cascade_simd files are compiled with -ffp-contract=off) or the same values formed in
+// integers where that is exact, the same integer LBP codes, and stage sums in fixed point, which
+// equal the reference's double sums exactly (see CascadeProgram::fixed_point_exact; the detector
+// uses this kernel only then). A stage's sum is kept in two 32-bit lanes per window (high and low
+// parts, ProgramStage::split_shift) and joined in 64 bits for the stage's threshold.
 #include <algorithm>
 #include <cstdint>
 
@@ -34,23 +36,37 @@ typename V::I stump_corner_sum(const std::uint8_t* w, const std::int32_t* o) {
                  V::loadi_bytes(w + o[3]));
 }
 
-template <typename V>
+// A stump's feature value before the variance factor. With integer weights
+// (CascadeProgram::integer_weights) the weighted sum is formed in integers, every partial sum
+// below 2^24, so it equals the reference's float products and sums of the same integers.
+template <typename V, int kRects, bool kIntegerWeights>
+typename V::F haar_value(const HaarStump& s, const std::uint8_t* w) {
+  const auto rect_sum = [&](int r) { return stump_corner_sum<V>(w, s.offsets[r]); };
+  if constexpr (kIntegerWeights) {
+    typename V::I value = V::mul_addi(rect_sum(0), rect_sum(1), s.integer_weights[1]);
+    if constexpr (kRects == 3) value = V::mul_addi(value, rect_sum(2), s.integer_weights[2]);
+    return V::tof(value);
+  } else {
+    typename V::F value = V::addf(V::mulf(V::splatf(s.weights[0]), V::tof(rect_sum(0))),
+                                  V::mulf(V::splatf(s.weights[1]), V::tof(rect_sum(1))));
+    if constexpr (kRects == 3) {
+      value = V::addf(value, V::mulf(V::splatf(s.weights[2]), V::tof(rect_sum(2))));
+    }
+    return value;
+  }
+}
+
+template <typename V, bool kIntegerWeights>
 typename V::M haar_stage(const ProgramStage& stage, const HaarStump* stumps, const std::uint8_t* w,
                          typename V::F factor) {
   typename V::Acc acc = V::acc_zero();
-  for (int k = 0; k < stage.weak_count; ++k) {
-    const HaarStump& s = stumps[k];
-    const HaarTerms& t = s.terms;
-    typename V::F value =
-        V::addf(V::mulf(V::splatf(t.weights[0]), V::tof(stump_corner_sum<V>(w, t.offsets[0]))),
-                V::mulf(V::splatf(t.weights[1]), V::tof(stump_corner_sum<V>(w, t.offsets[1]))));
-    if (t.rect_count == 3) {
-      value = V::addf(
-          value, V::mulf(V::splatf(t.weights[2]), V::tof(stump_corner_sum<V>(w, t.offsets[2]))));
-    }
-    V::acc_add(acc, V::ltf(V::mulf(value, factor), V::splatf(s.threshold)), s.delta);
-  }
-  return V::acc_at_least(acc, stage.fixed_threshold);
+  const auto add = [&](const HaarStump& s, typename V::F value) {
+    V::acc_add(acc, V::ltf(V::mulf(value, factor), V::load_splatf(&s.threshold)), &s.delta.low);
+  };
+  int k = 0;
+  for (; k < stage.pair_count; ++k) add(stumps[k], haar_value<V, 2, kIntegerWeights>(stumps[k], w));
+  for (; k < stage.weak_count; ++k) add(stumps[k], haar_value<V, 3, kIntegerWeights>(stumps[k], w));
+  return V::acc_at_least(acc, stage.split_shift, stage.fixed_threshold);
 }
 
 // LBP stumps. The 4 x 4 corners are read row by row: horizontal differences of each corner row,
@@ -95,9 +111,9 @@ typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const
                                    V::addi(bit(top_right, 32), bit(right, 16))),
                            V::addi(V::addi(bit(bottom_right, 8), bit(bottom, 4)),
                                    V::addi(bit(bottom_left, 2), bit(left, 1))));
-    V::acc_add(acc, V::subset_bit(s.subset, code), s.delta);
+    V::acc_add(acc, V::subset_bit(s.subset, code), &s.delta.low);
   }
-  return V::acc_at_least(acc, stage.fixed_threshold);
+  return V::acc_at_least(acc, stage.split_shift, stage.fixed_threshold);
 }
 
 template <typename V>
@@ -124,8 +140,10 @@ int cascade_row_simd(const CascadeProgram& p, const std::uint32_t* row, int posi
     const auto run_stage = [&](int s) {
       const ProgramStage& st = p.stages[s];
       const auto first_stump = static_cast<std::size_t>(st.first_weak);
-      return lbp ? V::bitsm(lbp_stage<V>(st, &p.lbp_stumps[first_stump], w_bytes))
-                 : V::bitsm(haar_stage<V>(st, &p.haar_stumps[first_stump], w_bytes, factor));
+      if (lbp) return V::bitsm(lbp_stage<V>(st, &p.lbp_stumps[first_stump], w_bytes));
+      const HaarStump* stumps = &p.haar_stumps[first_stump];
+      return V::bitsm(p.integer_weights ? haar_stage<V, true>(st, stumps, w_bytes, factor)
+                                        : haar_stage<V, false>(st, stumps, w_bytes, factor));
     };
     unsigned alive = 0;
     if (ok != 0) {

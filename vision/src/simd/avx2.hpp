@@ -50,9 +50,10 @@ struct Avx2 {
   using I = __m256i;
   using F = __m256;
   using M = __m256i;
+  // A fixed-point sum per lane as high * 2^shift + low (the shift is the caller's).
   struct Acc {
-    __m256i low;   // lanes 0..3
-    __m256i high;  // lanes 4..7
+    __m256i low;
+    __m256i high;
   };
 
   static I loadi(const std::uint32_t* p) {
@@ -65,6 +66,11 @@ struct Avx2 {
   static I subi(I a, I b) { return _mm256_sub_epi32(a, b); }
   static F tof(I a) { return _mm256_cvtepi32_ps(a); }
   static F splatf(float v) { return _mm256_set1_ps(v); }
+  static F load_splatf(const float* p) { return _mm256_broadcast_ss(p); }
+  // a + b * c
+  static I mul_addi(I a, I b, std::int32_t c) {
+    return _mm256_add_epi32(a, _mm256_mullo_epi32(b, _mm256_set1_epi32(c)));
+  }
   static F mulf(F a, F b) { return _mm256_mul_ps(a, b); }
   static F addf(F a, F b) { return _mm256_add_ps(a, b); }
   static M ltf(F a, F b) { return _mm256_castps_si256(_mm256_cmp_ps(a, b, _CMP_LT_OQ)); }
@@ -143,22 +149,29 @@ struct Avx2 {
   }
 
   static Acc acc_zero() { return {_mm256_setzero_si256(), _mm256_setzero_si256()}; }
-  static void acc_add(Acc& acc, M mask, std::int64_t delta) {
-    const __m256i d = _mm256_set1_epi64x(delta);
-    acc.low = _mm256_add_epi64(
-        acc.low, _mm256_and_si256(_mm256_cvtepi32_epi64(_mm256_castsi256_si128(mask)), d));
-    acc.high = _mm256_add_epi64(
-        acc.high, _mm256_and_si256(_mm256_cvtepi32_epi64(_mm256_extracti128_si256(mask, 1)), d));
+  // Adds parts[0] to the low sums and parts[1] to the high ones in the lanes of `mask`.
+  static void acc_add(Acc& acc, M mask, const std::int32_t* parts) {
+    acc.low = _mm256_add_epi32(acc.low, _mm256_and_si256(mask, _mm256_set1_epi32(parts[0])));
+    acc.high = _mm256_add_epi32(acc.high, _mm256_and_si256(mask, _mm256_set1_epi32(parts[1])));
   }
-  static M acc_at_least(const Acc& acc, std::int64_t threshold) {
+  // high * 2^shift + low >= threshold, per lane, in 64 bits.
+  static M acc_at_least(const Acc& acc, int shift, std::int64_t threshold) {
+    const __m128i s = _mm_cvtsi32_si128(shift);
     const __m256i t = _mm256_set1_epi64x(threshold);
-    const __m256i below_low = _mm256_cmpgt_epi64(t, acc.low);
-    const __m256i below_high = _mm256_cmpgt_epi64(t, acc.high);
+    const auto below = [&](__m128i high, __m128i low) {
+      const __m256i sum = _mm256_add_epi64(_mm256_sll_epi64(_mm256_cvtepi32_epi64(high), s),
+                                           _mm256_cvtepi32_epi64(low));
+      return _mm256_cmpgt_epi64(t, sum);
+    };
+    const __m256i below_low =
+        below(_mm256_castsi256_si128(acc.high), _mm256_castsi256_si128(acc.low));
+    const __m256i below_high =
+        below(_mm256_extracti128_si256(acc.high, 1), _mm256_extracti128_si256(acc.low, 1));
     const __m256i order = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
-    const __m256i below =
+    const __m256i below_all =
         _mm256_set_m128i(_mm256_castsi256_si128(_mm256_permutevar8x32_epi32(below_high, order)),
                          _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(below_low, order)));
-    return _mm256_xor_si256(below, _mm256_set1_epi32(-1));
+    return _mm256_xor_si256(below_all, _mm256_set1_epi32(-1));
   }
 };
 

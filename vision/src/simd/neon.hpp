@@ -155,9 +155,10 @@ struct Neon {
   using I = int32x4_t;
   using F = float32x4_t;
   using M = uint32x4_t;
+  // A fixed-point sum per lane as high * 2^shift + low (the shift is the caller's).
   struct Acc {
-    int64x2_t low;
-    int64x2_t high;
+    int32x4_t low;
+    int32x4_t high;
   };
 
   // Consecutive entries of an integral row.
@@ -169,6 +170,9 @@ struct Neon {
   static I subi(I a, I b) { return vsubq_s32(a, b); }
   static F tof(I a) { return vcvtq_f32_s32(a); }
   static F splatf(float v) { return vdupq_n_f32(v); }
+  static F load_splatf(const float* p) { return vld1q_dup_f32(p); }
+  // a + b * c
+  static I mul_addi(I a, I b, std::int32_t c) { return vmlaq_n_s32(a, b, c); }
   static F mulf(F a, F b) { return vmulq_f32(a, b); }
   static F addf(F a, F b) { return vaddq_f32(a, b); }
   static M ltf(F a, F b) { return vcltq_f32(a, b); }
@@ -230,20 +234,26 @@ struct Neon {
     return vreinterpretq_u32_s32(vmovl_s16(vget_low_s16(vmovl_s8(set))));
   }
 
-  static Acc acc_zero() { return {vdupq_n_s64(0), vdupq_n_s64(0)}; }
-  static void acc_add(Acc& acc, M mask, std::int64_t delta) {
+  static Acc acc_zero() { return {vdupq_n_s32(0), vdupq_n_s32(0)}; }
+  // Adds parts[0] to the low sums and parts[1] to the high ones in the lanes of `mask`, whose
+  // lanes are -1 or 0: acc - mask * part.
+  static void acc_add(Acc& acc, M mask, const std::int32_t* parts) {
     const int32x4_t m = vreinterpretq_s32_u32(mask);
-    const int64x2_t d = vdupq_n_s64(delta);
-    acc.low = vaddq_s64(acc.low, vandq_s64(vmovl_s32(vget_low_s32(m)), d));
-    acc.high = vaddq_s64(acc.high, vandq_s64(vmovl_s32(vget_high_s32(m)), d));
+    acc.low = vmlsq_n_s32(acc.low, m, parts[0]);
+    acc.high = vmlsq_n_s32(acc.high, m, parts[1]);
   }
-  // acc >= threshold, per lane (from the sign of acc - threshold).
-  static M acc_at_least(const Acc& acc, std::int64_t threshold) {
+  // high * 2^shift + low >= threshold, per lane, in 64 bits (from the sign of the difference).
+  static M acc_at_least(const Acc& acc, int shift, std::int64_t threshold) {
+    const int64x2_t s = vdupq_n_s64(shift);
     const int64x2_t t = vdupq_n_s64(threshold);
-    const int64x2_t below_low = vshrq_n_s64(vsubq_s64(acc.low, t), 63);
-    const int64x2_t below_high = vshrq_n_s64(vsubq_s64(acc.high, t), 63);
-    const int32x4_t below = vcombine_s32(vmovn_s64(below_low), vmovn_s64(below_high));
-    return vmvnq_u32(vreinterpretq_u32_s32(below));
+    const auto below = [&](int32x2_t high, int32x2_t low) {
+      const int64x2_t sum = vaddw_s32(vshlq_s64(vmovl_s32(high), s), low);
+      return vshrq_n_s64(vsubq_s64(sum, t), 63);
+    };
+    const int64x2_t below_low = below(vget_low_s32(acc.high), vget_low_s32(acc.low));
+    const int64x2_t below_high = below(vget_high_s32(acc.high), vget_high_s32(acc.low));
+    const int32x4_t below_all = vcombine_s32(vmovn_s64(below_low), vmovn_s64(below_high));
+    return vmvnq_u32(vreinterpretq_u32_s32(below_all));
   }
 };
 
