@@ -61,11 +61,6 @@ std::int32_t in_bytes(std::int32_t entries) {
   return entries * kEntryBytes;
 }
 
-LbpTerms in_bytes(LbpTerms t) {
-  for (std::int32_t& o : t.offsets) o = in_bytes(o);
-  return t;
-}
-
 // The smallest shift that makes v * 2^shift an integer (floats carry 24 significant bits).
 int exact_shift(float v) {
   if (v == 0.0f) return 0;
@@ -269,7 +264,9 @@ void CascadeProgram::build_fixed_point() {
     for (int k = 0; k < stage.weak_count; ++k) {
       const int i = stage.first_weak + k;
       LbpStump stump;
-      stump.terms = in_bytes(lbp[nodes[i].feature]);
+      const LbpTerms& terms = lbp[nodes[i].feature];
+      std::transform(std::begin(terms.offsets), std::end(terms.offsets), stump.offsets,
+                     [](std::int32_t o) { return in_bytes(o); });
       stump.delta = stump_delta(k);
       for (int word = 0; word < 8; ++word) {
         for (int byte = 0; byte < 4; ++byte) {

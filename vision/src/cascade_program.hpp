@@ -70,8 +70,8 @@ struct HaarStump {
 };
 
 struct LbpStump {
-  LbpTerms terms;
-  std::uint8_t subset[32] = {};  // bit c & 7 of byte c >> 3: the left leaf for code c
+  std::int32_t offsets[16] = {};  // LbpTerms' in bytes
+  std::uint8_t subset[32] = {};   // bit c & 7 of byte c >> 3: the left leaf for code c
   SplitDelta delta;
 };
 

@@ -78,7 +78,7 @@ typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const
   typename V::Acc acc = V::acc_zero();
   for (int k = 0; k < stage.weak_count; ++k) {
     const LbpStump& s = stumps[k];
-    const std::int32_t* o = s.terms.offsets;
+    const std::int32_t* o = s.offsets;
     I above[3];
     I below[3];
     const auto differences = [&](int r, I* d) {
@@ -103,14 +103,15 @@ typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const
     const I bottom_left = V::subi(above[0], below[0]);
     const I bottom = V::subi(above[1], below[1]);
     const I bottom_right = V::subi(above[2], below[2]);
-    // Clockwise from the top-left block (bit 7) to the middle-left one (bit 0).
-    const auto bit = [&centre](I block, int weight) {
-      return V::masked_splati(V::gei(block, centre), weight);
+    // Clockwise from the top-left block (bit 7) to the middle-left one (bit 0): pushed in at
+    // the top from bit 0 on, so that they end in the top byte.
+    const auto push = [&centre](I bits, I block) {
+      return V::push_bit_high(bits, V::gei(block, centre));
     };
-    const I code = V::addi(V::addi(V::addi(bit(top_left, 128), bit(top, 64)),
-                                   V::addi(bit(top_right, 32), bit(right, 16))),
-                           V::addi(V::addi(bit(bottom_right, 8), bit(bottom, 4)),
-                                   V::addi(bit(bottom_left, 2), bit(left, 1))));
+    I bits = push(V::zeroi(), left);
+    bits = push(push(push(bits, bottom_left), bottom), bottom_right);
+    bits = push(push(push(push(bits, right), top_right), top), top_left);
+    const I code = V::top_byte(bits);
     V::acc_add(acc, V::subset_bit(s.subset, code), &s.delta.low);
   }
   return V::acc_at_least(acc, stage.split_shift, stage.fixed_threshold);

@@ -77,7 +77,12 @@ struct Avx2 {
   static M gei(I a, I b) {
     return _mm256_xor_si256(_mm256_cmpgt_epi32(b, a), _mm256_set1_epi32(-1));
   }
-  static I masked_splati(M m, int value) { return _mm256_and_si256(m, _mm256_set1_epi32(value)); }
+  static I zeroi() { return _mm256_setzero_si256(); }
+  // bits >> 1 (logical) with bit 31 set in the lanes of `mask` (whose lanes are -1 or 0).
+  static I push_bit_high(I bits, M mask) {
+    return _mm256_or_si256(_mm256_srli_epi32(bits, 1), _mm256_slli_epi32(mask, 31));
+  }
+  static I top_byte(I bits) { return _mm256_srli_epi32(bits, 24); }
   static M andm(M a, M b) { return _mm256_and_si256(a, b); }
   static unsigned bitsm(M m) {
     return static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(m)));

@@ -177,8 +177,13 @@ struct Neon {
   static F addf(F a, F b) { return vaddq_f32(a, b); }
   static M ltf(F a, F b) { return vcltq_f32(a, b); }
   static M gei(I a, I b) { return vcgeq_s32(a, b); }
-  static I masked_splati(M m, int value) {
-    return vreinterpretq_s32_u32(vandq_u32(m, vdupq_n_u32(static_cast<std::uint32_t>(value))));
+  static I zeroi() { return vdupq_n_s32(0); }
+  // bits >> 1 (logical) with bit 31 set in the lanes of `mask` (one SRI).
+  static I push_bit_high(I bits, M mask) {
+    return vreinterpretq_s32_u32(vsriq_n_u32(mask, vreinterpretq_u32_s32(bits), 1));
+  }
+  static I top_byte(I bits) {
+    return vreinterpretq_s32_u32(vshrq_n_u32(vreinterpretq_u32_s32(bits), 24));
   }
   static M andm(M a, M b) { return vandq_u32(a, b); }
   // Lanes 0..3 as bits 0..3.
