@@ -9,6 +9,7 @@
 #include "cascade_program.hpp"
 #include "cascade_simd.hpp"
 #include "epipole/core/neon.hpp"
+#include "neon_pairs.hpp"
 #include "simd/neon.hpp"
 
 namespace epipole::vision::kernels {
@@ -80,13 +81,14 @@ void resize_columns_neon(const std::uint8_t* row, int source_width, const std::i
   int x = 0;
   // Blocks whose 8 pixel pairs lie inside the row (offsets never decrease).
   for (; x + 8 <= width && offsets[x + 7] + 1 < source_width; x += 8) {
-    std::uint8_t pairs[16];
-    for (int k = 0; k < 8; ++k) std::memcpy(pairs + 2 * k, row + offsets[x + k], 2);
-    const uint8x8x2_t p = vld2_u8(pairs);
+    const std::int32_t* o = offsets + x;
+    const uint16x8_t pairs =
+        vcombine_u16(pairs4(row, o[0], o[1], o[2], o[3]), pairs4(row, o[4], o[5], o[6], o[7]));
     const uint16x8x2_t w = vld2q_u16(weights + 2 * x);
     // At most 255 * 256: 16 bits suffice.
-    vst1q_u16(out + x,
-              vmlaq_u16(vmulq_u16(vmovl_u8(p.val[0]), w.val[0]), vmovl_u8(p.val[1]), w.val[1]));
+    const uint16x8_t first = vandq_u16(pairs, vdupq_n_u16(0xFF));
+    const uint16x8_t second = vshrq_n_u16(pairs, 8);
+    vst1q_u16(out + x, vmlaq_u16(vmulq_u16(first, w.val[0]), second, w.val[1]));
   }
   resize_columns_ref(row, source_width, offsets + x, weights + 2 * x, width - x, out + x);
 }

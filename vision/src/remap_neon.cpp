@@ -1,8 +1,8 @@
 // Bilinear remap, 8 destination pixels at a time with NEON. NEON has no gather: each
 // destination pixel's two 2-pixel pairs are fetched with scalar 16-bit loads (their offsets
-// y * stride + x computed 8 at a time in vectors) and packed four to a register, and the weighting
-// (the same integer arithmetic as remap_row_ref) runs in vectors, so results equal the
-// reference bit for bit. Blocks whose 8 neighbourhoods all lie inside the source skip the
+// y * stride + x computed 8 at a time in vectors) and packed four to a register (neon_pairs.hpp),
+// and the weighting (the same integer arithmetic as remap_row_ref) runs in vectors, so results
+// equal the reference bit for bit. Blocks whose 8 neighbourhoods all lie inside the source skip the
 // border checks; blocks wholly outside are the border value; the others go through a small
 // buffer pixel by pixel. The last block of a row is moved left to end at the last pixel instead
 // of falling back to scalar code. Only intrinsics that exist on both AArch64 and ARMv7 are used.
@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "epipole/core/neon.hpp"
+#include "neon_pairs.hpp"
 #include "remap_kernels.hpp"
 
 namespace epipole::vision::kernels {
@@ -54,21 +55,10 @@ inline uint8x8_t blend8(uint16x8_t top, uint16x8_t bottom, const std::uint16_t* 
                 fractions);
 }
 
-// The 2-pixel pair at `p` (first pixel in the low byte, as memory holds it).
-inline std::uint64_t pair_at(const std::uint8_t* p) {
-  std::uint16_t pair;
-  std::memcpy(&pair, p, 2);
-  return pair;
-}
-
-// The pairs of 4 neighbourhoods, from their offsets in `row`, as four 16-bit lanes. Gathered in
-// a general register: inserting them into vector lanes one by one chains each insert to the last.
-inline uint16x4_t pairs4(const std::uint8_t* row, int32x4_t offsets) {
-  const std::uint64_t v = pair_at(row + vgetq_lane_s32(offsets, 0)) |
-                          pair_at(row + vgetq_lane_s32(offsets, 1)) << 16 |
-                          pair_at(row + vgetq_lane_s32(offsets, 2)) << 32 |
-                          pair_at(row + vgetq_lane_s32(offsets, 3)) << 48;
-  return vcreate_u16(v);
+// The pairs of 4 neighbourhoods, from their offsets in `row`.
+inline uint16x4_t pairs_at(const std::uint8_t* row, int32x4_t offsets) {
+  return pairs4(row, vgetq_lane_s32(offsets, 0), vgetq_lane_s32(offsets, 1),
+                vgetq_lane_s32(offsets, 2), vgetq_lane_s32(offsets, 3));
 }
 
 }  // namespace
@@ -115,9 +105,9 @@ void remap_row_neon(GrayView source, const std::int16_t* xy, const std::uint16_t
                                                  vmovl_s16(vget_high_s16(c.val[1])), row_step);
       const std::uint8_t* below = pixels + stride;
       const uint16x8_t top =
-          vcombine_u16(pairs4(pixels, offsets_low), pairs4(pixels, offsets_high));
+          vcombine_u16(pairs_at(pixels, offsets_low), pairs_at(pixels, offsets_high));
       const uint16x8_t bottom =
-          vcombine_u16(pairs4(below, offsets_low), pairs4(below, offsets_high));
+          vcombine_u16(pairs_at(below, offsets_low), pairs_at(below, offsets_high));
       vst1_u8(destination + first, blend8(top, bottom, fractions + first));
       continue;
     }
