@@ -332,13 +332,12 @@ TEST(CascadeProgram, StumpsForTheSimdKernels) {
         std::int64_t high_magnitude = 0;
         for (int k = 0; k < stage.weak_count; ++k, ++next) {
           const kernels::HaarStump& s = p.haar_stumps[next];
-          EXPECT_GE(s.delta.low, 0);
-          EXPECT_LT(s.delta.low, unit);
-          sum += s.delta.high * unit + s.delta.low;
-          high_magnitude += std::abs(s.delta.high);
-          if (p.integer_weights) {
-            EXPECT_EQ(s.integer_weights[0], 1);
-          }
+          const std::int32_t low = s.params.words[kernels::StumpParams::kDeltaLow];
+          const std::int32_t high = s.params.words[kernels::StumpParams::kDeltaHigh];
+          EXPECT_GE(low, 0);
+          EXPECT_LT(low, unit);
+          sum += high * unit + low;
+          high_magnitude += std::abs(high);
         }
         EXPECT_LE(high_magnitude, std::int64_t{INT32_MAX});
         EXPECT_EQ(sum, expected);

@@ -4,6 +4,7 @@
 #include "cascade_program.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -124,10 +125,12 @@ int split_shift_for(int count) {
   return shift;
 }
 
-SplitDelta split(std::int64_t delta, int shift) {
+// Stores `delta` in `params` as high * 2^shift + low, 0 <= low < 2^shift.
+void set_delta(StumpParams& params, std::int64_t delta, int shift) {
   const std::int64_t high = delta >> shift;  // floor: the low part is not negative
-  return {static_cast<std::int32_t>(delta - high * (std::int64_t{1} << shift)),
-          static_cast<std::int32_t>(high)};
+  params.words[StumpParams::kDeltaLow] =
+      static_cast<std::int32_t>(delta - high * (std::int64_t{1} << shift));
+  params.words[StumpParams::kDeltaHigh] = static_cast<std::int32_t>(high);
 }
 
 }  // namespace
@@ -177,15 +180,15 @@ HaarStump CascadeProgram::haar_stump(int weak) const {
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 4; ++c) s.offsets[r][c] = in_bytes(t.offsets[r][c]);
     s.weights[r] = t.weights[r];
-    s.integer_weights[r] = static_cast<std::int32_t>(t.weights[r]);
   }
   if (integer_weights && t.weights[0] < 0.0f) {
     // p1 - p0 - p3 + p2 = -(p0 - p1 - p2 + p3): the first weight becomes 1.
     std::swap(s.offsets[0][0], s.offsets[0][1]);
     std::swap(s.offsets[0][2], s.offsets[0][3]);
-    s.integer_weights[0] = 1;
   }
-  s.threshold = nodes[weak].threshold;
+  s.params.words[StumpParams::kWeight] = static_cast<std::int32_t>(t.weights[1]);
+  s.params.words[StumpParams::kThreshold] = std::bit_cast<std::int32_t>(nodes[weak].threshold);
+  s.third_weight = static_cast<std::int32_t>(t.weights[2]);
   return s;
 }
 
@@ -237,15 +240,13 @@ void CascadeProgram::build_fixed_point() {
     stage.fixed_threshold = static_cast<std::int64_t>(threshold) - base;
     stage.split_shift = split_shift_for(stage.weak_count);
     std::int64_t high_magnitude = 0;
-    for (const std::int64_t d : deltas) {
-      high_magnitude += std::abs(split(d, stage.split_shift).high);
-    }
+    for (const std::int64_t d : deltas) high_magnitude += std::abs(d >> stage.split_shift);
     if (high_magnitude > std::numeric_limits<std::int32_t>::max()) {
       fixed_point_exact = false;
       break;
     }
-    const auto stump_delta = [&](int k) {
-      return split(deltas[static_cast<std::size_t>(k)], stage.split_shift);
+    const auto set_stump_delta = [&](StumpParams& params, int k) {
+      set_delta(params, deltas[static_cast<std::size_t>(k)], stage.split_shift);
     };
     if (type == CascadeFeatureType::haar) {
       // Two-rectangle stumps first: the kernels run a loop of each kind.
@@ -254,7 +255,7 @@ void CascadeProgram::build_fixed_point() {
           const int i = stage.first_weak + k;
           if (haar[nodes[i].feature].rect_count != rects) continue;
           HaarStump stump = haar_stump(i);
-          stump.delta = stump_delta(k);
+          set_stump_delta(stump.params, k);
           haar_stumps.push_back(stump);
           if (rects == 2) ++stage.pair_count;
         }
@@ -267,7 +268,7 @@ void CascadeProgram::build_fixed_point() {
       const LbpTerms& terms = lbp[nodes[i].feature];
       std::transform(std::begin(terms.offsets), std::end(terms.offsets), stump.offsets,
                      [](std::int32_t o) { return in_bytes(o); });
-      stump.delta = stump_delta(k);
+      set_stump_delta(stump.params, k);
       for (int word = 0; word < 8; ++word) {
         for (int byte = 0; byte < 4; ++byte) {
           stump.subset[4 * word + byte] =

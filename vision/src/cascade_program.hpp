@@ -51,28 +51,34 @@ struct ProgramStage {
   int split_shift = 0;
 };
 
-struct SplitDelta {
-  std::int32_t low = 0;
-  std::int32_t high = 0;
+// What a stump's evaluation reads besides its offsets (and an LBP stump's subset), in 16 bytes
+// that a NEON core loads with one instruction (simd/neon.hpp, load_params).
+struct alignas(16) StumpParams {
+  enum : int {
+    kWeight,     // Haar, integer weights: the second rectangle's weight
+    kThreshold,  // Haar: the node threshold, a float's bits
+    kDeltaLow,   // the delta in fixed point as high * 2^ProgramStage::split_shift + low,
+    kDeltaHigh,  // 0 <= low < 2^split_shift
+  };
+  std::int32_t words[4] = {};
 };
 
 // Stumps for the SIMD kernels, a stage's in the order they are evaluated. Taking the left leaf
-// adds `delta` to the stage's fixed-point sum (the right leaves are folded into the stage's
+// adds the delta to the stage's fixed-point sum (the right leaves are folded into the stage's
 // threshold). Offsets are in bytes, not entries (see cascade_simd.hpp).
 struct HaarStump {
   std::int32_t offsets[3][4] = {};
-  float weights[3] = {};
-  // CascadeProgram::integer_weights: the weights as integers, with the first rectangle's corners
-  // ordered so that its weight is 1.
-  std::int32_t integer_weights[3] = {};
-  float threshold = 0.0f;
-  SplitDelta delta;
+  StumpParams params;
+  // CascadeProgram::integer_weights: the first rectangle's corners are ordered so that its
+  // weight is 1; the second's is in params, the third's here.
+  std::int32_t third_weight = 0;
+  float weights[3] = {};  // the float path's
 };
 
 struct LbpStump {
   std::int32_t offsets[16] = {};  // LbpTerms' in bytes
   std::uint8_t subset[32] = {};   // bit c & 7 of byte c >> 3: the left leaf for code c
-  SplitDelta delta;
+  StumpParams params;             // the delta only
 };
 
 // Where integral entry (x, y) of a window lies relative to the window's (0, 0) entry. With

@@ -66,11 +66,17 @@ struct Avx2 {
   static I subi(I a, I b) { return _mm256_sub_epi32(a, b); }
   static F tof(I a) { return _mm256_cvtepi32_ps(a); }
   static F splatf(float v) { return _mm256_set1_ps(v); }
-  static F load_splatf(const float* p) { return _mm256_broadcast_ss(p); }
   // a + b * c
   static I mul_addi(I a, I b, std::int32_t c) {
     return _mm256_add_epi32(a, _mm256_mullo_epi32(b, _mm256_set1_epi32(c)));
   }
+
+  // A cascade stump's StumpParams (weight, threshold bits, delta low, delta high), read from
+  // memory as each is used: a broadcast load is one instruction.
+  using Params = const std::int32_t*;
+  static Params load_params(const std::int32_t* p) { return p; }
+  static I mul_add_weight(I a, I b, Params p) { return mul_addi(a, b, p[0]); }
+  static F threshold(Params p) { return _mm256_castsi256_ps(_mm256_set1_epi32(p[1])); }
   static F mulf(F a, F b) { return _mm256_mul_ps(a, b); }
   static F addf(F a, F b) { return _mm256_add_ps(a, b); }
   static M ltf(F a, F b) { return _mm256_castps_si256(_mm256_cmp_ps(a, b, _CMP_LT_OQ)); }
@@ -154,10 +160,10 @@ struct Avx2 {
   }
 
   static Acc acc_zero() { return {_mm256_setzero_si256(), _mm256_setzero_si256()}; }
-  // Adds parts[0] to the low sums and parts[1] to the high ones in the lanes of `mask`.
-  static void acc_add(Acc& acc, M mask, const std::int32_t* parts) {
-    acc.low = _mm256_add_epi32(acc.low, _mm256_and_si256(mask, _mm256_set1_epi32(parts[0])));
-    acc.high = _mm256_add_epi32(acc.high, _mm256_and_si256(mask, _mm256_set1_epi32(parts[1])));
+  // Adds the delta's parts to the low and high sums in the lanes of `mask`.
+  static void acc_add(Acc& acc, M mask, Params p) {
+    acc.low = _mm256_add_epi32(acc.low, _mm256_and_si256(mask, _mm256_set1_epi32(p[2])));
+    acc.high = _mm256_add_epi32(acc.high, _mm256_and_si256(mask, _mm256_set1_epi32(p[3])));
   }
   // high * 2^shift + low >= threshold, per lane, in 64 bits.
   static M acc_at_least(const Acc& acc, int shift, std::int64_t threshold) {

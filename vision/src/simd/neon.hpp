@@ -170,9 +170,17 @@ struct Neon {
   static I subi(I a, I b) { return vsubq_s32(a, b); }
   static F tof(I a) { return vcvtq_f32_s32(a); }
   static F splatf(float v) { return vdupq_n_f32(v); }
-  static F load_splatf(const float* p) { return vld1q_dup_f32(p); }
   // a + b * c
   static I mul_addi(I a, I b, std::int32_t c) { return vmlaq_n_s32(a, b, c); }
+
+  // A cascade stump's StumpParams in one register: weight, threshold bits, delta low, delta high.
+  using Params = int32x4_t;
+  static Params load_params(const std::int32_t* p) { return vld1q_s32(p); }
+  // a + b * weight (an MLA by element).
+  static I mul_add_weight(I a, I b, Params p) {
+    return vmlaq_s32(a, b, vdupq_lane_s32(vget_low_s32(p), 0));
+  }
+  static F threshold(Params p) { return vdupq_lane_f32(vreinterpret_f32_s32(vget_low_s32(p)), 1); }
   static F mulf(F a, F b) { return vmulq_f32(a, b); }
   static F addf(F a, F b) { return vaddq_f32(a, b); }
   static M ltf(F a, F b) { return vcltq_f32(a, b); }
@@ -240,12 +248,13 @@ struct Neon {
   }
 
   static Acc acc_zero() { return {vdupq_n_s32(0), vdupq_n_s32(0)}; }
-  // Adds parts[0] to the low sums and parts[1] to the high ones in the lanes of `mask`, whose
-  // lanes are -1 or 0: acc - mask * part.
-  static void acc_add(Acc& acc, M mask, const std::int32_t* parts) {
+  // Adds the delta's parts to the low and high sums in the lanes of `mask`, whose lanes are -1
+  // or 0: acc - mask * part (MLS by element).
+  static void acc_add(Acc& acc, M mask, Params p) {
     const int32x4_t m = vreinterpretq_s32_u32(mask);
-    acc.low = vmlsq_n_s32(acc.low, m, parts[0]);
-    acc.high = vmlsq_n_s32(acc.high, m, parts[1]);
+    const int32x2_t delta = vget_high_s32(p);
+    acc.low = vmlsq_s32(acc.low, m, vdupq_lane_s32(delta, 0));
+    acc.high = vmlsq_s32(acc.high, m, vdupq_lane_s32(delta, 1));
   }
   // high * 2^shift + low >= threshold, per lane, in 64 bits (from the sign of the difference).
   static M acc_at_least(const Acc& acc, int shift, std::int64_t threshold) {
