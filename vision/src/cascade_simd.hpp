@@ -115,15 +115,14 @@ typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const
     const I bottom = V::subi(above[1], below[1]);
     const I bottom_right = V::subi(above[2], below[2]);
     // Clockwise from the top-left block (bit 7) to the middle-left one (bit 0): pushed in at
-    // the top from bit 0 on, so that they end in the top byte.
+    // the top from bit 0 on, so that the code ends in the top byte, where subset_bit reads it.
     const auto push = [&centre](I bits, I block) {
       return V::push_bit_high(bits, V::gei(block, centre));
     };
     I bits = push(V::zeroi(), left);
     bits = push(push(push(bits, bottom_left), bottom), bottom_right);
     bits = push(push(push(push(bits, right), top_right), top), top_left);
-    const I code = V::top_byte(bits);
-    V::acc_add(acc, V::subset_bit(s.subset, code), V::load_params(s.params.words));
+    V::acc_add(acc, V::subset_bit(s.subset, bits), V::load_params(s.params.words));
   }
   return V::acc_at_least(acc, stage.split_shift, stage.fixed_threshold);
 }

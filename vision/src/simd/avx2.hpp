@@ -88,7 +88,6 @@ struct Avx2 {
   static I push_bit_high(I bits, M mask) {
     return _mm256_or_si256(_mm256_srli_epi32(bits, 1), _mm256_slli_epi32(mask, 31));
   }
-  static I top_byte(I bits) { return _mm256_srli_epi32(bits, 24); }
   static M andm(M a, M b) { return _mm256_and_si256(a, b); }
   static unsigned bitsm(M m) {
     return static_cast<unsigned>(_mm256_movemask_ps(_mm256_castsi256_ps(m)));
@@ -136,9 +135,11 @@ struct Avx2 {
     ok = _mm256_set_m128i(pass[1], pass[0]);
   }
 
-  // Bit `code` of a 256-bit subset (32 bytes) for 8 codes in 0..255: byte code >> 3 by two
-  // 16-byte table lookups (pshufb), tested against the bit code & 7 (a third lookup).
-  static M subset_bit(const std::uint8_t* bytes, I code) {
+  // Bit `code` of a 256-bit subset (32 bytes) for 8 codes held in the top byte of each lane
+  // (`bits`): byte code >> 3 by two 16-byte table lookups (pshufb), tested against the bit
+  // code & 7 (a third lookup).
+  static M subset_bit(const std::uint8_t* bytes, I bits) {
+    const __m256i code = _mm256_srli_epi32(bits, 24);
     const __m256i low_table =
         _mm256_broadcastsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(bytes)));
     const __m256i high_table =

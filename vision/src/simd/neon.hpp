@@ -190,9 +190,6 @@ struct Neon {
   static I push_bit_high(I bits, M mask) {
     return vreinterpretq_s32_u32(vsriq_n_u32(mask, vreinterpretq_u32_s32(bits), 1));
   }
-  static I top_byte(I bits) {
-    return vreinterpretq_s32_u32(vshrq_n_u32(vreinterpretq_u32_s32(bits), 24));
-  }
   static M andm(M a, M b) { return vandq_u32(a, b); }
   // Lanes 0..3 as bits 0..3.
   static unsigned bitsm(M m) {
@@ -233,21 +230,38 @@ struct Neon {
     ok = vld1q_u32(pass);
   }
 
-  // Bit `code` of a 256-bit subset (32 bytes) for 4 codes in 0..255: byte code >> 3 by table
-  // lookup, tested against the bit code & 7 (from a second table).
-  static M subset_bit(const std::uint8_t* subset, I code) {
+  // Bit `code` of a 256-bit subset (32 bytes) for 4 codes held in the top byte of each lane
+  // (`bits`; the other bits are 0).
+#if defined(__aarch64__) || !(defined(__ARM_NEON) || defined(__ARM_NEON__))
+  // AArch64 (and SIMDe): the lanes' byte code >> 3 looked up in 32-bit lanes (index bytes 1 to 3
+  // out of range, so 0), tested against the bit 1 << (code & 7).
+  static M subset_bit(const std::uint8_t* subset, I bits) {
+    const uint32x4_t b = vreinterpretq_u32_s32(bits);
+    const uint8x16x2_t table = {{vld1q_u8(subset), vld1q_u8(subset + 16)}};
+    const uint32x4_t index = vsriq_n_u32(vdupq_n_u32(0xFFFFFF00u), b, 27);
+    const uint32x4_t byte = vreinterpretq_u32_u8(vqtbl2q_u8(table, vreinterpretq_u8_u32(index)));
+    const uint32x4_t bit = vshlq_u32(
+        vdupq_n_u32(1), vreinterpretq_s32_u32(vandq_u32(vshrq_n_u32(b, 24), vdupq_n_u32(7))));
+    return vtstq_u32(byte, bit);
+  }
+#else
+  // ARMv7: the codes narrowed to bytes, the byte and the bit by table lookups, the test widened.
+  static M subset_bit(const std::uint8_t* subset, I bits) {
     static constexpr std::uint8_t kBit[8] = {1, 2, 4, 8, 16, 32, 64, 128};
     const uint8x8x4_t table = {
         {vld1_u8(subset), vld1_u8(subset + 8), vld1_u8(subset + 16), vld1_u8(subset + 24)}};
-    const uint16x4_t c16 = vmovn_u32(vreinterpretq_u32_s32(code));
-    const uint8x8_t c8 = vmovn_u16(vcombine_u16(c16, c16));
+    const uint16x4_t c16 = vshrn_n_u32(vreinterpretq_u32_s32(bits), 16);
+    const uint8x8_t c8 = vshrn_n_u16(vcombine_u16(c16, c16), 8);
     const uint8x8_t bytes = vtbl4_u8(table, vshr_n_u8(c8, 3));
     const uint8x8_t bit = vtbl1_u8(vld1_u8(kBit), vand_u8(c8, vdup_n_u8(7)));
     const int8x8_t set = vreinterpret_s8_u8(vtst_u8(bytes, bit));  // 0 or -1
     return vreinterpretq_u32_s32(vmovl_s16(vget_low_s16(vmovl_s8(set))));
   }
+#endif
 
-  static Acc acc_zero() { return {vdupq_n_s32(0), vdupq_n_s32(0)}; }
+  static Acc acc_zero() {
+    return {vdupq_n_s32(0), vdupq_n_s32(0)};
+  }
   // Adds the delta's parts to the low and high sums in the lanes of `mask`, whose lanes are -1
   // or 0: acc - mask * part (MLS by element).
   static void acc_add(Acc& acc, M mask, Params p) {
