@@ -5,8 +5,8 @@
 // row of one level (consecutive entries of its integral layout), so every corner of every feature
 // is one vector load. Per group of lanes: the variance normalisation, then the stages; the group
 // stops at the first stage that rejects all its lanes. OpenCV's rule "a window rejected by the
-// first stage skips the next position" is applied after the first stage, lane by lane in order, so
-// the same windows are evaluated as in cascade_row_ref.
+// first stage skips the next position" is applied after the first stage, 4 lanes at a time by
+// table lookup, so the same windows are evaluated as in cascade_row_ref.
 //
 // Arithmetic is the reference's: the same float operations in the same order for Haar feature
 // values (cascade_simd files are compiled with -ffp-contract=off) or the same values formed in
@@ -15,6 +15,7 @@
 // uses this kernel only then). A stage's sum is kept in two 32-bit lanes per window (high and low
 // parts, ProgramStage::split_shift) and joined in 64 bits for the stage's threshold.
 #include <algorithm>
+#include <array>
 #include <cstdint>
 
 #include "cascade_program.hpp"
@@ -127,10 +128,39 @@ typename V::M lbp_stage(const ProgramStage& stage, const LbpStump* stumps, const
   return V::acc_at_least(acc, stage.split_shift, stage.fixed_threshold);
 }
 
+// OpenCV's order over 4 neighbouring windows: one that is evaluated (its variance passes) and
+// rejected by the first stage makes the next one be skipped. Indexed by ok | pass << 4 |
+// skip << 8 (ok: the windows evaluated; pass: those the first stage passes; skip: the window
+// before the four was rejected), it gives the windows that go on | skip-the-next << 4.
+constexpr std::array<std::uint8_t, 512> first_stage_outcomes() {
+  std::array<std::uint8_t, 512> table{};
+  for (unsigned index = 0; index < table.size(); ++index) {
+    const unsigned ok = index & 15u;
+    const unsigned pass = (index >> 4) & 15u;
+    bool skip = (index >> 8) != 0;
+    unsigned alive = 0;
+    for (unsigned bit = 1; bit < 16; bit <<= 1) {
+      if (skip) {
+        skip = false;
+      } else if ((ok & bit) != 0) {  // else the variance is too low: -1, no skip
+        if ((pass & bit) == 0) {
+          skip = true;
+        } else {
+          alive |= bit;
+        }
+      }
+    }
+    table[index] = static_cast<std::uint8_t>(alive | (skip ? 16u : 0u));
+  }
+  return table;
+}
+inline constexpr std::array<std::uint8_t, 512> kFirstStageOutcomes = first_stage_outcomes();
+
 template <typename V>
 int cascade_row_simd(const CascadeProgram& p, const std::uint32_t* row, int positions,
                      std::int32_t* hits) {
   constexpr int kLanes = V::kLanesI;
+  static_assert(kLanes % 4 == 0);
   const bool lbp = p.type == CascadeFeatureType::lbp;
   const int stage_count = static_cast<int>(p.stages.size());
   int count = 0;
@@ -156,25 +186,14 @@ int cascade_row_simd(const CascadeProgram& p, const std::uint32_t* row, int posi
       return V::bitsm(p.integer_weights ? haar_stage<V, true>(st, stumps, w_bytes, factor)
                                         : haar_stage<V, false>(st, stumps, w_bytes, factor));
     };
+    const unsigned pass = ok != 0 ? run_stage(0) : 0;
     unsigned alive = 0;
-    if (ok != 0) {
-      const unsigned pass = run_stage(0);
-      // OpenCV's order: an evaluated window that the first stage rejects skips the next one.
-      for (int l = 0; l < lanes; ++l) {
-        const unsigned bit = 1u << l;
-        if (skip) {
-          skip = false;
-          continue;
-        }
-        if ((ok & bit) == 0) continue;  // variance too low: -1, no skip
-        if ((pass & bit) == 0) {
-          skip = true;
-        } else {
-          alive |= bit;
-        }
-      }
-    } else {
-      skip = false;
+    for (int quad = 0; quad < kLanes; quad += 4) {
+      const unsigned outcome =
+          kFirstStageOutcomes[((ok >> quad) & 15u) | ((pass >> quad) & 15u) << 4 |
+                              unsigned{skip} << 8];
+      alive |= (outcome & 15u) << quad;
+      skip = (outcome >> 4) != 0;
     }
     for (int stage = 1; alive != 0 && stage < stage_count; ++stage) {
       alive &= run_stage(stage);

@@ -6,7 +6,8 @@
 //   b: 16 unsigned bytes (B)           h: the same 16 lanes as unsigned 16-bit values (H)
 //   i, f, m: 4 lanes of 32-bit integers (I), floats (F) and masks (M)
 // Only intrinsics that exist on both AArch64 and ARMv7 are used (no float64 or 64-bit compare
-// vectors: ARMv7 has neither), except the across-lane reductions (`across`).
+// vectors: ARMv7 has neither), except in the AArch64 forms of the across-lane reductions
+// (`across`), the cascade's variance and its subset lookup, each beside a portable one.
 #include <cmath>
 #include <cstdint>
 
@@ -14,7 +15,7 @@
 
 namespace epipole::vision::simd {
 
-// Across-lane reductions: one instruction on AArch64 (UMINV, UADDLV), a ladder of pairwise
+// Across-lane reductions: one instruction on AArch64 (UMINV, UADDLV, ADDV), a ladder of pairwise
 // steps on ARMv7.
 namespace across {
 #if defined(__aarch64__)
@@ -26,6 +27,9 @@ inline std::uint16_t min_u16(uint16x8_t v) {
 }
 inline std::uint32_t sum_u16(uint16x8_t v) {
   return vaddlvq_u16(v);
+}
+inline std::uint32_t sum_u32(uint32x4_t v) {
+  return vaddvq_u32(v);
 }
 #else
 inline std::uint8_t min_u8(uint8x16_t v) {
@@ -44,6 +48,10 @@ inline std::uint16_t min_u16(uint16x8_t v) {
 inline std::uint32_t sum_u16(uint16x8_t v) {
   const uint64x2_t q = vpaddlq_u32(vpaddlq_u16(v));
   return static_cast<std::uint32_t>(vgetq_lane_u64(q, 0) + vgetq_lane_u64(q, 1));
+}
+inline std::uint32_t sum_u32(uint32x4_t v) {
+  const uint32x2_t pair = vadd_u32(vget_low_u32(v), vget_high_u32(v));
+  return vget_lane_u32(vpadd_u32(pair, pair), 0);
 }
 #endif
 }  // namespace across
@@ -194,9 +202,7 @@ struct Neon {
   // Lanes 0..3 as bits 0..3.
   static unsigned bitsm(M m) {
     static constexpr std::uint32_t kBits[4] = {1, 2, 4, 8};
-    const uint32x4_t b = vandq_u32(m, vld1q_u32(kBits));
-    const uint32x2_t pair = vadd_u32(vget_low_u32(b), vget_high_u32(b));
-    return vget_lane_u32(vpadd_u32(pair, pair), 0);
+    return across::sum_u32(vandq_u32(m, vld1q_u32(kBits)));
   }
   static M from_bitsm(unsigned bits) {
     static constexpr std::uint32_t kBits[4] = {1, 2, 4, 8};
@@ -204,7 +210,7 @@ struct Neon {
   }
 
   // The variance normalisation of 4 windows (see variance_factor): nf exactly in int64 lanes,
-  // then, per lane, OpenCV's double square root and division.
+  // then OpenCV's double square root and division.
   static void variance(I sum, I squares, double area, F& factor, M& ok) {
     const auto area32 = static_cast<std::uint32_t>(area);
     const uint32x4_t sq = vreinterpretq_u32_s32(squares);
@@ -213,6 +219,26 @@ struct Neon {
     const int64x2_t nf_high =
         vsubq_s64(vreinterpretq_s64_u64(vmull_n_u32(vget_high_u32(sq), area32)),
                   vmull_s32(vget_high_s32(sum), vget_high_s32(sum)));
+#if defined(__aarch64__)
+    // In float64x2 lanes: the same correctly rounded operations as the scalar code. A lane with
+    // nf <= 0 fails and keeps the factor 1.
+    const auto half = [area](int64x2_t nf, float32x2_t& f, uint32x2_t& pass) {
+      const uint64x2_t positive = vcgtzq_s64(nf);
+      const float64x2_t inverse = vdivq_f64(vdupq_n_f64(1.0), vsqrtq_f64(vcvtq_f64_s64(nf)));
+      f = vbsl_f32(vmovn_u64(positive), vcvt_f32_f64(inverse), vdup_n_f32(1.0f));
+      const uint64x2_t small = vcltq_f64(vmulq_n_f64(vcvt_f64_f32(f), area), vdupq_n_f64(0.1));
+      pass = vmovn_u64(vandq_u64(positive, small));
+    };
+    float32x2_t f_low;
+    float32x2_t f_high;
+    uint32x2_t pass_low;
+    uint32x2_t pass_high;
+    half(nf_low, f_low, pass_low);
+    half(nf_high, f_high, pass_high);
+    factor = vcombine_f32(f_low, f_high);
+    ok = vcombine_u32(pass_low, pass_high);
+#else
+    // ARMv7 (and SIMDe) have no float64 vectors: per lane.
     std::int64_t nf[4];
     vst1q_s64(nf, nf_low);
     vst1q_s64(nf + 2, nf_high);
@@ -228,6 +254,7 @@ struct Neon {
     }
     factor = vld1q_f32(f);
     ok = vld1q_u32(pass);
+#endif
   }
 
   // Bit `code` of a 256-bit subset (32 bytes) for 4 codes held in the top byte of each lane
