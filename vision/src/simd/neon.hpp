@@ -7,7 +7,7 @@
 //   i, f, m: 4 lanes of 32-bit integers (I), floats (F) and masks (M)
 // Only intrinsics that exist on both AArch64 and ARMv7 are used (no float64 or 64-bit compare
 // vectors: ARMv7 has neither), except in the AArch64 forms of the across-lane reductions
-// (`across`), the cascade's variance and its subset lookup, each beside a portable one.
+// (`across`), the cascade's variance, subset lookup and stage test, each beside a portable one.
 #include <cmath>
 #include <cstdint>
 
@@ -301,14 +301,22 @@ struct Neon {
   static M acc_at_least(const Acc& acc, int shift, std::int64_t threshold) {
     const int64x2_t s = vdupq_n_s64(shift);
     const int64x2_t t = vdupq_n_s64(threshold);
-    const auto below = [&](int32x2_t high, int32x2_t low) {
-      const int64x2_t sum = vaddw_s32(vshlq_s64(vmovl_s32(high), s), low);
-      return vshrq_n_s64(vsubq_s64(sum, t), 63);
+    const auto sum = [&s](int32x2_t high, int32x2_t low) {
+      return vaddw_s32(vshlq_s64(vmovl_s32(high), s), low);
     };
-    const int64x2_t below_low = below(vget_low_s32(acc.high), vget_low_s32(acc.low));
-    const int64x2_t below_high = below(vget_high_s32(acc.high), vget_high_s32(acc.low));
+    const int64x2_t sum_low = sum(vget_low_s32(acc.high), vget_low_s32(acc.low));
+    const int64x2_t sum_high = sum(vget_high_s32(acc.high), vget_high_s32(acc.low));
+#if defined(__aarch64__) || !(defined(__ARM_NEON) || defined(__ARM_NEON__))
+    // AArch64 (and SIMDe) compare 64-bit lanes.
+    return vuzp1q_u32(vreinterpretq_u32_u64(vcgeq_s64(sum_low, t)),
+                      vreinterpretq_u32_u64(vcgeq_s64(sum_high, t)));
+#else
+    // ARMv7: from the sign of the difference.
+    const int64x2_t below_low = vshrq_n_s64(vsubq_s64(sum_low, t), 63);
+    const int64x2_t below_high = vshrq_n_s64(vsubq_s64(sum_high, t), 63);
     const int32x4_t below_all = vcombine_s32(vmovn_s64(below_low), vmovn_s64(below_high));
     return vmvnq_u32(vreinterpretq_u32_s32(below_all));
+#endif
   }
 };
 
