@@ -276,9 +276,11 @@ TEST_P(CascadeDetection, EveryPathFindsTheSameWindows) {
 }
 
 test::RandomCascadeShape shape(CascadeFeatureType type, int w, int h, int nodes, bool tilted,
-                               double pass_rate = 0.75, bool fractional_weights = false) {
+                               double pass_rate = 0.75, bool fractional_weights = false,
+                               bool edge_features = false) {
   test::RandomCascadeShape s;
   s.fractional_weights = fractional_weights;
+  s.edge_features = edge_features;
   s.pass_rate = pass_rate;
   s.type = type;
   s.window_width = w;
@@ -293,6 +295,8 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         DetectionCase{"haar_stumps", shape(CascadeFeatureType::haar, 24, 24, 1, false), 97, 71},
         DetectionCase{"haar_tilted", shape(CascadeFeatureType::haar, 20, 24, 1, true), 83, 64},
+        DetectionCase{"haar_edge_features",
+                      shape(CascadeFeatureType::haar, 24, 24, 1, false, 0.75, false, true), 91, 69},
         DetectionCase{"haar_fractional_weights",
                       shape(CascadeFeatureType::haar, 24, 24, 1, true, 0.9, true), 89, 67},
         DetectionCase{"haar_trees", shape(CascadeFeatureType::haar, 20, 20, 3, true), 61, 45},
@@ -302,20 +306,21 @@ INSTANTIATE_TEST_SUITE_P(
                       24, 2}),
     [](const ::testing::TestParamInfo<DetectionCase>& p) { return std::string(p.param.name); });
 
-// The SIMD kernels' stumps: a stage's two-rectangle stumps first, integer weights where OpenCV's
-// cascades have them, and each stage's deltas split into 32-bit parts that add up to the same
-// fixed-point sums without overflow.
+// The SIMD kernels' stumps: a stage's grouped by kind (a rectangle and its half as six corners),
+// integer weights where OpenCV's cascades have them, and each stage's deltas split into 32-bit
+// parts that add up to the same fixed-point sums without overflow.
 TEST(CascadeProgram, StumpsForTheSimdKernels) {
   for (const bool fractional : {false, true}) {
     for (const bool tilted : {false, true}) {
       const CascadeModel model(
-          test::random_cascade(shape(CascadeFeatureType::haar, 24, 24, 1, tilted, 0.75, fractional),
-                               7),
+          test::random_cascade(
+              shape(CascadeFeatureType::haar, 24, 24, 1, tilted, 0.75, fractional, true), 7),
           "random");
       const kernels::CascadeProgram p(model, {64, 0}, 64 * 30, 64 * 60);
       ASSERT_TRUE(p.fixed_point_exact);
       EXPECT_EQ(p.integer_weights, !fractional);
       std::size_t next = 0;
+      int six_corner_stumps = 0;
       for (const kernels::ProgramStage& stage : p.stages) {
         int pairs = 0;
         std::int64_t expected = 0;
@@ -325,7 +330,11 @@ TEST(CascadeProgram, StumpsForTheSimdKernels) {
           expected += static_cast<std::int64_t>(std::ldexp(p.leaves[2 * i], p.fixed_shift)) -
                       static_cast<std::int64_t>(std::ldexp(p.leaves[2 * i + 1], p.fixed_shift));
         }
-        EXPECT_EQ(stage.pair_count, pairs);
+        EXPECT_EQ(stage.six_count + stage.pair_count, pairs);
+        if (fractional) {
+          EXPECT_EQ(stage.six_count, 0);
+        }
+        six_corner_stumps += stage.six_count;
         const std::int64_t unit = std::int64_t{1} << stage.split_shift;
         EXPECT_LE(stage.weak_count * (unit - 1), std::int64_t{INT32_MAX});
         std::int64_t sum = 0;
@@ -343,6 +352,9 @@ TEST(CascadeProgram, StumpsForTheSimdKernels) {
         EXPECT_EQ(sum, expected);
       }
       EXPECT_EQ(next, p.haar_stumps.size());
+      if (!fractional) {
+        EXPECT_GT(six_corner_stumps, 0) << "a rectangle and its half share two corners";
+      }
     }
   }
 }

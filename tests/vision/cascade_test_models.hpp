@@ -22,6 +22,9 @@ struct RandomCascadeShape {
   // Haar: weights like -1.3 and 2.6 instead of OpenCV's -1, 2, 3 and 9 (the kernels form
   // integer weights' values in integers, other weights' in floats).
   bool fractional_weights = false;
+  // Haar: one in three two-rectangle features a rectangle and its first half, as OpenCV's edge
+  // features are (the corners they share make them the kernels' six-corner stumps).
+  bool edge_features = false;
   // Stage thresholds: a random window passes a stage about this often.
   double pass_rate = 0.75;
 };
@@ -53,6 +56,7 @@ inline vision::CascadeData random_cascade(const RandomCascadeShape& shape, std::
       vision::HaarFeature f;
       f.tilted = shape.tilted && pick(0, 2) == 0;
       f.rect_count = pick(0, 3) == 0 ? 3 : 2;
+      const bool half = shape.edge_features && f.rect_count == 2 && pick(0, 2) == 0;
       for (int r = 0; r < f.rect_count; ++r) {
         vision::HaarRect& rect = f.rects[r];
         if (f.tilted) {
@@ -67,6 +71,17 @@ inline vision::CascadeData random_cascade(const RandomCascadeShape& shape, std::
           rect.height = pick(1, h);
           rect.x = pick(0, w - rect.width);
           rect.y = pick(0, h - rect.height);
+        }
+        if (half && r == 1) {
+          const bool across = pick(0, 1) == 0;  // halve the width, else the height
+          rect = f.rects[0];
+          if (across) {
+            rect.width = std::max(1, rect.width / 2);
+          } else {
+            rect.height = std::max(1, rect.height / 2);
+          }
+          rect.weight = 2.0f;
+          continue;
         }
         if (shape.fractional_weights) {
           rect.weight = static_cast<float>(r == 0 ? -uniform(0.5, 1.5) : uniform(0.5, 3.5));

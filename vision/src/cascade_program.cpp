@@ -125,6 +125,53 @@ int split_shift_for(int count) {
   return shift;
 }
 
+// A two-rectangle stump with integer weights as a six-corner one (HaarStumpKind::six_corners),
+// when its corners merge into two +1, two -1, one +k and one -k; false otherwise.
+bool merge_six_corners(HaarStump& s) {
+  const std::int32_t weight = s.params.words[StumpParams::kWeight];
+  std::vector<std::pair<std::int32_t, std::int32_t>> corners;  // offset, coefficient
+  for (int r = 0; r < 2; ++r) {
+    const std::int32_t w = r == 0 ? 1 : weight;
+    const std::int32_t signs[4] = {w, -w, -w, w};
+    for (int c = 0; c < 4; ++c) {
+      const auto same = [&](const auto& corner) { return corner.first == s.offsets[r][c]; };
+      const auto it = std::find_if(corners.begin(), corners.end(), same);
+      if (it == corners.end()) {
+        corners.emplace_back(s.offsets[r][c], signs[c]);
+      } else {
+        it->second += signs[c];
+      }
+    }
+  }
+  std::erase_if(corners, [](const auto& corner) { return corner.second == 0; });
+  std::vector<std::int32_t> plus;
+  std::vector<std::int32_t> minus;
+  std::vector<std::pair<std::int32_t, std::int32_t>> weighted;
+  for (const auto& [offset, coefficient] : corners) {
+    if (coefficient == 1) {
+      plus.push_back(offset);
+    } else if (coefficient == -1) {
+      minus.push_back(offset);
+    } else {
+      weighted.emplace_back(offset, coefficient);
+    }
+  }
+  if (plus.size() != 2 || minus.size() != 2 || weighted.size() != 2 ||
+      weighted[0].second != -weighted[1].second) {
+    return false;
+  }
+  if (weighted[0].second < 0) std::swap(weighted[0], weighted[1]);
+  s.offsets[0][0] = plus[0];
+  s.offsets[0][1] = plus[1];
+  s.offsets[0][2] = minus[0];
+  s.offsets[0][3] = minus[1];
+  s.offsets[1][0] = weighted[0].first;
+  s.offsets[1][1] = weighted[1].first;
+  s.offsets[1][2] = s.offsets[1][3] = 0;
+  s.params.words[StumpParams::kWeight] = weighted[0].second;
+  return true;
+}
+
 // Stores `delta` in `params` as high * 2^shift + low, 0 <= low < 2^shift.
 void set_delta(StumpParams& params, std::int64_t delta, int shift) {
   const std::int64_t high = delta >> shift;  // floor: the low part is not negative
@@ -249,17 +296,22 @@ void CascadeProgram::build_fixed_point() {
       set_delta(params, deltas[static_cast<std::size_t>(k)], stage.split_shift);
     };
     if (type == CascadeFeatureType::haar) {
-      // Two-rectangle stumps first: the kernels run a loop of each kind.
-      for (const int rects : {2, 3}) {
-        for (int k = 0; k < stage.weak_count; ++k) {
-          const int i = stage.first_weak + k;
-          if (haar[nodes[i].feature].rect_count != rects) continue;
-          HaarStump stump = haar_stump(i);
-          set_stump_delta(stump.params, k);
-          haar_stumps.push_back(stump);
-          if (rects == 2) ++stage.pair_count;
-        }
+      // Grouped by kind, in HaarStumpKind's order: the kernels run a loop of each.
+      std::vector<HaarStump> by_kind[3];
+      for (int k = 0; k < stage.weak_count; ++k) {
+        const int i = stage.first_weak + k;
+        HaarStump stump = haar_stump(i);
+        set_stump_delta(stump.params, k);
+        const HaarStumpKind kind =
+            haar[nodes[i].feature].rect_count == 3        ? HaarStumpKind::three_rects
+            : integer_weights && merge_six_corners(stump) ? HaarStumpKind::six_corners
+                                                          : HaarStumpKind::two_rects;
+        by_kind[static_cast<int>(kind)].push_back(stump);
       }
+      stage.six_count = static_cast<int>(by_kind[0].size());
+      stage.pair_count = static_cast<int>(by_kind[1].size());
+      for (const auto& stumps : by_kind)
+        haar_stumps.insert(haar_stumps.end(), stumps.begin(), stumps.end());
       continue;
     }
     for (int k = 0; k < stage.weak_count; ++k) {

@@ -43,8 +43,10 @@ struct ProgramStage {
   // Fixed point (see CascadeProgram): the stage passes when the sum of the selected deltas is
   // at least this.
   std::int64_t fixed_threshold = 0;
-  // The SIMD kernels' stumps of a Haar stage: the first pair_count have two rectangles, the
-  // others three (the sum does not depend on the order: it is exact).
+  // The SIMD kernels' stumps of a Haar stage by kind (HaarStumpKind), in this order: six_count
+  // six-corner stumps, pair_count two-rectangle ones, then three-rectangle ones (the sum does
+  // not depend on the order: it is exact).
+  int six_count = 0;
   int pair_count = 0;
   // The SIMD kernels add each delta in two 32-bit lanes, delta = high * 2^split_shift + low with
   // 0 <= low < 2^split_shift; the shift is chosen per stage so that neither sum can overflow.
@@ -61,6 +63,16 @@ struct alignas(16) StumpParams {
     kDeltaHigh,  // 0 <= low < 2^split_shift
   };
   std::int32_t words[4] = {};
+};
+
+// How the SIMD kernels form a Haar stump's value.
+enum class HaarStumpKind {
+  // Integer weights, two rectangles sharing two corners (a rectangle and its half, as OpenCV's
+  // edge features are): (p0 + p1) - (p2 + p3) + weight * (p4 - p5) over the six distinct
+  // corners, in offsets[0][0..3] and offsets[1][0..1].
+  six_corners,
+  two_rects,    // each rectangle p0 - p1 - p2 + p3, weighted
+  three_rects,  // the same with a third
 };
 
 // Stumps for the SIMD kernels, a stage's in the order they are evaluated. Taking the left leaf

@@ -40,44 +40,66 @@ typename V::I stump_corner_sum(const std::uint8_t* w, const std::int32_t* o) {
 // A stump's feature value before the variance factor. With integer weights
 // (CascadeProgram::integer_weights) the weighted sum is formed in integers, every partial sum
 // below 2^24, so it equals the reference's float products and sums of the same integers.
-template <typename V, int kRects, bool kIntegerWeights>
+template <typename V, HaarStumpKind kKind, bool kIntegerWeights>
 [[gnu::always_inline]] inline typename V::F haar_value(const HaarStump& s,
                                                        typename V::Params params,
                                                        const std::uint8_t* w) {
   const auto rect_sum = [&](int r) { return stump_corner_sum<V>(w, s.offsets[r]); };
-  if constexpr (kIntegerWeights) {
+  if constexpr (kKind == HaarStumpKind::six_corners) {
+    const auto at = [&](int r, int c) { return V::loadi_bytes(w + s.offsets[r][c]); };
+    const typename V::I ones = V::subi(V::addi(at(0, 0), at(0, 1)), V::addi(at(0, 2), at(0, 3)));
+    return V::tof(V::mul_add_weight(ones, V::subi(at(1, 0), at(1, 1)), params));
+  } else if constexpr (kIntegerWeights) {
     typename V::I value = V::mul_add_weight(rect_sum(0), rect_sum(1), params);
-    if constexpr (kRects == 3) value = V::mul_addi(value, rect_sum(2), s.third_weight);
+    if constexpr (kKind == HaarStumpKind::three_rects) {
+      value = V::mul_addi(value, rect_sum(2), s.third_weight);
+    }
     return V::tof(value);
   } else {
     typename V::F value = V::addf(V::mulf(V::splatf(s.weights[0]), V::tof(rect_sum(0))),
                                   V::mulf(V::splatf(s.weights[1]), V::tof(rect_sum(1))));
-    if constexpr (kRects == 3) {
+    if constexpr (kKind == HaarStumpKind::three_rects) {
       value = V::addf(value, V::mulf(V::splatf(s.weights[2]), V::tof(rect_sum(2))));
     }
     return value;
   }
 }
 
-template <typename V, int kRects, bool kIntegerWeights>
+template <typename V, HaarStumpKind kKind, bool kIntegerWeights>
 [[gnu::always_inline]] inline void haar_stump(typename V::Acc& acc, const HaarStump& s,
                                               const std::uint8_t* w, typename V::F factor) {
   const typename V::Params params = V::load_params(s.params.words);
-  const typename V::F value = haar_value<V, kRects, kIntegerWeights>(s, params, w);
+  const typename V::F value = haar_value<V, kKind, kIntegerWeights>(s, params, w);
   V::acc_add(acc, V::ltf(V::mulf(value, factor), V::threshold(params)), params);
+}
+
+// Stumps [first, last) of one kind, two at a time (half the loop's own instructions).
+template <typename V, HaarStumpKind kKind, bool kIntegerWeights>
+[[gnu::always_inline]] inline void haar_stumps(typename V::Acc& acc, const HaarStump* stumps,
+                                               int first, int last, const std::uint8_t* w,
+                                               typename V::F factor) {
+  int k = first;
+  for (; k + 2 <= last; k += 2) {
+    haar_stump<V, kKind, kIntegerWeights>(acc, stumps[k], w, factor);
+    haar_stump<V, kKind, kIntegerWeights>(acc, stumps[k + 1], w, factor);
+  }
+  if (k < last) haar_stump<V, kKind, kIntegerWeights>(acc, stumps[k], w, factor);
 }
 
 template <typename V, bool kIntegerWeights>
 typename V::M haar_stage(const ProgramStage& stage, const HaarStump* stumps, const std::uint8_t* w,
                          typename V::F factor) {
   typename V::Acc acc = V::acc_zero();
-  int k = 0;
-  for (; k + 2 <= stage.pair_count; k += 2) {  // two at a time: half the loop's own instructions
-    haar_stump<V, 2, kIntegerWeights>(acc, stumps[k], w, factor);
-    haar_stump<V, 2, kIntegerWeights>(acc, stumps[k + 1], w, factor);
+  const int pairs_first = stage.six_count;
+  const int triples_first = pairs_first + stage.pair_count;
+  if constexpr (kIntegerWeights) {
+    haar_stumps<V, HaarStumpKind::six_corners, true>(acc, stumps, 0, pairs_first, w, factor);
   }
-  for (; k < stage.pair_count; ++k) haar_stump<V, 2, kIntegerWeights>(acc, stumps[k], w, factor);
-  for (; k < stage.weak_count; ++k) haar_stump<V, 3, kIntegerWeights>(acc, stumps[k], w, factor);
+  haar_stumps<V, HaarStumpKind::two_rects, kIntegerWeights>(acc, stumps, pairs_first, triples_first,
+                                                            w, factor);
+  for (int k = triples_first; k < stage.weak_count; ++k) {
+    haar_stump<V, HaarStumpKind::three_rects, kIntegerWeights>(acc, stumps[k], w, factor);
+  }
   return V::acc_at_least(acc, stage.split_shift, stage.fixed_threshold);
 }
 
