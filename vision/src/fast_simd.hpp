@@ -15,6 +15,7 @@
 // Because v - x and x - v are monotonic in x, the arcs' extremes are taken over the pixels
 // themselves and v is subtracted once.
 #include <algorithm>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -112,9 +113,10 @@ int fast_row_simd(const std::uint8_t* row, std::ptrdiff_t stride, int width, int
     }
     const B is_corner = V::gtb(contrast, t);
     V::storeb(scores + x, V::andb(is_corner, V::subb(contrast, one)));
-    for (std::uint32_t corners = V::bitsb(is_corner) >> (next - x) << (next - x); corners != 0;
+    const int listed = (next - x) * V::kBitsPerLaneB;  // lanes the vector before listed
+    for (typename V::LaneBits corners = V::bitsb(is_corner) >> listed << listed; corners != 0;
          corners &= corners - 1) {
-      columns[count++] = x + __builtin_ctz(corners);
+      columns[count++] = x + std::countr_zero(corners) / V::kBitsPerLaneB;
     }
   }
   return count;

@@ -41,9 +41,10 @@ struct Avx2 {
   static B minb(B a, B b) { return _mm256_min_epu8(a, b); }
   static B maxb(B a, B b) { return _mm256_max_epu8(a, b); }
   static bool anyb(B mask) { return _mm256_testz_si256(mask, mask) == 0; }
-  static std::uint32_t bitsb(B mask) {
-    return static_cast<std::uint32_t>(_mm256_movemask_epi8(mask));
-  }
+  // A comparison mask as bits: lane i -> bit i (kBitsPerLaneB apart).
+  using LaneBits = std::uint32_t;
+  static constexpr int kBitsPerLaneB = 1;
+  static LaneBits bitsb(B mask) { return static_cast<std::uint32_t>(_mm256_movemask_epi8(mask)); }
 
   // Words: 8 lanes of 32-bit integers (I), floats (F) and masks (M).
   static constexpr int kLanesI = 8;

@@ -7,7 +7,8 @@
 //   i, f, m: 4 lanes of 32-bit integers (I), floats (F) and masks (M)
 // Only intrinsics that exist on both AArch64 and ARMv7 are used (no float64 or 64-bit compare
 // vectors: ARMv7 has neither), except in the AArch64 forms of the across-lane reductions
-// (`across`), the cascade's variance, subset lookup and stage test, each beside a portable one.
+// (`across`), the mask bits (`bitsb`), the cascade's variance, subset lookup and stage test, each
+// beside a portable one.
 #include <cmath>
 #include <cstdint>
 
@@ -15,8 +16,8 @@
 
 namespace epipole::vision::simd {
 
-// Across-lane reductions: one instruction on AArch64 (UMINV, UADDLV, ADDV), a ladder of pairwise
-// steps on ARMv7.
+// Across-lane reductions: one instruction on AArch64 (UMINV, UMAXV, UADDLV, ADDV), a ladder of
+// pairwise steps on ARMv7.
 namespace across {
 #if defined(__aarch64__)
 inline std::uint8_t min_u8(uint8x16_t v) {
@@ -30,6 +31,9 @@ inline std::uint32_t sum_u16(uint16x8_t v) {
 }
 inline std::uint32_t sum_u32(uint32x4_t v) {
   return vaddvq_u32(v);
+}
+inline bool any_u8(uint8x16_t v) {
+  return vmaxvq_u8(v) != 0;
 }
 #else
 inline std::uint8_t min_u8(uint8x16_t v) {
@@ -52,6 +56,10 @@ inline std::uint32_t sum_u16(uint16x8_t v) {
 inline std::uint32_t sum_u32(uint32x4_t v) {
   const uint32x2_t pair = vadd_u32(vget_low_u32(v), vget_high_u32(v));
   return vget_lane_u32(vpadd_u32(pair, pair), 0);
+}
+inline bool any_u8(uint8x16_t v) {
+  const uint64x2_t halves = vreinterpretq_u64_u8(v);
+  return (vgetq_lane_u64(halves, 0) | vgetq_lane_u64(halves, 1)) != 0;
 }
 #endif
 }  // namespace across
@@ -76,12 +84,22 @@ struct Neon {
   static B maxb(B a, B b) { return vmaxq_u8(a, b); }
   static B gtb(B a, B b) { return vcgtq_u8(a, b); }
   static B ltb(B a, B b) { return vcltq_u8(a, b); }
-  static bool anyb(B mask) {
-    const uint64x2_t halves = vreinterpretq_u64_u8(mask);
-    return (vgetq_lane_u64(halves, 0) | vgetq_lane_u64(halves, 1)) != 0;
+  static bool anyb(B mask) { return across::any_u8(mask); }
+#if defined(__aarch64__) || !(defined(__ARM_NEON) || defined(__ARM_NEON__))
+  // A comparison mask as bits: lane i -> bit 4 i (kBitsPerLaneB apart). One narrowing shift
+  // gives each lane a nibble, fewer instructions than packing one bit a lane.
+  using LaneBits = std::uint64_t;
+  static constexpr int kBitsPerLaneB = 4;
+  static LaneBits bitsb(B mask) {
+    const uint8x8_t nibbles = vshrn_n_u16(vreinterpretq_u16_u8(mask), 4);
+    return vget_lane_u64(vreinterpret_u64_u8(nibbles), 0) & 0x1111111111111111u;
   }
-  // One bit per lane of a comparison mask (lane i -> bit i).
-  static std::uint32_t bitsb(B mask) {
+#else
+  // ARMv7: lane i -> bit i, pairwise additions of the lanes' weights (64-bit words cost two
+  // registers there).
+  using LaneBits = std::uint32_t;
+  static constexpr int kBitsPerLaneB = 1;
+  static LaneBits bitsb(B mask) {
     static constexpr std::uint8_t kWeights[16] = {1, 2, 4, 8, 16, 32, 64, 128,
                                                   1, 2, 4, 8, 16, 32, 64, 128};
     const uint8x16_t bits = vandq_u8(mask, vld1q_u8(kWeights));
@@ -90,6 +108,7 @@ struct Neon {
     sum = vpadd_u8(sum, sum);
     return vget_lane_u16(vreinterpret_u16_u8(sum), 0);
   }
+#endif
   static B iotab() {
     static constexpr std::uint8_t kIota[16] = {0, 1, 2,  3,  4,  5,  6,  7,
                                                8, 9, 10, 11, 12, 13, 14, 15};
@@ -103,17 +122,25 @@ struct Neon {
   static B popcount4(B a, B b, B c, B d) {
     return vaddq_u8(vaddq_u8(vcntq_u8(a), vcntq_u8(b)), vaddq_u8(vcntq_u8(c), vcntq_u8(d)));
   }
-  static std::uint8_t hminb(B v) { return across::min_u8(v); }
+  static std::uint8_t hminb(B v) {
+    return across::min_u8(v);
+  }
 
   // Halves: the same 16 lanes as unsigned 16-bit values, in two registers.
   using H = uint16x8x2_t;
-  static H loadh(const std::uint16_t* p) { return {{vld1q_u16(p), vld1q_u16(p + 8)}}; }
+  static H loadh(const std::uint16_t* p) {
+    return {{vld1q_u16(p), vld1q_u16(p + 8)}};
+  }
   static void storeh(std::uint16_t* p, H v) {
     vst1q_u16(p, v.val[0]);
     vst1q_u16(p + 8, v.val[1]);
   }
-  static H splath(std::uint16_t v) { return {{vdupq_n_u16(v), vdupq_n_u16(v)}}; }
-  static H widen(B v) { return {{vmovl_u8(vget_low_u8(v)), vmovl_u8(vget_high_u8(v))}}; }
+  static H splath(std::uint16_t v) {
+    return {{vdupq_n_u16(v), vdupq_n_u16(v)}};
+  }
+  static H widen(B v) {
+    return {{vmovl_u8(vget_low_u8(v)), vmovl_u8(vget_high_u8(v))}};
+  }
   static H addw(H a, B b) {
     return {{vaddw_u8(a.val[0], vget_low_u8(b)), vaddw_u8(a.val[1], vget_high_u8(b))}};
   }
@@ -149,10 +176,16 @@ struct Neon {
   static H shift_in(H prev, H cur) {
     return {{vextq_u16(prev.val[1], cur.val[0], 7), vextq_u16(cur.val[0], cur.val[1], 7)}};
   }
-  static std::uint16_t last(H v) { return vgetq_lane_u16(v.val[1], 7); }
-  static std::uint16_t hminh(H v) { return across::min_u16(vminq_u16(v.val[0], v.val[1])); }
+  static std::uint16_t last(H v) {
+    return vgetq_lane_u16(v.val[1], 7);
+  }
+  static std::uint16_t hminh(H v) {
+    return across::min_u16(vminq_u16(v.val[0], v.val[1]));
+  }
   // The sum of the 8 lanes of the two registers added lane by lane (modulo 2^16).
-  static std::uint32_t hsumh(H v) { return across::sum_u16(vaddq_u16(v.val[0], v.val[1])); }
+  static std::uint32_t hsumh(H v) {
+    return across::sum_u16(vaddq_u16(v.val[0], v.val[1]));
+  }
   static bool anyh(H mask) {
     const uint64x2_t halves = vreinterpretq_u64_u16(vorrq_u16(mask.val[0], mask.val[1]));
     return (vgetq_lane_u64(halves, 0) | vgetq_lane_u64(halves, 1)) != 0;
@@ -170,35 +203,65 @@ struct Neon {
   };
 
   // Consecutive entries of an integral row.
-  static I loadi(const std::uint32_t* p) { return vreinterpretq_s32_u32(vld1q_u32(p)); }
+  static I loadi(const std::uint32_t* p) {
+    return vreinterpretq_s32_u32(vld1q_u32(p));
+  }
   // The same from a byte address (a load at base + a byte offset needs no shift; the lanes are
   // the same as vld1q_u32's on little-endian ARM, which every supported board is).
-  static I loadi_bytes(const std::uint8_t* p) { return vreinterpretq_s32_u8(vld1q_u8(p)); }
-  static I addi(I a, I b) { return vaddq_s32(a, b); }
-  static I subi(I a, I b) { return vsubq_s32(a, b); }
-  static F tof(I a) { return vcvtq_f32_s32(a); }
-  static F splatf(float v) { return vdupq_n_f32(v); }
+  static I loadi_bytes(const std::uint8_t* p) {
+    return vreinterpretq_s32_u8(vld1q_u8(p));
+  }
+  static I addi(I a, I b) {
+    return vaddq_s32(a, b);
+  }
+  static I subi(I a, I b) {
+    return vsubq_s32(a, b);
+  }
+  static F tof(I a) {
+    return vcvtq_f32_s32(a);
+  }
+  static F splatf(float v) {
+    return vdupq_n_f32(v);
+  }
   // a + b * c
-  static I mul_addi(I a, I b, std::int32_t c) { return vmlaq_n_s32(a, b, c); }
+  static I mul_addi(I a, I b, std::int32_t c) {
+    return vmlaq_n_s32(a, b, c);
+  }
 
   // A cascade stump's StumpParams in one register: weight, threshold bits, delta low, delta high.
   using Params = int32x4_t;
-  static Params load_params(const std::int32_t* p) { return vld1q_s32(p); }
+  static Params load_params(const std::int32_t* p) {
+    return vld1q_s32(p);
+  }
   // a + b * weight (an MLA by element).
   static I mul_add_weight(I a, I b, Params p) {
     return vmlaq_s32(a, b, vdupq_lane_s32(vget_low_s32(p), 0));
   }
-  static F threshold(Params p) { return vdupq_lane_f32(vreinterpret_f32_s32(vget_low_s32(p)), 1); }
-  static F mulf(F a, F b) { return vmulq_f32(a, b); }
-  static F addf(F a, F b) { return vaddq_f32(a, b); }
-  static M ltf(F a, F b) { return vcltq_f32(a, b); }
-  static M gei(I a, I b) { return vcgeq_s32(a, b); }
-  static I zeroi() { return vdupq_n_s32(0); }
+  static F threshold(Params p) {
+    return vdupq_lane_f32(vreinterpret_f32_s32(vget_low_s32(p)), 1);
+  }
+  static F mulf(F a, F b) {
+    return vmulq_f32(a, b);
+  }
+  static F addf(F a, F b) {
+    return vaddq_f32(a, b);
+  }
+  static M ltf(F a, F b) {
+    return vcltq_f32(a, b);
+  }
+  static M gei(I a, I b) {
+    return vcgeq_s32(a, b);
+  }
+  static I zeroi() {
+    return vdupq_n_s32(0);
+  }
   // bits >> 1 (logical) with bit 31 set in the lanes of `mask` (one SRI).
   static I push_bit_high(I bits, M mask) {
     return vreinterpretq_s32_u32(vsriq_n_u32(mask, vreinterpretq_u32_s32(bits), 1));
   }
-  static M andm(M a, M b) { return vandq_u32(a, b); }
+  static M andm(M a, M b) {
+    return vandq_u32(a, b);
+  }
   // Lanes 0..3 as bits 0..3.
   static unsigned bitsm(M m) {
     static constexpr std::uint32_t kBits[4] = {1, 2, 4, 8};
