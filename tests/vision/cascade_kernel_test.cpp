@@ -201,6 +201,7 @@ struct DetectionCase {
   int width;
   int height;
   std::size_t min_hits = 20;  // windows that pass, over both images and all scale factors
+  std::uint32_t seed = 21;
 };
 
 void PrintTo(const DetectionCase& c, std::ostream* out) {
@@ -213,7 +214,14 @@ class CascadeDetection : public ::testing::TestWithParam<DetectionCase> {};
 // images with sizes that give odd level widths, for several scale factors.
 TEST_P(CascadeDetection, EveryPathFindsTheSameWindows) {
   const DetectionCase& c = GetParam();
-  const CascadeModel model(test::random_cascade(c.shape, 21), c.name);
+  const CascadeModel model(test::random_cascade(c.shape, c.seed), c.name);
+  if (c.shape.edge_features) {  // the kernels' six-corner stumps are what this case tests
+    const kernels::CascadeProgram program(model, {128, 0}, 128 * 30, 128 * 60);
+    int six_corner_stumps = 0;
+    for (const kernels::ProgramStage& stage : program.stages) six_corner_stumps += stage.six_count;
+    EXPECT_TRUE(program.integer_weights);
+    EXPECT_GT(six_corner_stumps, 0);
+  }
   ThreadPool pool(3);
   std::size_t total_hits = 0;
   for (const test::Pattern pattern : {test::Pattern::blobs, test::Pattern::noise}) {
@@ -297,6 +305,9 @@ INSTANTIATE_TEST_SUITE_P(
         DetectionCase{"haar_tilted", shape(CascadeFeatureType::haar, 20, 24, 1, true), 83, 64},
         DetectionCase{"haar_edge_features",
                       shape(CascadeFeatureType::haar, 24, 24, 1, false, 0.75, false, true), 91, 69},
+        DetectionCase{"haar_tilted_edge_features",
+                      shape(CascadeFeatureType::haar, 24, 24, 1, true, 0.75, false, true), 91, 69,
+                      20, 22},
         DetectionCase{"haar_fractional_weights",
                       shape(CascadeFeatureType::haar, 24, 24, 1, true, 0.9, true), 89, 67},
         DetectionCase{"haar_trees", shape(CascadeFeatureType::haar, 20, 20, 3, true), 61, 45},
@@ -336,7 +347,9 @@ TEST(CascadeProgram, StumpsForTheSimdKernels) {
         }
         six_corner_stumps += stage.six_count;
         const std::int64_t unit = std::int64_t{1} << stage.split_shift;
+        // The largest shift for which the low parts' sum fits.
         EXPECT_LE(stage.weak_count * (unit - 1), std::int64_t{INT32_MAX});
+        EXPECT_GT(stage.weak_count * (2 * unit - 1), std::int64_t{INT32_MAX});
         std::int64_t sum = 0;
         std::int64_t high_magnitude = 0;
         for (int k = 0; k < stage.weak_count; ++k, ++next) {
@@ -357,6 +370,38 @@ TEST(CascadeProgram, StumpsForTheSimdKernels) {
       }
     }
   }
+}
+
+// A stage whose high parts could overflow 32 bits (thousands of stumps with leaves of very
+// different sizes) leaves the cascade to the reference kernel, whose double sums are exact.
+TEST(CascadeProgram, HugeStagesFallBackToTheReference) {
+  CascadeData d;
+  d.window_width = d.window_height = 24;
+  HaarFeature f;
+  f.rect_count = 2;
+  f.rects[0] = {0, 0, 24, 24, -1.0f};
+  f.rects[1] = {0, 0, 12, 24, 2.0f};
+  d.haar_features.push_back(f);
+  const int stumps = 8000;
+  d.stages.push_back({stumps, 0.0f});
+  for (int i = 0; i < stumps; ++i) {
+    d.node_counts.push_back(1);
+    d.nodes.push_back({0, -1, 0, 0.0f});
+    // Leaves of 1 and -1, and one of 2^-13, which makes the unit 2^-36: deltas of 2^37.
+    d.leaves.push_back(1.0f);
+    d.leaves.push_back(i == 0 ? 0x1p-13f : -1.0f);
+  }
+  const CascadeModel model(d, "huge");
+  const kernels::CascadeProgram p(model, {64, 0}, 64 * 30, 64 * 60);
+  EXPECT_FALSE(p.fixed_point_exact);
+  EXPECT_TRUE(p.haar_stumps.empty());
+  // With a tenth of the stumps it fits.
+  d.stages[0].weak_count = stumps / 10;
+  d.node_counts.resize(stumps / 10);
+  d.nodes.resize(stumps / 10);
+  d.leaves.resize(2 * (stumps / 10));
+  const CascadeModel smaller(d, "smaller");
+  EXPECT_TRUE(kernels::CascadeProgram(smaller, {64, 0}, 64 * 30, 64 * 60).fixed_point_exact);
 }
 
 TEST(CascadeDetector, BoundsAndLimits) {

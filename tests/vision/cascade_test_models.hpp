@@ -73,13 +73,20 @@ inline vision::CascadeData random_cascade(const RandomCascadeShape& shape, std::
           rect.y = pick(0, h - rect.height);
         }
         if (half && r == 1) {
-          const bool across = pick(0, 1) == 0;  // halve the width, else the height
+          // The first or the second half of the width or the height: the two rectangles
+          // share two corners.
+          const bool across = pick(0, 1) == 0;
+          const bool second = pick(0, 1) == 0;
           rect = f.rects[0];
-          if (across) {
-            rect.width = std::max(1, rect.width / 2);
-          } else {
-            rect.height = std::max(1, rect.height / 2);
+          const int cut = (across ? rect.width : rect.height) / 2;
+          if (second && across) {  // along the width: right for upright, down-right for tilted
+            rect.x += cut;
+            if (f.tilted) rect.y += cut;
+          } else if (second) {  // along the height: down for upright, down-left for tilted
+            rect.y += cut;
+            if (f.tilted) rect.x -= cut;
           }
+          (across ? rect.width : rect.height) -= cut;
           rect.weight = 2.0f;
           continue;
         }

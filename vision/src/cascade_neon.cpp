@@ -1,8 +1,9 @@
 // The cascade detector's NEON kernels: integral images 8 pixels at a time (in-vector prefix
 // sums), the tilted integral 4 at a time, the pyramid resize 8 at a time (NEON has no gather:
 // pixel pairs are fetched with scalar 16-bit loads, the weighting runs in vectors), and the
-// window kernel with 4 windows per vector (cascade_simd.hpp). Only intrinsics common to AArch64
-// and ARMv7 are used; every result equals the reference's bit for bit.
+// window kernel with 4 windows per vector (cascade_simd.hpp over simd/neon.hpp, which has
+// AArch64 forms of a few steps beside portable ones). Every result equals the reference's bit
+// for bit.
 #include <cstring>
 
 #include "cascade_kernels.hpp"

@@ -221,8 +221,8 @@ CascadeProgram::CascadeProgram(const CascadeModel& model, IntegralLayout layout_
   if (stump_based) build_fixed_point();
 }
 
-HaarStump CascadeProgram::haar_stump(int weak) const {
-  const HaarTerms& t = haar[nodes[weak].feature];
+HaarStump CascadeProgram::haar_stump(int node) const {
+  const HaarTerms& t = haar[nodes[node].feature];
   HaarStump s;
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 4; ++c) s.offsets[r][c] = in_bytes(t.offsets[r][c]);
@@ -233,13 +233,16 @@ HaarStump CascadeProgram::haar_stump(int weak) const {
     std::swap(s.offsets[0][0], s.offsets[0][1]);
     std::swap(s.offsets[0][2], s.offsets[0][3]);
   }
-  s.params.words[StumpParams::kWeight] = static_cast<std::int32_t>(t.weights[1]);
-  s.params.words[StumpParams::kThreshold] = std::bit_cast<std::int32_t>(nodes[weak].threshold);
-  s.third_weight = static_cast<std::int32_t>(t.weights[2]);
+  if (integer_weights) {  // else the weights may not fit an integer
+    s.params.words[StumpParams::kWeight] = static_cast<std::int32_t>(t.weights[1]);
+    s.third_weight = static_cast<std::int32_t>(t.weights[2]);
+  }
+  s.params.words[StumpParams::kThreshold] = std::bit_cast<std::int32_t>(nodes[node].threshold);
   return s;
 }
 
-// The stumps in fixed point for the SIMD kernels, when that is exact (fixed_point_exact).
+// The stumps in fixed point for the SIMD kernels, when that is exact (fixed_point_exact). The
+// cascade is stump-based: weak classifier i is node i.
 void CascadeProgram::build_fixed_point() {
   // Integral images too large for 32-bit byte offsets are left to the reference kernel.
   const auto fit = [](const std::int32_t* offsets, int count) {
@@ -297,7 +300,7 @@ void CascadeProgram::build_fixed_point() {
     };
     if (type == CascadeFeatureType::haar) {
       // Grouped by kind, in HaarStumpKind's order: the kernels run a loop of each.
-      std::vector<HaarStump> by_kind[3];
+      std::vector<HaarStump> by_kind[3];  // indexed by HaarStumpKind
       for (int k = 0; k < stage.weak_count; ++k) {
         const int i = stage.first_weak + k;
         HaarStump stump = haar_stump(i);
@@ -308,8 +311,11 @@ void CascadeProgram::build_fixed_point() {
                                                           : HaarStumpKind::two_rects;
         by_kind[static_cast<int>(kind)].push_back(stump);
       }
-      stage.six_count = static_cast<int>(by_kind[0].size());
-      stage.pair_count = static_cast<int>(by_kind[1].size());
+      const auto count = [&by_kind](HaarStumpKind kind) {
+        return static_cast<int>(by_kind[static_cast<int>(kind)].size());
+      };
+      stage.six_count = count(HaarStumpKind::six_corners);
+      stage.pair_count = count(HaarStumpKind::two_rects);
       for (const auto& stumps : by_kind)
         haar_stumps.insert(haar_stumps.end(), stumps.begin(), stumps.end());
       continue;

@@ -49,7 +49,9 @@ struct ProgramStage {
   int six_count = 0;
   int pair_count = 0;
   // The SIMD kernels add each delta in two 32-bit lanes, delta = high * 2^split_shift + low with
-  // 0 <= low < 2^split_shift; the shift is chosen per stage so that neither sum can overflow.
+  // 0 <= low < 2^split_shift: the shift is the largest for which the low parts' sum cannot
+  // overflow, and the program falls back to the reference kernel when the high parts' could (a
+  // stage of thousands of stumps with leaves of very different sizes).
   int split_shift = 0;
 };
 
@@ -57,7 +59,7 @@ struct ProgramStage {
 // that a NEON core loads with one instruction (simd/neon.hpp, load_params).
 struct alignas(16) StumpParams {
   enum : int {
-    kWeight,     // Haar, integer weights: the second rectangle's weight
+    kWeight,     // Haar, integer weights: the second rectangle's weight (six corners: k)
     kThreshold,  // Haar: the node threshold, a float's bits
     kDeltaLow,   // the delta in fixed point as high * 2^ProgramStage::split_shift + low,
     kDeltaHigh,  // 0 <= low < 2^split_shift
@@ -134,8 +136,9 @@ struct CascadeProgram {
 
   // Stage sums in fixed point: every leaf is an integer multiple of 2^-fixed_shift, and when
   // fixed_point_exact no stage's sum of leaf magnitudes reaches 2^52 units, so OpenCV's double
-  // sums are exact and equal the int64 sums of the SIMD kernels. (It also requires the window
-  // to be small enough for exact variance sums: below about 600 x 600 pixels.)
+  // sums are exact and equal the SIMD kernels' integer sums (ProgramStage::split_shift). (It
+  // also requires the window to be small enough for exact variance sums: below about 600 x 600
+  // pixels.)
   int fixed_shift = 0;
   bool fixed_point_exact = false;
   // Haar: every rectangle weight is an integer, the first 1 or -1, and no weighted sum of a
@@ -147,7 +150,7 @@ struct CascadeProgram {
 
  private:
   void build_fixed_point();
-  HaarStump haar_stump(int weak) const;
+  HaarStump haar_stump(int node) const;  // a stump's (its weak classifier's only node)
 };
 
 // The windows of one row of one pyramid level: window i (of `positions`) at x = i *

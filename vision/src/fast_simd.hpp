@@ -113,7 +113,8 @@ int fast_row_simd(const std::uint8_t* row, std::ptrdiff_t stride, int width, int
     }
     const B is_corner = V::gtb(contrast, t);
     V::storeb(scores + x, V::andb(is_corner, V::subb(contrast, one)));
-    const int listed = (next - x) * V::kBitsPerLaneB;  // lanes the vector before listed
+    // The bits of the lanes the vector before already listed (the last vector overlaps it).
+    const int listed = (next - x) * V::kBitsPerLaneB;
     for (typename V::LaneBits corners = V::bitsb(is_corner) >> listed << listed; corners != 0;
          corners &= corners - 1) {
       columns[count++] = x + std::countr_zero(corners) / V::kBitsPerLaneB;

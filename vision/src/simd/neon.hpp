@@ -14,6 +14,14 @@
 
 #include "epipole/core/neon.hpp"
 
+// The AArch64 forms that SIMDe has too, so that host tests run them (the across-lane reductions
+// and the float64x2 variance stay on ARMv7's code under SIMDe).
+#if defined(__aarch64__) || !(defined(__ARM_NEON) || defined(__ARM_NEON__))
+#define EPIPOLE_NEON_A64_FORMS 1
+#else
+#define EPIPOLE_NEON_A64_FORMS 0
+#endif
+
 namespace epipole::vision::simd {
 
 // Across-lane reductions: one instruction on AArch64 (UMINV, UMAXV, UADDLV, ADDV), a ladder of
@@ -85,7 +93,7 @@ struct Neon {
   static B gtb(B a, B b) { return vcgtq_u8(a, b); }
   static B ltb(B a, B b) { return vcltq_u8(a, b); }
   static bool anyb(B mask) { return across::any_u8(mask); }
-#if defined(__aarch64__) || !(defined(__ARM_NEON) || defined(__ARM_NEON__))
+#if EPIPOLE_NEON_A64_FORMS
   // A comparison mask as bits: lane i -> bit 4 i (kBitsPerLaneB apart). One narrowing shift
   // gives each lane a nibble, fewer instructions than packing one bit a lane.
   using LaneBits = std::uint64_t;
@@ -284,10 +292,12 @@ struct Neon {
                   vmull_s32(vget_high_s32(sum), vget_high_s32(sum)));
 #if defined(__aarch64__)
     // In float64x2 lanes: the same correctly rounded operations as the scalar code. A lane with
-    // nf <= 0 fails and keeps the factor 1.
+    // nf <= 0 fails and keeps the factor 1 (its root is taken of 1, raising no exception).
     const auto half = [area](int64x2_t nf, float32x2_t& f, uint32x2_t& pass) {
       const uint64x2_t positive = vcgtzq_s64(nf);
-      const float64x2_t inverse = vdivq_f64(vdupq_n_f64(1.0), vsqrtq_f64(vcvtq_f64_s64(nf)));
+      const float64x2_t one = vdupq_n_f64(1.0);
+      const float64x2_t root = vsqrtq_f64(vbslq_f64(positive, vcvtq_f64_s64(nf), one));
+      const float64x2_t inverse = vdivq_f64(one, root);
       f = vbsl_f32(vmovn_u64(positive), vcvt_f32_f64(inverse), vdup_n_f32(1.0f));
       const uint64x2_t small = vcltq_f64(vmulq_n_f64(vcvt_f64_f32(f), area), vdupq_n_f64(0.1));
       pass = vmovn_u64(vandq_u64(positive, small));
@@ -301,7 +311,7 @@ struct Neon {
     factor = vcombine_f32(f_low, f_high);
     ok = vcombine_u32(pass_low, pass_high);
 #else
-    // ARMv7 (and SIMDe) have no float64 vectors: per lane.
+    // Per lane: ARMv7 has no float64 vectors (SIMDe follows it here).
     std::int64_t nf[4];
     vst1q_s64(nf, nf_low);
     vst1q_s64(nf + 2, nf_high);
@@ -322,7 +332,7 @@ struct Neon {
 
   // Bit `code` of a 256-bit subset (32 bytes) for 4 codes held in the top byte of each lane
   // (`bits`; the other bits are 0).
-#if defined(__aarch64__) || !(defined(__ARM_NEON) || defined(__ARM_NEON__))
+#if EPIPOLE_NEON_A64_FORMS
   // AArch64 (and SIMDe): the lanes' byte code >> 3 looked up in 32-bit lanes (index bytes 1 to 3
   // out of range, so 0), tested against the bit 1 << (code & 7).
   static M subset_bit(const std::uint8_t* subset, I bits) {
@@ -360,7 +370,7 @@ struct Neon {
     acc.low = vmlsq_s32(acc.low, m, vdupq_lane_s32(delta, 0));
     acc.high = vmlsq_s32(acc.high, m, vdupq_lane_s32(delta, 1));
   }
-  // high * 2^shift + low >= threshold, per lane, in 64 bits (from the sign of the difference).
+  // high * 2^shift + low >= threshold, per lane, in 64 bits.
   static M acc_at_least(const Acc& acc, int shift, std::int64_t threshold) {
     const int64x2_t s = vdupq_n_s64(shift);
     const int64x2_t t = vdupq_n_s64(threshold);
@@ -369,7 +379,7 @@ struct Neon {
     };
     const int64x2_t sum_low = sum(vget_low_s32(acc.high), vget_low_s32(acc.low));
     const int64x2_t sum_high = sum(vget_high_s32(acc.high), vget_high_s32(acc.low));
-#if defined(__aarch64__) || !(defined(__ARM_NEON) || defined(__ARM_NEON__))
+#if EPIPOLE_NEON_A64_FORMS
     // AArch64 (and SIMDe) compare 64-bit lanes.
     return vuzp1q_u32(vreinterpretq_u32_u64(vcgeq_s64(sum_low, t)),
                       vreinterpretq_u32_u64(vcgeq_s64(sum_high, t)));
