@@ -228,12 +228,12 @@ HaarStump CascadeProgram::haar_stump(int node) const {
     for (int c = 0; c < 4; ++c) s.offsets[r][c] = in_bytes(t.offsets[r][c]);
     s.weights[r] = t.weights[r];
   }
-  if (integer_weights && t.weights[0] < 0.0f) {
-    // p1 - p0 - p3 + p2 = -(p0 - p1 - p2 + p3): the first weight becomes 1.
-    std::swap(s.offsets[0][0], s.offsets[0][1]);
-    std::swap(s.offsets[0][2], s.offsets[0][3]);
-  }
   if (integer_weights) {  // else the weights may not fit an integer
+    if (t.weights[0] < 0.0f) {
+      // p1 - p0 - p3 + p2 = -(p0 - p1 - p2 + p3): the first weight becomes 1.
+      std::swap(s.offsets[0][0], s.offsets[0][1]);
+      std::swap(s.offsets[0][2], s.offsets[0][3]);
+    }
     s.params.words[StumpParams::kWeight] = static_cast<std::int32_t>(t.weights[1]);
     s.third_weight = static_cast<std::int32_t>(t.weights[2]);
   }
