@@ -119,7 +119,7 @@ struct WtaOut {
       : disparity(width, 99),
         best(width, 99),
         right_best(width, 99),
-        window(2 * (static_cast<std::size_t>(D) + 16), 7),
+        window(2 * (width + static_cast<std::size_t>(D)), 7),
         confidence(width, 77),
         with_confidence(confidence_wanted) {}
   kernels::WtaRow row(int uniqueness) {

@@ -273,7 +273,7 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
     w->right_census.assign(kPlanes * uw, 0);
     w->reversed.assign(kPlanes * (uw + ud), 0);
     w->sums.assign(wd, 0);
-    w->window.assign(2 * (ud + 16), 0);
+    w->window.assign(2 * (uw + ud), 0);
     w->best.assign(uw, -1);
     w->right_best.assign(uw, -1);
     if (config.method == StereoMethod::sgm) {

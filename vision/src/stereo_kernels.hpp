@@ -28,9 +28,9 @@ using CostRowKernel = void(const std::uint8_t* const* left, const std::uint8_t* 
 // of the SGM and BM row kernels. disparity[x]: d * 16 with parabolic sub-pixel, or
 // kInvalidDisparity when not unique or when d > x; best[x]: that integer d or -1.
 // right_best[xr]: the right image's best disparity at xr, the smallest S(xr + d, d) over
-// 0 <= d < min(D, width - xr), the smallest d among equal costs. window: 2 * (D + 16) values
-// of scratch. confidence[x] (when not null): confidence_of() the winner's cost and the lowest
-// cost outside best +-1, 0 where there is no winner.
+// 0 <= d < min(D, width - xr), the smallest d among equal costs. window: 2 * (width + D)
+// values of scratch. confidence[x] (when not null): confidence_of() the winner's cost and the
+// lowest cost outside best +-1, 0 where there is no winner.
 constexpr std::uint16_t kNoCost = 0x7FFF;
 struct WtaRow {
   int uniqueness;

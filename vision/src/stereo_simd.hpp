@@ -110,23 +110,24 @@ void cost_row_simd(const std::uint8_t* const* left_planes, const std::uint8_t* c
 }
 
 // Winner take all, one pixel at a time in increasing x (wta_row_ref defines the result).
-// The right image's candidates live in a window of D (cost, disparity) pairs, lane d for right
-// pixel x - d; moving to x + 1 moves it up one lane, and the pair that leaves at lane D - 1 is
-// final. The window is stored behind one block of padding (kNoCost), so a pixel's loads read
-// exactly what the previous pixel stored.
+// The right image's candidates, a (cost, disparity) pair for each right pixel xr, are kept in
+// reverse order (entry width - 1 - xr), so that pixel x's disparities d .. d + 15 meet right
+// pixels x - d .. x - d - 15 at the consecutive entries width - 1 - x + d ..: one load and store
+// a block, no shift. Entries past width - 1 (right pixels left of the image) are written and
+// never read.
 template <typename V>
 class WtaPixels {
   using H = typename V::H;
 
  public:
-  WtaPixels(const WtaRow& row, int disparities)
+  WtaPixels(const WtaRow& row, int width, int disparities)
       : row_(row),
+        width_(width),
         disparities_(disparities),
         ratio_(uniqueness_ratio(row.uniqueness)),
         cost_(row.window),
-        disp_(row.window + disparities + 16) {
-    std::fill_n(cost_, disparities + 16, kNoCost);
-    std::fill_n(disp_, disparities + 16, std::uint16_t{0xFFFF});
+        disp_(row.window + width + disparities) {
+    std::fill_n(cost_, width + disparities, kNoCost);
   }
 
   // The winner of pixel x. sums(d) gives the sums of disparities d .. d + 15 and has stored
@@ -139,24 +140,18 @@ class WtaPixels {
     H index = V::iotah();
     H m = V::splath(kNoCost);
     H m_index = V::splath(0);
-    H prev_cost = V::loadh(cost_);
-    H prev_disp = V::loadh(disp_);
+    std::uint16_t* const cost = cost_ + (width_ - 1 - x);
+    std::uint16_t* const disp = disp_ + (width_ - 1 - x);
 #pragma GCC unroll 2
     for (int d = 0; d < D; d += 16) {
       const H v = sums(d);
       m_index = V::selecth(V::gth(m, v), index, m_index);
       m = V::minh(m, v);
-      const H old_cost = V::loadh(cost_ + 16 + d);
-      const H old_disp = V::loadh(disp_ + 16 + d);
-      const H shifted_cost = V::shift_in(prev_cost, old_cost);
-      const H shifted_disp = V::shift_in(prev_disp, old_disp);
-      V::storeh(cost_ + 16 + d, V::minh(shifted_cost, v));
-      V::storeh(disp_ + 16 + d, V::selecth(V::gth(shifted_cost, v), index, shifted_disp));
-      prev_cost = old_cost;
-      prev_disp = old_disp;
+      const H old_cost = V::loadh(cost + d);
+      V::storeh(cost + d, V::minh(old_cost, v));
+      V::storeh(disp + d, V::selecth(V::gth(old_cost, v), index, V::loadh(disp + d)));
       index = V::addh(index, sixteen);
     }
-    if (x >= D) row_.right_best[x - D] = static_cast<std::int16_t>(V::last(prev_disp));
 
     const std::uint16_t min_cost = V::hminh(m);
     const int best =
@@ -200,15 +195,16 @@ class WtaPixels {
     store_winner(row_, x, V::hsumh(count) == 0 ? best : -1, s, D, V::hminh(others));
   }
 
-  // After the last pixel: the right pixels width - D .. width - 1 are in the window.
-  void finish(int width) {
-    for (int d = 0; d < std::min(disparities_, width); ++d) {
-      row_.right_best[width - 1 - d] = static_cast<std::int16_t>(disp_[16 + d]);
+  // After the last pixel: every right pixel's winner.
+  void finish() {
+    for (int xr = 0; xr < width_; ++xr) {
+      row_.right_best[xr] = static_cast<std::int16_t>(disp_[width_ - 1 - xr]);
     }
   }
 
  private:
   WtaRow row_;
+  int width_;
   int disparities_;
   std::uint32_t ratio_;
   std::uint16_t* cost_;
@@ -318,7 +314,7 @@ void sgm_second_pass_simd(const SgmRow& r) {
   std::uint16_t* const sums = r.sums;
   std::uint8_t* h[2];
   sgm_horizontal_rows(r, h);
-  WtaPixels<V> wta(r.wta, D);
+  WtaPixels<V> wta(r.wta, width, D);
   B h_prev = V::zerob();
   for (int x = 0; x < width; ++x) {
     const std::uint8_t* c = cost + static_cast<std::ptrdiff_t>(x) * D;
@@ -336,7 +332,7 @@ void sgm_second_pass_simd(const SgmRow& r) {
     h_prev = V::splatb(V::hminb(m));
     std::swap(h[0], h[1]);
   }
-  wta.finish(width);
+  wta.finish();
 }
 
 template <typename V>
@@ -397,7 +393,7 @@ void bm_row_sweep(const BmRow& r) {
   const auto update = [&](int c, int d) {
     return bm_column<V, kEnters, kLeaves>(r.columns + offset(c), entering_at(c), leaving_at(c), d);
   };
-  WtaPixels<V> wta(r.wta, D);
+  WtaPixels<V> wta(r.wta, W, D);
   // x = 0: columns 0..R.
   for (int c = 0; c < R; ++c) {
     for (int d = 0; d < D; d += 16) update(c, d);
@@ -433,7 +429,7 @@ void bm_row_sweep(const BmRow& r) {
       return acc;
     });
   }
-  wta.finish(W);
+  wta.finish();
 }
 
 template <typename V>

@@ -260,11 +260,6 @@ struct Avx2x16 {
   static H iotah() {
     return _mm256_setr_epi16(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   }
-  // Lane 15 of prev, then lanes 0..14 of cur: a window moved up by one lane.
-  static H shift_in(H prev, H cur) {
-    return _mm256_alignr_epi8(cur, _mm256_permute2x128_si256(prev, cur, 0x21), 14);
-  }
-  static std::uint16_t last(H v) { return static_cast<std::uint16_t>(_mm256_extract_epi16(v, 15)); }
   static std::uint16_t hminh(H v) {
     const __m128i m = _mm_min_epu16(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1));
     return static_cast<std::uint16_t>(_mm_extract_epi16(_mm_minpos_epu16(m), 0));

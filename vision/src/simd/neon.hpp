@@ -180,13 +180,6 @@ struct Neon {
                                                 8, 9, 10, 11, 12, 13, 14, 15};
     return loadh(kIota);
   }
-  // Lane 15 of prev, then lanes 0..14 of cur: a window moved up by one lane.
-  static H shift_in(H prev, H cur) {
-    return {{vextq_u16(prev.val[1], cur.val[0], 7), vextq_u16(cur.val[0], cur.val[1], 7)}};
-  }
-  static std::uint16_t last(H v) {
-    return vgetq_lane_u16(v.val[1], 7);
-  }
   static std::uint16_t hminh(H v) {
     return across::min_u16(vminq_u16(v.val[0], v.val[1]));
   }
