@@ -1,5 +1,5 @@
-// Sparse stereo: the Hamming kernel of every path against the reference, bit for bit; matches
-// on a synthetic pair shifted by a known (integer and half-pixel) disparity; bad input.
+// Sparse stereo: the Hamming and box kernels of every path against the reference, bit for bit;
+// matches on a synthetic pair shifted by a known (integer and half-pixel) disparity; bad input.
 #include "epipole/vision/sparse_stereo.hpp"
 
 #include <gtest/gtest.h>
@@ -39,6 +39,38 @@ TEST(SparseStereoKernels, HammingEqualsReference) {
   std::vector<std::uint16_t> self(1);
   kernels::hamming_ref(data.data(), data.data(), 1, self.data());
   EXPECT_EQ(self[0], 0);
+}
+
+// The 5x5 box sums at every width from the smallest with a sum to past two vectors, and a
+// camera's, over rows at odd strides and unaligned starts; entries without a sum keep their
+// value; all-255 rows give the largest sum.
+TEST(SparseStereoKernels, Box5EqualsReference) {
+  std::mt19937 rng(5);
+  for (int width = 1; width <= 48 || width == 641; width = width == 48 ? 641 : width + 1) {
+    for (const int offset : {0, 1, 3}) {
+      const int stride = width + 5;
+      std::vector<std::uint8_t> image(static_cast<std::size_t>(5 * stride + offset));
+      for (auto& b : image) b = static_cast<std::uint8_t>(rng());
+      if (width % 7 == 0) std::fill(image.begin(), image.end(), std::uint8_t{255});
+      const std::uint8_t* rows[5];
+      for (int r = 0; r < 5; ++r) rows[r] = image.data() + offset + r * stride;
+      std::vector<std::uint16_t> ref(static_cast<std::size_t>(width) + 1, 0xBEEF);
+      kernels::box5_row_ref(rows, width, ref.data());
+      EXPECT_EQ(ref[0], 0xBEEF);
+      EXPECT_EQ(ref[static_cast<std::size_t>(width) - 1], 0xBEEF);
+      if (width >= 5) {
+        EXPECT_NE(ref[2], 0xBEEF);
+        if (width % 7 == 0) {
+          EXPECT_EQ(ref[static_cast<std::size_t>(width) - 3], 25 * 255);
+        }
+      }
+      for (const SimdPath path : available_simd_paths()) {
+        std::vector<std::uint16_t> out(static_cast<std::size_t>(width) + 1, 0xBEEF);
+        kernels::box5_row_kernel(path)(rows, width, out.data());
+        ASSERT_EQ(out, ref) << to_string(path) << " width " << width << " offset " << offset;
+      }
+    }
+  }
 }
 
 // A textured scene: the left view and a right view whose pixel x shows the left's x + d

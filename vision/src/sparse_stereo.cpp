@@ -28,6 +28,20 @@ HammingKernel* hamming_kernel(SimdPath path) {
   return KernelSet<HammingKernel>{hamming_ref, hamming_neon, nullptr}.pick(path);
 }
 
+void box5_row_ref(const std::uint8_t* const* rows, int width, std::uint16_t* out) {
+  for (int x = 2; x < width - 2; ++x) {
+    int sum = 0;
+    for (int r = 0; r < 5; ++r) {
+      for (int dx = -2; dx <= 2; ++dx) sum += rows[r][x + dx];
+    }
+    out[x] = static_cast<std::uint16_t>(sum);
+  }
+}
+
+Box5RowKernel* box5_row_kernel(SimdPath path) {
+  return KernelSet<Box5RowKernel>{box5_row_ref, box5_row_neon, nullptr}.pick(path);
+}
+
 }  // namespace kernels
 
 namespace {
@@ -66,19 +80,23 @@ SparseStereoMatcher::SparseStereoMatcher(const SparseStereoConfig& config, SimdP
   require(simd_path_available(path), "kernel path ", to_string(path),
           " is not available on this CPU");
 
-  // The test pattern: offsets in -12..12, each the sum of two uniform draws in -6..6 from a
-  // fixed linear congruential generator, so every build has the same descriptor.
-  pattern_.resize(4 * kBits);
+  // The test pattern: points (x, y) with x and y in -12..12, each the sum of two uniform draws
+  // in -6..6 from a fixed linear congruential generator, so every build has the same
+  // descriptor; kept as offsets in the box sums, y * W + x.
+  pattern_.resize(2 * kBits);
   std::uint32_t state = 0x2545F491u;
   const auto draw = [&] {
     state = state * 1664525u + 1013904223u;
     return static_cast<int>((state >> 16) % 13u) - 6;
   };
-  for (std::int16_t& offset : pattern_) offset = static_cast<std::int16_t>(draw() + draw());
+  for (std::int32_t& offset : pattern_) {
+    const int x = draw() + draw();
+    const int y = draw() + draw();
+    offset = y * W + x;
+  }
 
   const auto pixels = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
   const auto corners = static_cast<std::size_t>(config.max_corners);
-  box_rows_.assign(static_cast<std::size_t>(2 * kBoxRadius + 1) * static_cast<std::size_t>(W), 0);
   distances_.assign(corners, 0);
   for (Side* side : {&left_, &right_}) {
     side->box.assign(pixels, 0);
@@ -93,8 +111,7 @@ SparseStereoMatcher::SparseStereoMatcher(const SparseStereoConfig& config, SimdP
 }
 
 std::size_t SparseStereoMatcher::working_set_bytes() const {
-  std::size_t n =
-      bytes_of(pattern_) + bytes_of(box_rows_) + bytes_of(distances_) + bytes_of(matches_);
+  std::size_t n = bytes_of(pattern_) + bytes_of(distances_) + bytes_of(matches_);
   for (const Side* side : {&left_, &right_}) {
     n += bytes_of(side->box) + bytes_of(side->descriptors) + bytes_of(side->x) + bytes_of(side->y) +
          bytes_of(side->row_start) + bytes_of(side->order) + bytes_of(side->partner);
@@ -107,29 +124,11 @@ std::size_t SparseStereoMatcher::working_set_bytes() const {
 void SparseStereoMatcher::prepare(Side& side, GrayView image, std::span<const Corner> corners) {
   const int W = config_.width;
   const int H = config_.height;
-  constexpr int kRows = 2 * kBoxRadius + 1;
-  const auto horizontal = [&](int y) {
-    const std::uint8_t* src = image.row(y);
-    std::uint16_t* out = box_rows_.data() + static_cast<std::ptrdiff_t>(y % kRows) * W;
-    int sum = 0;
-    for (int x = 0; x < kRows - 1; ++x) sum += src[x];
-    for (int x = kBoxRadius; x < W - kBoxRadius; ++x) {
-      sum += src[x + kBoxRadius];
-      out[x] = static_cast<std::uint16_t>(sum);
-      sum -= src[x - kBoxRadius];
-    }
-  };
-  for (int y = 0; y < kRows - 1; ++y) horizontal(y);
+  kernels::Box5RowKernel* const box5_row = kernels::box5_row_kernel(path_);
   for (int y = kBoxRadius; y < H - kBoxRadius; ++y) {
-    horizontal(y + kBoxRadius);
-    std::uint16_t* out = side.box.data() + static_cast<std::ptrdiff_t>(y) * W;
-    const std::uint16_t* r[kRows];
-    for (int i = 0; i < kRows; ++i) {
-      r[i] = box_rows_.data() + static_cast<std::ptrdiff_t>((y - kBoxRadius + i) % kRows) * W;
-    }
-    for (int x = kBoxRadius; x < W - kBoxRadius; ++x) {
-      out[x] = static_cast<std::uint16_t>(r[0][x] + r[1][x] + r[2][x] + r[3][x] + r[4][x]);
-    }
+    const std::uint8_t* rows[2 * kBoxRadius + 1];
+    for (int i = 0; i <= 2 * kBoxRadius; ++i) rows[i] = image.row(y - kBoxRadius + i);
+    box5_row(rows, W, side.box.data() + static_cast<std::ptrdiff_t>(y) * W);
   }
 
   // Corners with a descriptor, at most max_corners, sorted by (y, x).
@@ -159,14 +158,10 @@ void SparseStereoMatcher::prepare(Side& side, GrayView image, std::span<const Co
     ++side.row_start[static_cast<std::size_t>(c.y) + 1];
     std::uint8_t* d = side.descriptors.data() + static_cast<std::ptrdiff_t>(k) * kDescriptorBytes;
     const std::uint16_t* centre = side.box.data() + static_cast<std::ptrdiff_t>(c.y) * W + c.x;
+    const std::int32_t* o = pattern_.data();
     for (int byte = 0; byte < kDescriptorBytes; ++byte) {
       unsigned bits = 0;
-      for (int b = 0; b < 8; ++b) {
-        const std::int16_t* o = pattern_.data() + 4 * (byte * 8 + b);
-        const int p = centre[o[1] * W + o[0]];
-        const int q = centre[o[3] * W + o[2]];
-        bits |= (p < q ? 1u : 0u) << b;
-      }
+      for (int b = 0; b < 8; ++b, o += 2) bits |= (centre[o[0]] < centre[o[1]] ? 1u : 0u) << b;
       d[byte] = static_cast<std::uint8_t>(bits);
     }
     side.partner[static_cast<std::size_t>(k)] = -2;

@@ -90,8 +90,7 @@ class SparseStereoMatcher {
 
   SparseStereoConfig config_;
   SimdPath path_;
-  std::vector<std::int16_t> pattern_;    // 4 offsets (x1, y1, x2, y2) per bit
-  std::vector<std::uint16_t> box_rows_;  // 5 rows of horizontal sums
+  std::vector<std::int32_t> pattern_;  // per bit, 2 points as offsets in the box sums
   std::vector<std::uint16_t> distances_;
   Side left_, right_;
   std::vector<SparseMatch> matches_;
