@@ -150,10 +150,10 @@ void expect_same_wta(const WtaOut& out, const WtaOut& ref, const std::string& wh
 }
 
 // Three rows of aggregation: path state carried from row to row must agree too, and so must
-// each row's winners.
+// each row's winners. 64, 128 and 256 have kernels of their own (their loops unrolled).
 TEST(StereoKernels, SgmEqualsReference) {
   for (const int width : {17, 33, 70}) {
-    for (const int D : {16, 32, 48, 64}) {
+    for (const int D : {16, 32, 48, 64, 128, 256}) {
       const auto n = static_cast<std::size_t>(width);
       const std::size_t stride = static_cast<std::size_t>(D) + 32;
       struct State {
@@ -279,9 +279,10 @@ TEST(StereoKernels, BoxEqualsReference) {
 }
 
 // One row of block matching in one pass against box_columns + box_wta of the reference: the
-// columns updated, the winners.
+// columns updated, the winners (64, 128 and 256 with both rows have kernels of their own).
 TEST(StereoKernels, BmRowEqualsReference) {
-  for (const auto& [width, D] : {std::pair{17, 16}, std::pair{40, 32}, std::pair{65, 48}}) {
+  for (const auto& [width, D] : {std::pair{17, 16}, std::pair{40, 32}, std::pair{65, 48},
+                                 std::pair{70, 64}, std::pair{131, 128}, std::pair{45, 256}}) {
     const auto n = static_cast<std::size_t>(width);
     U16 base = random_u16(n * D, 900, 23);
     for (auto& v : base) v = static_cast<std::uint16_t>(v + 100);  // a leaving row never wraps

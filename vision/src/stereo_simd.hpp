@@ -11,6 +11,15 @@
 #include "stereo_kernels.hpp"
 #include "stereo_winner.hpp"
 
+// How many blocks of 16 disparities the loops over the range take at once: a whole common range
+// (kD) where there are 32 vector registers; one on ARMv7, whose 16 would spill (armhf counts:
+// SGM 587 M a pair with one, 596 M with two, 662 M with eight).
+#if defined(__arm__)
+#define EPIPOLE_UNROLL_RANGE _Pragma("GCC unroll 1")
+#else
+#define EPIPOLE_UNROLL_RANGE _Pragma("GCC unroll 8")
+#endif
+
 namespace epipole::vision::kernels {
 
 // The census of the 16 pixels from x, whose columns x - 4 .. x + 19 are readable.
@@ -114,8 +123,8 @@ void cost_row_simd(const std::uint8_t* const* left_planes, const std::uint8_t* c
 // reverse order (entry width - 1 - xr), so that pixel x's disparities d .. d + 15 meet right
 // pixels x - d .. x - d - 15 at the consecutive entries width - 1 - x + d ..: one load and store
 // a block, no shift. Entries past width - 1 (right pixels left of the image) are written and
-// never read.
-template <typename V>
+// never read. kD: the range when fixed at compile time (0: the constructor's).
+template <typename V, int kD = 0>
 class WtaPixels {
   using H = typename V::H;
 
@@ -135,14 +144,14 @@ class WtaPixels {
   // the time it takes: the caller's next sums may start from them).
   template <typename Sums>
   [[gnu::always_inline]] inline void pixel(int x, std::uint16_t* s, Sums&& sums) {
-    const int D = disparities_;
+    const int D = kD != 0 ? kD : disparities_;
     const H sixteen = V::splath(16);
     H index = V::iotah();
     H m = V::splath(kNoCost);
     H m_index = V::splath(0);
     std::uint16_t* const cost = cost_ + (width_ - 1 - x);
     std::uint16_t* const disp = disp_ + (width_ - 1 - x);
-#pragma GCC unroll 2
+    EPIPOLE_UNROLL_RANGE
     for (int d = 0; d < D; d += 16) {
       const H v = sums(d);
       m_index = V::selecth(V::gth(m, v), index, m_index);
@@ -166,6 +175,7 @@ class WtaPixels {
                                  (s[best] < limit ? 1u : 0u) +
                                  (best < D - 1 && s[best + 1] < limit ? 1u : 0u);
       H count = V::splath(0);
+      EPIPOLE_UNROLL_RANGE
       for (int d = 0; d < D; d += 16) count = V::subh(count, V::gth(l, V::loadh(s + d)));
       store_winner(row_, x, V::hsumh(count) == near ? best : -1, s, D, kNoCost);
       return;
@@ -184,6 +194,7 @@ class WtaPixels {
     if (has_above) s[best + 1] = kNoCost;
     H count = V::splath(0);
     H others = V::splath(kNoCost);
+    EPIPOLE_UNROLL_RANGE
     for (int d = 0; d < D; d += 16) {
       const H v = V::loadh(s + d);
       count = V::subh(count, V::gth(l, v));
@@ -229,12 +240,12 @@ inline typename V::B sgm_step(typename V::B c, const std::uint8_t* p, typename V
 }
 
 // The first of an SGM row's two passes: right to left, with the three paths from the previous
-// row, the sums of four paths into r.sums.
-template <typename V>
+// row, the sums of four paths into r.sums. kD: the range when fixed at compile time (0: r's).
+template <typename V, int kD = 0>
 void sgm_first_pass_simd(const SgmRow& r) {
   using B = typename V::B;
   using H = typename V::H;
-  const int D = r.disparities;
+  const int D = kD != 0 ? kD : r.disparities;
   const int width = r.width;
   const B p1 = V::splatb(static_cast<std::uint8_t>(r.p1));
   const B p2 = V::splatb(static_cast<std::uint8_t>(r.p2));
@@ -278,6 +289,7 @@ void sgm_first_pass_simd(const SgmRow& r) {
     }
     mins[3] = V::splatb(0xFF);
     const B h_p2 = V::addsb(h_prev, p2);
+    EPIPOLE_UNROLL_RANGE
     for (int d = 0; d < D; d += 16) {
       const B c_d = V::loadb(c + d);
       const B rl = sgm_step<V>(c_d, h[0] + d, p1, h_p2, h_prev);
@@ -301,12 +313,12 @@ void sgm_first_pass_simd(const SgmRow& r) {
 }
 
 // The second pass: left to right, the fifth path added to the sums, then the winner of each
-// pixel.
-template <typename V>
+// pixel. kD as in sgm_first_pass_simd.
+template <typename V, int kD = 0>
 void sgm_second_pass_simd(const SgmRow& r) {
   using B = typename V::B;
   using H = typename V::H;
-  const int D = r.disparities;
+  const int D = kD != 0 ? kD : r.disparities;
   const int width = r.width;
   const B p1 = V::splatb(static_cast<std::uint8_t>(r.p1));
   const B p2 = V::splatb(static_cast<std::uint8_t>(r.p2));
@@ -314,7 +326,7 @@ void sgm_second_pass_simd(const SgmRow& r) {
   std::uint16_t* const sums = r.sums;
   std::uint8_t* h[2];
   sgm_horizontal_rows(r, h);
-  WtaPixels<V> wta(r.wta, width, D);
+  WtaPixels<V, kD> wta(r.wta, width, D);
   B h_prev = V::zerob();
   for (int x = 0; x < width; ++x) {
     const std::uint8_t* c = cost + static_cast<std::ptrdiff_t>(x) * D;
@@ -335,10 +347,25 @@ void sgm_second_pass_simd(const SgmRow& r) {
   wta.finish();
 }
 
+template <typename V, int kD>
+void sgm_row_fixed(const SgmRow& r) {
+  sgm_first_pass_simd<V, kD>(r);
+  sgm_second_pass_simd<V, kD>(r);
+}
+
+// The common ranges with their loops' trip counts known to the compiler.
 template <typename V>
 void sgm_row_simd(const SgmRow& r) {
-  sgm_first_pass_simd<V>(r);
-  sgm_second_pass_simd<V>(r);
+  switch (r.disparities) {
+    case 64:
+      return sgm_row_fixed<V, 64>(r);
+    case 128:
+      return sgm_row_fixed<V, 128>(r);
+    case 256:
+      return sgm_row_fixed<V, 256>(r);
+    default:
+      return sgm_row_fixed<V, 0>(r);
+  }
 }
 
 template <typename V>
@@ -378,11 +405,11 @@ template <typename V, bool kEnters, bool kLeaves>
 
 // One row of block matching in one sweep: column x + r updated just before the box of x needs
 // it, the box of x from the box of x - 1, its winner.
-template <typename V, bool kEnters, bool kLeaves>
+template <typename V, bool kEnters, bool kLeaves, int kD = 0>
 void bm_row_sweep(const BmRow& r) {
   using H = typename V::H;
   const int W = r.width;
-  const int D = r.disparities;
+  const int D = kD != 0 ? kD : r.disparities;
   const int R = r.radius;
   std::uint16_t* const sums = r.sums;
   const auto offset = [D](int c) { return static_cast<std::ptrdiff_t>(c) * D; };
@@ -393,7 +420,7 @@ void bm_row_sweep(const BmRow& r) {
   const auto update = [&](int c, int d) {
     return bm_column<V, kEnters, kLeaves>(r.columns + offset(c), entering_at(c), leaving_at(c), d);
   };
-  WtaPixels<V> wta(r.wta, W, D);
+  WtaPixels<V, kD> wta(r.wta, W, D);
   // x = 0: columns 0..R.
   for (int c = 0; c < R; ++c) {
     for (int d = 0; d < D; d += 16) update(c, d);
@@ -434,6 +461,20 @@ void bm_row_sweep(const BmRow& r) {
 
 template <typename V>
 void bm_row_simd(const BmRow& r) {
+  // The rows inside the image, each with a row entering the box and one leaving it: the common
+  // ranges with their loops' trip counts known to the compiler.
+  if (r.entering != nullptr && r.leaving != nullptr) {
+    switch (r.disparities) {
+      case 64:
+        return bm_row_sweep<V, true, true, 64>(r);
+      case 128:
+        return bm_row_sweep<V, true, true, 128>(r);
+      case 256:
+        return bm_row_sweep<V, true, true, 256>(r);
+      default:
+        return bm_row_sweep<V, true, true>(r);
+    }
+  }
   if (r.entering != nullptr) {
     r.leaving != nullptr ? bm_row_sweep<V, true, true>(r) : bm_row_sweep<V, true, false>(r);
   } else {
