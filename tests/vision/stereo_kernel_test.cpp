@@ -85,10 +85,11 @@ INSTANTIATE_TEST_SUITE_P(Sizes, StereoCensus,
                                            CensusCase{40, 11, 5, 3}, CensusCase{77, 10, 1, 7},
                                            CensusCase{129, 12, 0, 5}));
 
-// Census planes at odd offsets inside larger buffers, so loads are unaligned.
+// Census planes at odd offsets inside larger buffers, so loads are unaligned. 64, 128 and 256
+// have kernels of their own, for the pixels whose range lies inside the image.
 TEST(StereoKernels, CostEqualsReference) {
-  for (const int width : {17, 40, 65}) {
-    for (const int D : {16, 32, 48}) {
+  for (const int width : {17, 40, 65, 300}) {
+    for (const int D : {16, 32, 48, 64, 128, 256}) {
       const auto n = static_cast<std::size_t>(width);
       const U8 left = random_u8(4 * n + 3, 255, 1);
       U8 right = random_u8(4 * (n + D) + 5, 255, 3);

@@ -85,10 +85,11 @@ inline typename V::B census_distance(const typename V::B* left, const std::uint8
 }
 
 // Row costs, pixel by pixel: the blocks of 16 disparities inside the image first, then those
-// that reach beyond its left border (d > x), which cost the most there.
-template <typename V>
-void cost_row_simd(const std::uint8_t* const* left_planes, const std::uint8_t* const* right_planes,
-                   int width, int disparities, std::uint8_t* cost) {
+// that reach beyond its left border (d > x), which cost the most there. kD: the range when
+// fixed at compile time (0: disparities).
+template <typename V, int kD = 0>
+void cost_row_range(const std::uint8_t* const* left_planes, const std::uint8_t* const* right_planes,
+                    int width, int disparities, std::uint8_t* cost) {
   using B = typename V::B;
   // The planes in locals: the byte stores into `cost` may alias what the arguments point to,
   // and the compiler would load them again after each one.
@@ -107,6 +108,11 @@ void cost_row_simd(const std::uint8_t* const* left_planes, const std::uint8_t* c
     const std::ptrdiff_t k = width - 1 - x;
     std::uint8_t* out = cost + static_cast<std::ptrdiff_t>(x) * disparities;
     // Block d lies inside when its last disparity does: d + 15 <= x.
+    if (kD != 0 && x >= kD - 1) {
+      EPIPOLE_UNROLL_RANGE
+      for (int d = 0; d < kD; d += 16) V::storeb(out + d, census_distance<V>(l, right, k + d));
+      continue;
+    }
     const int inside = x < 15 ? 0 : std::min(disparities, (x - 15) / 16 * 16 + 16);
     int d = 0;
     for (; d < inside; d += 16) V::storeb(out + d, census_distance<V>(l, right, k + d));
@@ -115,6 +121,21 @@ void cost_row_simd(const std::uint8_t* const* left_planes, const std::uint8_t* c
                               V::splatb(static_cast<std::uint8_t>(x)));
       V::storeb(out + d, V::maxb(census_distance<V>(l, right, k + d), V::andb(beyond, max_cost)));
     }
+  }
+}
+
+template <typename V>
+void cost_row_simd(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
+                   int disparities, std::uint8_t* cost) {
+  switch (disparities) {
+    case 64:
+      return cost_row_range<V, 64>(left, right, width, disparities, cost);
+    case 128:
+      return cost_row_range<V, 128>(left, right, width, disparities, cost);
+    case 256:
+      return cost_row_range<V, 256>(left, right, width, disparities, cost);
+    default:
+      return cost_row_range<V>(left, right, width, disparities, cost);
   }
 }
 
