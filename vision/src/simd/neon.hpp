@@ -123,8 +123,9 @@ struct Neon {
     return vld1q_u8(kIota);
   }
   // acc with `bit` set in the lanes where a > c.
+  // acc with the bits of `bit` set where a > c (they must be clear in acc): one BIT.
   static B set_if_greater(B acc, B a, B c, B bit) {
-    return vorrq_u8(acc, vandq_u8(vcgtq_u8(a, c), bit));
+    return vbslq_u8(bit, vcgtq_u8(a, c), acc);
   }
   // Per lane: popcount(a) + popcount(b) + popcount(c) + popcount(d).
   static B popcount4(B a, B b, B c, B d) {
