@@ -68,6 +68,8 @@ DepthCells::DepthCells(const DepthCellsConfig& config, const calib::Triangulator
   histogram_.assign(cells * static_cast<std::size_t>(config.max_disparity), 0);
   sums_.assign(histogram_.size(), 0);
   cell_pixels_.assign(cells, 0);
+  column_pixels_.assign(static_cast<std::size_t>(config.columns), 0);
+  for (const std::uint8_t c : horizontal_.cell_of) ++column_pixels_[c];
 }
 
 double DepthCells::column_centre_deg(int column) const {
@@ -76,7 +78,7 @@ double DepthCells::column_centre_deg(int column) const {
 
 std::size_t DepthCells::working_set_bytes() const {
   return horizontal_.cell_of.size() + vertical_.cell_of.size() + histogram_.size() * 4 +
-         sums_.size() * sizeof(std::uint64_t) + cell_pixels_.size() * 4;
+         sums_.size() * sizeof(std::uint64_t) + cell_pixels_.size() * 4 + column_pixels_.size() * 4;
 }
 
 void DepthCells::measure(ImageView<const std::int16_t> disparity,
@@ -101,15 +103,20 @@ void DepthCells::measure(ImageView<const std::int16_t> disparity,
     const std::uint8_t* trust = trusted_only ? confidence.row(y) : nullptr;
     const int first_cell =
         vertical_.cell_of[static_cast<std::size_t>(y - band_first_)] * config_.columns;
+    for (int k = 0; k < config_.columns; ++k) {
+      cell_pixels_[static_cast<std::size_t>(first_cell + k)] +=
+          column_pixels_[static_cast<std::size_t>(k)];
+    }
     for (int x = 0; x < config_.width; ++x) {
-      const int c = first_cell + horizontal_.cell_of[static_cast<std::size_t>(x)];
-      ++cell_pixels_[static_cast<std::size_t>(c)];
-      const int d = row[x] / vision::kDisparityScale;
-      if (row[x] <= 0 || d >= D) continue;
+      const int v = row[x];
+      if (v <= 0) continue;
+      const int d = v / vision::kDisparityScale;
+      if (d >= D) continue;
       if (trust != nullptr && trust[x] < config_.min_confidence) continue;
+      const int c = first_cell + horizontal_.cell_of[static_cast<std::size_t>(x)];
       const auto bin = static_cast<std::size_t>(c * D + d);
       ++histogram_[bin];
-      sums_[bin] += static_cast<std::uint64_t>(row[x]);
+      sums_[bin] += static_cast<std::uint64_t>(v);
     }
   }
   for (std::size_t c = 0; c < cells; ++c) {

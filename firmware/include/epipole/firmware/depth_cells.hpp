@@ -83,6 +83,7 @@ class DepthCells {
   std::vector<std::uint64_t> sums_;       // and the sums of their disparities x16 (a 1x1 grid of a
                                           // large image overflows 32 bits in one bin)
   std::vector<std::uint32_t> cell_pixels_;
+  std::vector<std::uint32_t> column_pixels_;  // per column of cells: its pixels in one row
 };
 
 }  // namespace epipole::firmware
