@@ -88,8 +88,8 @@ SceneMats scene_mats(const std::string& name) {
 
 // The quality mode and SGBM with one range (128, the simulated board's) on each scene: the
 // figures of docs/vision.md, the baseline that they do not get worse, and the issue of depth
-// quality's aim on every scene for the configuration the boards ship (occlusions filled): at
-// most 0.8x SGBM's bad2 with at least its density.
+// quality's aim on every scene for the simulated board's configuration (SGM, 128 disparities,
+// occlusions filled): at most 0.8x SGBM's bad2 with at least its density.
 TEST(SyntheticStereo, QualityModeBesideSgbmOnEveryScene) {
   constexpr int kDisparities = 128;
   for (const std::string& name : test::synthetic_scene_names()) {

@@ -153,7 +153,7 @@ void expect_same_wta(const WtaOut& out, const WtaOut& ref, const std::string& wh
 // Three rows of aggregation: path state carried from row to row must agree too, and so must
 // each row's winners. 64, 128 and 256 have kernels of their own (their loops unrolled).
 TEST(StereoKernels, SgmEqualsReference) {
-  for (const int width : {17, 33, 70}) {
+  for (const int width : {17, 33, 70, 300}) {
     for (const int D : {16, 32, 48, 64, 128, 256}) {
       const auto n = static_cast<std::size_t>(width);
       const std::size_t stride = static_cast<std::size_t>(D) + 32;
@@ -282,8 +282,9 @@ TEST(StereoKernels, BoxEqualsReference) {
 // One row of block matching in one pass against box_columns + box_wta of the reference: the
 // columns updated, the winners (64, 128 and 256 with both rows have kernels of their own).
 TEST(StereoKernels, BmRowEqualsReference) {
-  for (const auto& [width, D] : {std::pair{17, 16}, std::pair{40, 32}, std::pair{65, 48},
-                                 std::pair{70, 64}, std::pair{131, 128}, std::pair{45, 256}}) {
+  for (const auto& [width, D] :
+       {std::pair{17, 16}, std::pair{40, 32}, std::pair{65, 48}, std::pair{70, 64},
+        std::pair{131, 128}, std::pair{45, 256}, std::pair{300, 128}, std::pair{300, 256}}) {
     const auto n = static_cast<std::size_t>(width);
     U16 base = random_u16(n * D, 900, 23);
     for (auto& v : base) v = static_cast<std::uint16_t>(v + 100);  // a leaving row never wraps
@@ -292,19 +293,21 @@ TEST(StereoKernels, BmRowEqualsReference) {
       for (const int radius : {1, 3, 10}) {
         for (const bool enters : {false, true}) {
           for (const bool leaves : {false, true}) {
-            const auto run = [&](kernels::BmRowKernel* kernel, U16& columns, WtaOut& out) {
-              U16 sums(n * D, 3);
-              kernel({enters ? entering.data() : nullptr, leaves ? leaving.data() : nullptr,
-                      columns.data(), width, D, radius, sums.data(), out.row(10)});
-            };
-            U16 ref_columns = base, columns = base;
-            WtaOut ref(n, D), out(n, D, enters != leaves);
-            run(kernels::bm_row_ref, ref_columns, ref);
-            run(kernels::stereo_kernels(path).bm, columns, out);
-            const std::string where = cat(to_string(path), " width ", width, " radius ", radius,
-                                          " enters ", enters, " leaves ", leaves);
-            ASSERT_EQ(columns, ref_columns) << where;
-            expect_same_wta(out, ref, where);
+            for (const bool confidence : {false, true}) {
+              const auto run = [&](kernels::BmRowKernel* kernel, U16& columns, WtaOut& out) {
+                U16 sums(n * D, 3);
+                kernel({enters ? entering.data() : nullptr, leaves ? leaving.data() : nullptr,
+                        columns.data(), width, D, radius, sums.data(), out.row(10)});
+              };
+              U16 ref_columns = base, columns = base;
+              WtaOut ref(n, D), out(n, D, confidence);
+              run(kernels::bm_row_ref, ref_columns, ref);
+              run(kernels::stereo_kernels(path).bm, columns, out);
+              const std::string where = cat(to_string(path), " width ", width, " radius ", radius,
+                                            " enters ", enters, " leaves ", leaves);
+              ASSERT_EQ(columns, ref_columns) << where;
+              expect_same_wta(out, ref, where);
+            }
           }
         }
       }

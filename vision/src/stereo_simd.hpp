@@ -11,9 +11,10 @@
 #include "stereo_kernels.hpp"
 #include "stereo_winner.hpp"
 
-// How many blocks of 16 disparities the loops over the range take at once: a whole common range
-// (kD) where there are 32 vector registers; one on ARMv7, whose 16 would spill (armhf counts:
-// SGM 587 M a pair with one, 596 M with two, 662 M with eight).
+// How many blocks of 16 disparities the loops over the range take at once: eight (a range of
+// 128 whole, as kD lets the compiler see) where there are 32 vector registers; one on ARMv7,
+// whose 16 would spill (armhf counts: SGM 587 M a pair with one, 596 M with two, 662 M with
+// eight).
 #if defined(__arm__)
 #define EPIPOLE_UNROLL_RANGE _Pragma("GCC unroll 1")
 #else
@@ -144,7 +145,9 @@ void cost_row_simd(const std::uint8_t* const* left, const std::uint8_t* const* r
 // reverse order (entry width - 1 - xr), so that pixel x's disparities d .. d + 15 meet right
 // pixels x - d .. x - d - 15 at the consecutive entries width - 1 - x + d ..: one load and store
 // a block, no shift. Entries past width - 1 (right pixels left of the image) are written and
-// never read. kD: the range when fixed at compile time (0: the constructor's).
+// never read. The disparities need no first value: every sum is below kNoCost (SGM's at most
+// 5 * 255, BM's 21 * 21 * 31), so a right pixel's first candidate, at d = 0, replaces its
+// kNoCost. kD: the range when fixed at compile time (0: the constructor's).
 template <typename V, int kD = 0>
 class WtaPixels {
   using H = typename V::H;
@@ -497,7 +500,7 @@ void bm_row_simd(const BmRow& r) {
     }
   }
   if (r.entering != nullptr) {
-    r.leaving != nullptr ? bm_row_sweep<V, true, true>(r) : bm_row_sweep<V, true, false>(r);
+    bm_row_sweep<V, true, false>(r);
   } else {
     r.leaving != nullptr ? bm_row_sweep<V, false, true>(r) : bm_row_sweep<V, false, false>(r);
   }

@@ -122,8 +122,8 @@ struct Neon {
                                                8, 9, 10, 11, 12, 13, 14, 15};
     return vld1q_u8(kIota);
   }
-  // acc with `bit` set in the lanes where a > c.
-  // acc with the bits of `bit` set where a > c (they must be clear in acc): one BIT.
+  // acc with the bits of `bit` set where a > c (they must be clear in acc, as the census's are:
+  // each set once in a vector that starts at zero): one BIT.
   static B set_if_greater(B acc, B a, B c, B bit) {
     return vbslq_u8(bit, vcgtq_u8(a, c), acc);
   }
