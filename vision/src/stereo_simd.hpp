@@ -436,7 +436,7 @@ void bm_row_sweep(const BmRow& r) {
   const int D = kD != 0 ? kD : r.disparities;
   const int R = r.radius;
   std::uint16_t* const sums = r.sums;
-  const auto offset = [D](int c) { return static_cast<std::ptrdiff_t>(c) * D; };
+  const auto offset = [&](int c) { return static_cast<std::ptrdiff_t>(c) * D; };
   // The entering and leaving costs of column c (null when there is no such row).
   const auto entering_at = [&](int c) { return kEnters ? r.entering + offset(c) : nullptr; };
   const auto leaving_at = [&](int c) { return kLeaves ? r.leaving + offset(c) : nullptr; };
