@@ -6,6 +6,7 @@
 // bytes, sums in 16-bit lanes.
 #include <algorithm>
 #include <cstdint>
+#include <type_traits>
 
 #include "stereo_census.hpp"
 #include "stereo_kernels.hpp"
@@ -22,6 +23,23 @@
 #endif
 
 namespace epipole::vision::kernels {
+
+// Calls run(std::integral_constant<int, kD>) with kD the range when it is one of the common ones
+// (64, 128, 256), which have kernels of their own with their loops' trip counts known to the
+// compiler, and 0 (the range read at run time) otherwise.
+template <typename Run>
+void with_common_range(int disparities, Run&& run) {
+  switch (disparities) {
+    case 64:
+      return run(std::integral_constant<int, 64>{});
+    case 128:
+      return run(std::integral_constant<int, 128>{});
+    case 256:
+      return run(std::integral_constant<int, 256>{});
+    default:
+      return run(std::integral_constant<int, 0>{});
+  }
+}
 
 // The census of the 16 pixels from x, whose columns x - 4 .. x + 19 are readable.
 template <typename V>
@@ -128,16 +146,9 @@ void cost_row_range(const std::uint8_t* const* left_planes, const std::uint8_t* 
 template <typename V>
 void cost_row_simd(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
                    int disparities, std::uint8_t* cost) {
-  switch (disparities) {
-    case 64:
-      return cost_row_range<V, 64>(left, right, width, disparities, cost);
-    case 128:
-      return cost_row_range<V, 128>(left, right, width, disparities, cost);
-    case 256:
-      return cost_row_range<V, 256>(left, right, width, disparities, cost);
-    default:
-      return cost_row_range<V>(left, right, width, disparities, cost);
-  }
+  with_common_range(disparities, [&](auto range) {
+    cost_row_range<V, range.value>(left, right, width, disparities, cost);
+  });
 }
 
 // Winner take all, one pixel at a time in increasing x (wta_row_ref defines the result).
@@ -377,19 +388,9 @@ void sgm_row_fixed(const SgmRow& r) {
   sgm_second_pass_simd<V, kD>(r);
 }
 
-// The common ranges with their loops' trip counts known to the compiler.
 template <typename V>
 void sgm_row_simd(const SgmRow& r) {
-  switch (r.disparities) {
-    case 64:
-      return sgm_row_fixed<V, 64>(r);
-    case 128:
-      return sgm_row_fixed<V, 128>(r);
-    case 256:
-      return sgm_row_fixed<V, 256>(r);
-    default:
-      return sgm_row_fixed<V, 0>(r);
-  }
+  with_common_range(r.disparities, [&](auto range) { sgm_row_fixed<V, range.value>(r); });
 }
 
 template <typename V>
@@ -488,16 +489,9 @@ void bm_row_simd(const BmRow& r) {
   // The rows inside the image, each with a row entering the box and one leaving it: the common
   // ranges with their loops' trip counts known to the compiler.
   if (r.entering != nullptr && r.leaving != nullptr) {
-    switch (r.disparities) {
-      case 64:
-        return bm_row_sweep<V, true, true, 64>(r);
-      case 128:
-        return bm_row_sweep<V, true, true, 128>(r);
-      case 256:
-        return bm_row_sweep<V, true, true, 256>(r);
-      default:
-        return bm_row_sweep<V, true, true>(r);
-    }
+    with_common_range(r.disparities,
+                      [&](auto range) { bm_row_sweep<V, true, true, range.value>(r); });
+    return;
   }
   if (r.entering != nullptr) {
     bm_row_sweep<V, true, false>(r);
