@@ -1,5 +1,5 @@
 // The stereo kernels with AVX2, 16 disparities at a time (bytes in SSE registers, 16-bit sums
-// in AVX registers): the generic kernels of stereo_simd.hpp; the cost row and SGM's first pass
+// in AVX registers): the generic kernels of stereo_simd.hpp; the cost row and SGM's path steps
 // 32 disparities at a time in AVX registers (x86 hosts only).
 #include "simd/avx2.hpp"
 #include "stereo_simd.hpp"
@@ -64,12 +64,17 @@ void store32(void* p, __m256i v) {
   _mm256_storeu_si256(reinterpret_cast<__m256i*>(p), v);
 }
 
-// sgm_step (stereo_simd.hpp) for 32 disparities.
-__m256i sgm_step32(__m256i c, const std::uint8_t* p, __m256i p1, __m256i min_p2, __m256i min_prev) {
-  const __m256i best =
-      _mm256_min_epu8(_mm256_min_epu8(load32(p), min_p2),
-                      _mm256_adds_epu8(_mm256_min_epu8(load32(p - 1), load32(p + 1)), p1));
-  return _mm256_add_epi8(_mm256_sub_epi8(best, min_prev), c);
+// sgm_step (stereo_simd.hpp) for 32 disparities, with min_prev subtracted before the minimum
+// rather than after it: min(p[d] - m, min(p[d - 1], p[d + 1]) - m + P1, P2) + c, m = min_prev.
+// The same bytes: every path value is at least m (the pads too), so the differences are exact,
+// and where a saturating add of the original would saturate, its term is at least p[d] - m here
+// as there and is not the minimum. P2 is one constant for every path, which leaves registers
+// for the loop (16 on AVX2: the per-path min_prev + P2 spilled).
+__m256i sgm_step32(__m256i c, const std::uint8_t* p, __m256i p1, __m256i p2, __m256i min_prev) {
+  const __m256i side = _mm256_min_epu8(load32(p - 1), load32(p + 1));
+  const __m256i best = _mm256_min_epu8(_mm256_min_epu8(_mm256_sub_epi8(load32(p), min_prev), p2),
+                                       _mm256_adds_epu8(_mm256_sub_epi8(side, min_prev), p1));
+  return _mm256_add_epi8(best, c);
 }
 
 std::uint8_t hmin32(__m256i v) {
@@ -77,13 +82,29 @@ std::uint8_t hmin32(__m256i v) {
       _mm_min_epu8(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1)));
 }
 
+// The smallest byte of each of a, b, c and d, in bytes 0, 1, 2 and 3: interleaved and halved,
+// so that the four reductions share their steps.
+std::uint32_t hmin32x4(__m256i a, __m256i b, __m256i c, __m256i d) {
+  const __m256i ab = _mm256_min_epu8(_mm256_unpacklo_epi8(a, b), _mm256_unpackhi_epi8(a, b));
+  const __m256i cd = _mm256_min_epu8(_mm256_unpacklo_epi8(c, d), _mm256_unpackhi_epi8(c, d));
+  const __m256i abcd =
+      _mm256_min_epu8(_mm256_unpacklo_epi16(ab, cd), _mm256_unpackhi_epi16(ab, cd));
+  __m128i v = _mm_min_epu8(_mm256_castsi256_si128(abcd), _mm256_extracti128_si256(abcd, 1));
+  v = _mm_min_epu8(v, _mm_srli_si128(v, 8));
+  v = _mm_min_epu8(v, _mm_srli_si128(v, 4));
+  return static_cast<std::uint32_t>(_mm_cvtsi128_si32(v));
+}
+
 // sgm_first_pass_simd for a range that is a multiple of 32: the same steps, 32 lanes at a time.
 // The four paths' bytes are added in 16 bits two at a time: interleaved, then multiplied by 1
 // and added pairwise (maddubs), which leaves disparities 0..7 and 16..23 in one register and
-// 8..15 and 24..31 in the other until the halves are swapped back.
+// 8..15 and 24..31 in the other until the halves are swapped back. kD: the range when fixed at
+// compile time (0: r's).
+template <int kD>
 void sgm_first_pass_avx2(const SgmRow& r) {
-  const int D = r.disparities;
+  const int D = kD != 0 ? kD : r.disparities;
   const __m256i p1 = _mm256_set1_epi8(static_cast<char>(r.p1));
+  const __m256i p2 = _mm256_set1_epi8(static_cast<char>(r.p2));
   const __m256i ones = _mm256_set1_epi8(1);
   const auto splat = [](int v) { return _mm256_set1_epi8(static_cast<char>(v)); };
   std::uint8_t* h[2];
@@ -95,26 +116,23 @@ void sgm_first_pass_avx2(const SgmRow& r) {
     const std::uint8_t* const* p = paths.prev;
     std::uint8_t* const* q = paths.cur;
     __m256i min_prev[3];
-    __m256i min_p2[3];
     __m256i mins[4];
     for (int k = 0; k < 3; ++k) {
       min_prev[k] = splat(paths.prev_min[k]);
-      min_p2[k] = splat(sgm_plus_p2(paths.prev_min[k], r.p2));
       mins[k] = splat(0xFF);
     }
     mins[3] = splat(0xFF);
     const __m256i h_prev = splat(h_min);
-    const __m256i h_p2 = splat(sgm_plus_p2(h_min, r.p2));
     std::uint16_t* s = r.sums + static_cast<std::ptrdiff_t>(x) * D;
     for (int d = 0; d < D; d += 32) {
       const __m256i cost = load32(c + d);
-      const __m256i rl = sgm_step32(cost, h[0] + d, p1, h_p2, h_prev);
+      const __m256i rl = sgm_step32(cost, h[0] + d, p1, p2, h_prev);
       store32(h[1] + d, rl);
       mins[3] = _mm256_min_epu8(mins[3], rl);
       __m256i v[3];
 #pragma GCC unroll 3
       for (int k = 0; k < 3; ++k) {
-        v[k] = sgm_step32(cost, p[k] + d, p1, min_p2[k], min_prev[k]);
+        v[k] = sgm_step32(cost, p[k] + d, p1, p2, min_prev[k]);
         store32(q[k] + d, v[k]);
         mins[k] = _mm256_min_epu8(mins[k], v[k]);
       }
@@ -130,19 +148,63 @@ void sgm_first_pass_avx2(const SgmRow& r) {
       store32(s + d, _mm256_permute2x128_si256(low, high, 0x20));
       store32(s + d + 16, _mm256_permute2x128_si256(low, high, 0x31));
     }
-    for (int k = 0; k < 3; ++k) r.cur_min[k][x + 1] = hmin32(mins[k]);
-    h_min = hmin32(mins[3]);
+    const std::uint32_t minima = hmin32x4(mins[0], mins[1], mins[2], mins[3]);
+    for (int k = 0; k < 3; ++k) r.cur_min[k][x + 1] = static_cast<std::uint8_t>(minima >> (8 * k));
+    h_min = static_cast<int>(minima >> 24);
     std::swap(h[0], h[1]);
   }
 }
 
-void sgm_row_avx2(const SgmRow& r) {
-  if (r.disparities % 32 == 0) {
-    sgm_first_pass_avx2(r);
-  } else {
-    sgm_first_pass_simd<simd::Avx2x16>(r);
+// sgm_second_pass_simd for a range that is a multiple of 32: the path step 32 lanes at a time,
+// the sums and the winner 16 at a time as there.
+template <int kD>
+void sgm_second_pass_avx2(const SgmRow& r) {
+  using V = simd::Avx2x16;
+  const int D = kD != 0 ? kD : r.disparities;
+  const int width = r.width;
+  const __m256i p1 = _mm256_set1_epi8(static_cast<char>(r.p1));
+  const __m256i p2 = _mm256_set1_epi8(static_cast<char>(r.p2));
+  const std::uint8_t* const cost = r.cost;  // in locals: see sgm_first_pass_simd
+  std::uint16_t* const sums = r.sums;
+  std::uint8_t* h[2];
+  sgm_horizontal_rows(r, h);
+  WtaPixels<V, kD> wta(r.wta, width, D);
+  __m256i h_prev = _mm256_setzero_si256();
+  for (int x = 0; x < width; ++x) {
+    const std::uint8_t* c = cost + static_cast<std::ptrdiff_t>(x) * D;
+    std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
+    __m256i m = _mm256_set1_epi8(-1);
+    __m256i step = _mm256_setzero_si256();  // disparities d & ~31 ..
+    wta.pixel(x, s, [&](int d) {
+      __m128i half;
+      if (d % 32 == 0) {
+        step = sgm_step32(load32(c + d), h[0] + d, p1, p2, h_prev);
+        store32(h[1] + d, step);
+        m = _mm256_min_epu8(m, step);
+        half = _mm256_castsi256_si128(step);
+      } else {
+        half = _mm256_extracti128_si256(step, 1);
+      }
+      const V::H sum = V::addw(V::loadh(s + d), half);
+      V::storeh(s + d, sum);
+      return sum;
+    });
+    h_prev = _mm256_set1_epi8(static_cast<char>(hmin32(m)));
+    std::swap(h[0], h[1]);
   }
-  sgm_second_pass_simd<simd::Avx2x16>(r);
+  wta.finish();
+}
+
+void sgm_row_avx2(const SgmRow& r) {
+  with_common_range(r.disparities, [&](auto range) {
+    if (r.disparities % 32 == 0) {
+      sgm_first_pass_avx2<range.value>(r);
+      sgm_second_pass_avx2<range.value>(r);
+    } else {
+      sgm_first_pass_simd<simd::Avx2x16, range.value>(r);
+      sgm_second_pass_simd<simd::Avx2x16, range.value>(r);
+    }
+  });
 }
 
 }  // namespace
