@@ -301,8 +301,7 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
   padded_.assign(padded, kInvalidDisparity);
   disparity_ = ImageView<std::int16_t>(padded_.data() + W + 3, W, H, W + 2);
   if (config.speckle_size > 0) {
-    runs_.assign(uw * static_cast<std::size_t>(H), 0);  // at most one run per pixel
-    labels_.assign(2 * uw, 0);
+    speckles_ = std::make_unique<SpeckleFilter>(W, H, config.speckle_size, config.speckle_range);
   }
   if (config.confidence) confidence_ = Image<std::uint8_t>(W, H);
   if (config.spatial_percent > 0) {
@@ -318,7 +317,8 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
 StereoMatcher::~StereoMatcher() = default;
 
 std::size_t StereoMatcher::working_set_bytes() const {
-  std::size_t n = bytes_of(padded_) + bytes_of(runs_) + bytes_of(labels_);
+  std::size_t n = bytes_of(padded_);
+  if (speckles_) n += speckles_->working_set_bytes();
   for (const auto& w : workers_) n += w->bytes();
   if (spatial_) n += spatial_->working_set_bytes();
   if (temporal_) n += temporal_->working_set_bytes();
@@ -344,7 +344,7 @@ int StereoMatcher::start(GrayView left, GrayView right) {
 }
 
 ImageView<const std::int16_t> StereoMatcher::finish() {
-  if (config_.speckle_size > 0) remove_speckles();
+  if (speckles_) speckles_->apply(disparity_, path_);
   if (!confidence_.empty()) {
     // What the left-right check refused and the speckles removed have no confidence either;
     // the holes filled next keep none.
@@ -508,73 +508,6 @@ void StereoMatcher::bm_stripe(Worker& w, int y0, int y1) {
     if (y - r - 1 >= first) row.leaving = ring_row(y - r - 1);
     w.kernels.bm(row);
     check_row(config_, w, disparity_.row(y));
-  }
-}
-
-void StereoMatcher::remove_speckles() {
-  // Regions are 4-connected between valid neighbours at most speckle_range pixels apart. Each
-  // row is cut into runs of such horizontal neighbours; a run joins the runs above it where a
-  // pixel and the one above it are neighbours (union-find on runs, sizes at the roots); then
-  // the same runs, found again, are invalidated where their region is small.
-  const int W = config_.width;
-  const int H = config_.height;
-  const int range = config_.speckle_range * kDisparityScale;
-  const auto near = [range](int a, int b) { return std::abs(a - b) <= range; };
-  // Calls run(begin, end) for each run of row d, in order.
-  const auto for_each_run = [&](const std::int16_t* d, auto&& run) {
-    for (int x = 0; x < W;) {
-      if (d[x] < 0) {
-        ++x;
-        continue;
-      }
-      const int begin = x;
-      for (++x; x < W && d[x] >= 0 && near(d[x], d[x - 1]);) ++x;
-      run(begin, x);
-    }
-  };
-  std::int32_t* const node = runs_.data();
-  const auto find = [node](std::int32_t i) {
-    while (node[i] >= 0) {
-      if (node[node[i]] >= 0) node[i] = node[node[i]];
-      i = node[i];
-    }
-    return i;
-  };
-  std::int32_t count = 0;
-  std::uint32_t* labels = labels_.data();
-  std::uint32_t* above = labels_.data() + W;
-  for (int y = 0; y < H; ++y) {
-    const std::int16_t* d = disparity_.row(y);
-    for_each_run(d, [&](int begin, int end) {
-      node[count] = begin - end;
-      std::fill(labels + begin, labels + end, static_cast<std::uint32_t>(count));
-      ++count;
-    });
-    if (y > 0) {
-      const std::int16_t* u = disparity_.row(y - 1);
-      std::uint32_t last_a = 0xFFFFFFFF;
-      std::uint32_t last_b = 0xFFFFFFFF;
-      for (int x = 0; x < W; ++x) {
-        if (d[x] < 0 || u[x] < 0 || !near(d[x], u[x])) continue;
-        if (labels[x] == last_a && above[x] == last_b) continue;  // the same two runs again
-        last_a = labels[x];
-        last_b = above[x];
-        const std::int32_t a = find(static_cast<std::int32_t>(last_a));
-        const std::int32_t b = find(static_cast<std::int32_t>(last_b));
-        if (a == b) continue;
-        const auto [big, small] = node[a] <= node[b] ? std::pair{a, b} : std::pair{b, a};
-        node[big] += node[small];
-        node[small] = big;
-      }
-    }
-    std::swap(labels, above);
-  }
-  std::int32_t i = 0;
-  for (int y = 0; y < H; ++y) {
-    std::int16_t* d = disparity_.row(y);
-    for_each_run(d, [&](int begin, int end) {
-      if (-node[find(i++)] < config_.speckle_size) std::fill(d + begin, d + end, kInvalidDisparity);
-    });
   }
 }
 

@@ -9,6 +9,7 @@
 #include "epipole/core/simd.hpp"
 #include "epipole/core/thread_pool.hpp"
 #include "epipole/vision/disparity_filters.hpp"
+#include "epipole/vision/speckle_filter.hpp"
 
 namespace epipole::vision {
 
@@ -99,7 +100,6 @@ class StereoMatcher {
   void sgm_stripe(Worker& w, int y0, int y1);
   void bm_stripe(Worker& w, int y0, int y1);
 
-  void remove_speckles();
   void fill_occlusions();
   // Row y of the confidence, or null without config.confidence.
   std::uint8_t* confidence_row(int y) {
@@ -112,12 +112,9 @@ class StereoMatcher {
   ThreadPool* pool_;
   GrayView left_, right_;  // the pair of the stripes in progress (start() .. finish())
   std::vector<std::unique_ptr<Worker>> workers_;
-  std::vector<std::int16_t> padded_;   // the output with a border of one invalid pixel
-  ImageView<std::int16_t> disparity_;  // the output: padded_ without its border
-  // Speckle filter: union-find over the runs of the rows (a root holds minus its region's size,
-  // another run its parent) and the run of each pixel of two rows.
-  std::vector<std::int32_t> runs_;
-  std::vector<std::uint32_t> labels_;
+  std::vector<std::int16_t> padded_;          // the output with a border of one invalid pixel
+  ImageView<std::int16_t> disparity_;         // the output: padded_ without its border
+  std::unique_ptr<SpeckleFilter> speckles_;   // with config.speckle_size
   std::unique_ptr<SpatialFilter> spatial_;    // with config.spatial_percent
   std::unique_ptr<TemporalFilter> temporal_;  // with config.temporal_percent
   Image<std::uint8_t> confidence_;            // with config.confidence

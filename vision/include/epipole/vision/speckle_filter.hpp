@@ -1,0 +1,67 @@
+#pragma once
+
+// The speckle filter of a dense disparity map (x16, invalid below 0: stereo.hpp), in place:
+// connected regions of fewer than `min_size` pixels become kInvalidDisparity. Two pixels are
+// connected when they are 4-neighbours, both valid, and at most `range` pixels apart in
+// disparity (OpenCV's filterSpeckles with maxSpeckleSize = min_size - 1 and maxDiff = range x16,
+// where every negative value counts as its newVal). Other invalid values (the left-right
+// check's occlusion marks) are kept.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "epipole/core/image.hpp"
+#include "epipole/core/simd.hpp"
+
+namespace epipole::vision {
+
+class SpeckleFilter {
+ public:
+  // min_size >= 1 (1 removes nothing), range 0..255 px. Throws Error otherwise or for an empty
+  // size. All memory is allocated here.
+  SpeckleFilter(int width, int height, int min_size, int range);
+
+  void apply(ImageView<std::int16_t> disparity, SimdPath path);
+
+  std::size_t working_set_bytes() const;
+
+ private:
+  // The runs of one row: begin and end (exclusive) of each, in order.
+  struct Runs {
+    std::vector<std::int32_t> begin, end;
+    int count = 0;
+  };
+  void find_runs(Runs& runs) const;
+
+  int width_, height_;
+  int min_size_;
+  int range_x16_;
+  int words_;  // of each mask row
+  // Union-find over all runs of the image: a root holds minus its region's size, another run
+  // its parent.
+  std::vector<std::int32_t> nodes_;
+  std::vector<std::uint64_t> valid_, left_, up_;  // one row's masks (kernels::SpeckleMasksRow)
+  Runs runs_[2];                                  // the row's runs and the row above's
+};
+
+namespace kernels {
+// The speckle filter's view of one row, 16 pixels a 64-bit word and 4 bits a pixel (all set or
+// all clear): pixel x in bits 4 * (x % 16) .. 4 * (x % 16) + 3 of word x / 16; the nibbles past
+// the width clear.
+//   valid[x]: row[x] >= 0;
+//   left[x]:  x > 0, row[x] and row[x - 1] valid and at most range_x16 apart (x continues the
+//             run of x - 1);
+//   up[x]:    row[x] and above[x] valid and at most range_x16 apart (all clear when above is
+//             null).
+using SpeckleMasksRow = void(const std::int16_t* row, const std::int16_t* above, int width,
+                             int range_x16, std::uint64_t* valid, std::uint64_t* left,
+                             std::uint64_t* up);
+void speckle_masks_row_ref(const std::int16_t* row, const std::int16_t* above, int width,
+                           int range_x16, std::uint64_t* valid, std::uint64_t* left,
+                           std::uint64_t* up);
+void speckle_masks_row_neon(const std::int16_t* row, const std::int16_t* above, int width,
+                            int range_x16, std::uint64_t* valid, std::uint64_t* left,
+                            std::uint64_t* up);
+}  // namespace kernels
+
+}  // namespace epipole::vision
