@@ -174,15 +174,22 @@ class WtaPixels {
     std::fill_n(cost_, width + disparities, kNoCost);
   }
 
-  // The winner of pixel x. sums(d) gives the sums of disparities d .. d + 15 and has stored
-  // them at s + d, where the uniqueness test reads them again (and changes three of them for
-  // the time it takes: the caller's next sums may start from them).
+  // The winner of pixel x. sums(d) gives the sums of disparities d .. d + 15 (and may store
+  // them at s + d, where the sub-pixel step reads the three around the winner).
+  //
+  // Uniqueness and confidence need the lowest sum outside best - 1 .. best + 1. Each lane keeps
+  // its smallest sum, where it is, and its second smallest; a lane whose smallest is one of
+  // those three (they lie in three different lanes) gives its second smallest instead, which
+  // is nowhere near the winner (16 disparities away at least). The pixel is unique when that
+  // sum is not below the limit: then every sum below the limit is at best - 1 .. best + 1, as
+  // wta_row_ref counts them.
   template <typename Sums>
-  [[gnu::always_inline]] inline void pixel(int x, std::uint16_t* s, Sums&& sums) {
+  [[gnu::always_inline]] inline void pixel(int x, const std::uint16_t* s, Sums&& sums) {
     const int D = kD != 0 ? kD : disparities_;
     const H sixteen = V::splath(16);
     H index = V::iotah();
     H m = V::splath(kNoCost);
+    H second = V::splath(kNoCost);
     H m_index = V::splath(0);
     std::uint16_t* const cost = cost_ + (width_ - 1 - x);
     std::uint16_t* const disp = disp_ + (width_ - 1 - x);
@@ -190,6 +197,7 @@ class WtaPixels {
     for (int d = 0; d < D; d += 16) {
       const H v = sums(d);
       m_index = V::selecth(V::gth(m, v), index, m_index);
+      second = V::minh(second, V::maxh(m, v));
       m = V::minh(m, v);
       const H old_cost = V::loadh(cost + d);
       V::storeh(cost + d, V::minh(old_cost, v));
@@ -200,45 +208,13 @@ class WtaPixels {
     const std::uint16_t min_cost = V::hminh(m);
     const int best =
         V::hminh(V::selecth(V::eqh(m, V::splath(min_cost)), m_index, V::splath(0xFFFF)));
+    // m_index - (best - 1) is 0, 1 or 2 (as unsigned 16 bits) at the three.
+    const H offset = V::subh(m_index, V::splath(static_cast<std::uint16_t>(best - 1)));
+    const H near = V::eqh(V::minh(offset, V::splath(2)), offset);
+    const int others = V::hminh(V::selecth(near, second, m));
     const int limit = std::min(uniqueness_limit(min_cost, ratio_), static_cast<int>(kNoCost));
-    const H l = V::splath(static_cast<std::uint16_t>(limit));
-    if (row_.confidence == nullptr) {
-      // Unique when every sum below the limit is at best - 1 .. best + 1: the count of sums
-      // below it (each lane counts down by the all-ones mask) equals the count among those
-      // three.
-      const std::uint32_t near = (best > 0 && s[best - 1] < limit ? 1u : 0u) +
-                                 (s[best] < limit ? 1u : 0u) +
-                                 (best < D - 1 && s[best + 1] < limit ? 1u : 0u);
-      H count = V::splath(0);
-      EPIPOLE_UNROLL_RANGE
-      for (int d = 0; d < D; d += 16) count = V::subh(count, V::gth(l, V::loadh(s + d)));
-      store_winner(row_, x, V::hsumh(count) == near ? best : -1, s, D, kNoCost);
-      return;
-    }
-    // The same test, and the lowest sum outside best - 1 .. best + 1 for the confidence: those
-    // three are set to kNoCost (never below the limit) while the sums are counted and their
-    // minimum taken.
-    // One by one, not std::copy and std::fill: those became calls to memcpy and memset.
-    const bool has_below = best > 0;
-    const bool has_above = best < D - 1;
-    const std::uint16_t below = has_below ? s[best - 1] : kNoCost;
-    const std::uint16_t at = s[best];
-    const std::uint16_t above = has_above ? s[best + 1] : kNoCost;
-    if (has_below) s[best - 1] = kNoCost;
-    s[best] = kNoCost;
-    if (has_above) s[best + 1] = kNoCost;
-    H count = V::splath(0);
-    H others = V::splath(kNoCost);
-    EPIPOLE_UNROLL_RANGE
-    for (int d = 0; d < D; d += 16) {
-      const H v = V::loadh(s + d);
-      count = V::subh(count, V::gth(l, v));
-      others = V::minh(others, v);
-    }
-    if (has_below) s[best - 1] = below;
-    s[best] = at;
-    if (has_above) s[best + 1] = above;
-    store_winner(row_, x, V::hsumh(count) == 0 ? best : -1, s, D, V::hminh(others));
+    store_winner(row_, x, others >= limit ? best : -1, s, D,
+                 row_.confidence != nullptr ? others : kNoCost);
   }
 
   // After the last pixel: every right pixel's winner.

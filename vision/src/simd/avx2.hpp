@@ -252,6 +252,7 @@ struct Avx2x16 {
   static H addh(H a, H b) { return _mm256_add_epi16(a, b); }
   static H subh(H a, H b) { return _mm256_sub_epi16(a, b); }
   static H minh(H a, H b) { return _mm256_min_epu16(a, b); }
+  static H maxh(H a, H b) { return _mm256_max_epu16(a, b); }
   static H orh(H a, H b) { return _mm256_or_si256(a, b); }
   // a > b for values below 0x8000.
   static H gth(H a, H b) { return _mm256_cmpgt_epi16(a, b); }

@@ -162,6 +162,9 @@ struct Neon {
   static H minh(H a, H b) {
     return {{vminq_u16(a.val[0], b.val[0]), vminq_u16(a.val[1], b.val[1])}};
   }
+  static H maxh(H a, H b) {
+    return {{vmaxq_u16(a.val[0], b.val[0]), vmaxq_u16(a.val[1], b.val[1])}};
+  }
   static H orh(H a, H b) {
     return {{vorrq_u16(a.val[0], b.val[0]), vorrq_u16(a.val[1], b.val[1])}};
   }
