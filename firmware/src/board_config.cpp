@@ -381,7 +381,7 @@ class BoardReader {
     integer(n, "stereo", "uniqueness", s.uniqueness, 0, 99);
     integer(n, "stereo", "lr_max_diff", s.lr_max_diff, -1, 256);
     integer(n, "stereo", "speckle_size", s.speckle_size, 0, 1'000'000);
-    integer(n, "stereo", "speckle_range", s.speckle_range, 0, 256);
+    integer(n, "stereo", "speckle_range", s.speckle_range, 0, 255);
     boolean(n, "stereo", "fill_occlusions", s.fill_occlusions);
     integer(n, "stereo", "spatial_percent", s.spatial_percent, 0, 99);
     integer(n, "stereo", "spatial_max_step", s.spatial_max_step, 1, 7);

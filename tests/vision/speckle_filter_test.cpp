@@ -130,6 +130,47 @@ TEST(SpeckleFilter, EveryPathRemovesTheRegionsAFloodFillFinds) {
   }
 }
 
+// Long runs (whole words of the masks, overlaps across words) in a row stride wider than the
+// image: smooth patches of one disparity with a few holes and thin lines.
+TEST(SpeckleFilter, LongRunsAndAStrideWiderThanTheImage) {
+  constexpr int width = 75;
+  constexpr int height = 20;
+  constexpr int stride = 80;
+  Row image(static_cast<std::size_t>(stride * height), 7);  // padding: never read as pixels
+  Row expected(static_cast<std::size_t>(width * height));
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      std::int16_t d = x < 40 ? 320 : 800;           // two wide surfaces
+      if (y == 5 && x > 10 && x < 60) d = 1600;      // a thin line across both: 49 px
+      if (y > 12 && x == 20) d = kInvalidDisparity;  // a vertical hole
+      if ((x * 7 + y * 3) % 23 == 0) d = kInvalidDisparity;
+      image[static_cast<std::size_t>(y * stride + x)] = d;
+      expected[static_cast<std::size_t>(y * width + x)] = d;
+    }
+  }
+  for (const int min_size : {40, 60}) {
+    Row want = expected;
+    flood_filter(want, width, height, min_size, kDisparityScale);
+    EXPECT_NE(want, expected) << "some region is small";
+    for (const SimdPath path : {SimdPath::reference, SimdPath::neon, best_simd_path()}) {
+      Row in = image;
+      SpeckleFilter filter(width, height, min_size, 1);
+      filter.apply(ImageView<std::int16_t>(in.data(), width, height, stride), path);
+      Row out;
+      for (int y = 0; y < height; ++y) {
+        out.insert(out.end(), in.begin() + y * stride, in.begin() + y * stride + width);
+        for (int x = width; x < stride; ++x) {
+          EXPECT_EQ(in[static_cast<std::size_t>(y * stride + x)], 7) << "padding written";
+        }
+      }
+      EXPECT_EQ(out, want) << to_string(path) << " min_size " << min_size;
+    }
+  }
+  // Its memory: the union-find (one entry a pixel), the runs of two rows, three mask rows.
+  EXPECT_EQ(SpeckleFilter(width, height, 40, 1).working_set_bytes(),
+            (75u * 20 + 4 * 75) * sizeof(std::int32_t) + 3 * 5 * sizeof(std::uint64_t));
+}
+
 TEST(SpeckleFilter, ARingIsOneRegionAndOcclusionMarksStay) {
   // A ring of 10 pixels around a hole (176 is within 1 px of 160), and a lone pixel: with
   // min_size 10 the ring stays, the lone pixel goes.

@@ -113,8 +113,7 @@ TEST(StereoKernels, CostEqualsReference) {
 
 // The outputs of a winner take all, filled with a value the kernels never write (the
 // confidence: one they write only where a winner's cost curve says so). Without
-// `confidence_wanted` the kernel is given none to write (the SIMD paths then test uniqueness
-// another way).
+// `confidence_wanted` the kernel is given none to write.
 struct WtaOut {
   WtaOut(std::size_t width, int D, bool confidence_wanted = true)
       : disparity(width, 99),
@@ -230,10 +229,11 @@ TEST(StereoKernels, SgmEqualsReference) {
 }
 
 // A block-matching row of radius 0 with no row entering or leaving: the winner take all
-// alone, on sums of every range.
+// alone, on sums of every range; with max 3, many ties within a lane's eight values (each
+// lane keeps its two smallest).
 TEST(StereoKernels, WtaEqualsReference) {
   for (const int width : {17, 40}) {
-    for (const int D : {16, 32}) {
+    for (const int D : {16, 32, 64, 128}) {
       for (const int max : {3, 60, 2000, kernels::kNoCost - 1}) {
         for (const int uniqueness : {0, 5, 15, 99}) {
           const auto n = static_cast<std::size_t>(width);
@@ -387,6 +387,12 @@ TEST(StereoMatcher, BadInputIsAClearError) {
             }).find("P2 225 must satisfy 1 <= P1 <= P2 <= 224"),
             std::string::npos)
       << "8-bit path values need max cost + P2 <= 255";
+  EXPECT_NE(message([] {
+              StereoConfig config{.width = 64, .height = 48, .max_disparity = 16};
+              config.speckle_range = 256;
+              StereoMatcher m(config);
+            }).find("speckle range 256 px: expected 0..255"),
+            std::string::npos);
   GrayImage a(64, 32), b(64, 31);
   std::fill_n(a.view().row(0), a.stride() * 32, std::uint8_t{0});
   std::fill_n(b.view().row(0), b.stride() * 31, std::uint8_t{0});

@@ -81,13 +81,13 @@ SpeckleFilter::SpeckleFilter(int width, int height, int min_size, int range)
     : width_(width),
       height_(height),
       min_size_(min_size),
-      range_x16_(range * kDisparityScale),
       words_((width + kPixelsPerWord - 1) / kPixelsPerWord) {
   require(width > 0 && height > 0, "speckle filter: the size must not be empty, not ", width, "x",
           height);
   require(min_size >= 1, "speckle filter: the smallest region kept must be 1 pixel or more, not ",
           min_size);
   require(range >= 0 && range <= 255, "speckle filter: the range must be 0..255 px, not ", range);
+  range_x16_ = range * kDisparityScale;
   const auto w = static_cast<std::size_t>(width);
   nodes_.assign(w * static_cast<std::size_t>(height), 0);  // at most one run per pixel
   const auto words = static_cast<std::size_t>(words_);

@@ -247,8 +247,10 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
           " pixels: expected 0 (off) to the image width ", W);
   require(config.spatial_percent >= 0 && config.spatial_percent <= 99, "spatial filter weight ",
           config.spatial_percent, " %: expected 0 (off) to 99");
-  require(config.speckle_size >= 0 && config.speckle_range >= 0,
-          "speckle size and range must not be negative");
+  require(config.speckle_size >= 0, "speckle size ", config.speckle_size,
+          ": expected 0 (off) or more");
+  require(config.speckle_range >= 0 && config.speckle_range <= 255, "speckle range ",
+          config.speckle_range, " px: expected 0..255");
   require(simd_path_available(path), "kernel path ", to_string(path),
           " is not available on this CPU");
   require(config.threads >= 1 && config.threads <= 64, "stereo threads ", config.threads,

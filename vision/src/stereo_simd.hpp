@@ -174,8 +174,8 @@ class WtaPixels {
     std::fill_n(cost_, width + disparities, kNoCost);
   }
 
-  // The winner of pixel x. sums(d) gives the sums of disparities d .. d + 15 (and may store
-  // them at s + d, where the sub-pixel step reads the three around the winner).
+  // The winner of pixel x. sums(d) gives the sums of disparities d .. d + 15 and must have
+  // stored them at s + d, where the sub-pixel step reads the three around the winner.
   //
   // Uniqueness and confidence need the lowest sum outside best - 1 .. best + 1. Each lane keeps
   // its smallest sum, where it is, and its second smallest; a lane whose smallest is one of
@@ -232,11 +232,6 @@ class WtaPixels {
   std::uint16_t* cost_;
   std::uint16_t* disp_;
 };
-
-// min_prev + P2 as the path steps use it, saturated to a byte.
-inline std::uint8_t sgm_plus_p2(int min_prev, int p2) {
-  return static_cast<std::uint8_t>(std::min(min_prev + p2, 255));
-}
 
 // One path step for 16 disparities at d: c + min(p[d], p[d-1] + P1, p[d+1] + P1,
 // min_prev + P2) - min_prev, in bytes. The saturating adds are exact where it matters: a sum
@@ -295,7 +290,7 @@ void sgm_first_pass_simd(const SgmRow& r) {
       p[k] = prev[k] + at;
       q[k] = cur[k] + at;
       min_prev[k] = V::load_splatb(prev_min[k] + x);
-      min_p2[k] = V::addsb(min_prev[k], p2);  // min_prev + P2, saturated (sgm_plus_p2)
+      min_p2[k] = V::addsb(min_prev[k], p2);  // min_prev + P2, saturated to a byte
       mins[k] = V::splatb(0xFF);
     }
     mins[3] = V::splatb(0xFF);
@@ -342,7 +337,7 @@ void sgm_second_pass_simd(const SgmRow& r) {
   for (int x = 0; x < width; ++x) {
     const std::uint8_t* c = cost + static_cast<std::ptrdiff_t>(x) * D;
     std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
-    const B h_p2 = V::addsb(h_prev, p2);  // min_prev + P2, saturated (sgm_plus_p2)
+    const B h_p2 = V::addsb(h_prev, p2);  // min_prev + P2, saturated to a byte
     B m = V::splatb(0xFF);
     wta.pixel(x, s, [&](int d) {
       const B lr = sgm_step<V>(V::loadb(c + d), h[0] + d, p1, h_p2, h_prev);

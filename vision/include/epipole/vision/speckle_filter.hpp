@@ -35,7 +35,7 @@ class SpeckleFilter {
 
   int width_, height_;
   int min_size_;
-  int range_x16_;
+  int range_x16_ = 0;
   int words_;  // of each mask row
   // Union-find over all runs of the image: a root holds minus its region's size, another run
   // its parent.
