@@ -38,14 +38,16 @@ void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* r
         _mm256_set1_epi8(static_cast<char>(l2[x])), _mm256_set1_epi8(static_cast<char>(l3[x]))};
     const std::ptrdiff_t k = width - 1 - x;
     std::uint8_t* out = cost + static_cast<std::ptrdiff_t>(x) * disparities;
+    // Disparities past x (beyond the left border) cost the most: filled below, not computed.
+    const int computed = std::min(disparities, x + 1);
     int d = 0;
-    for (; d + 32 <= disparities; d += 32) {
+    for (; d + 32 <= disparities && d < computed; d += 32) {
       const __m256i sum =
           _mm256_add_epi8(_mm256_add_epi8(count(l[0], r0 + k + d), count(l[1], r1 + k + d)),
                           _mm256_add_epi8(count(l[2], r2 + k + d), count(l[3], r3 + k + d)));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + d), sum);
     }
-    if (d < disparities) {  // 16 left
+    if (d < computed && disparities - d == 16) {  // 16 left
       const auto half = [&](int p) {
         return V::xorb(_mm256_castsi256_si128(l[p]), V::loadb(right[p] + k + d));
       };

@@ -103,9 +103,10 @@ inline typename V::B census_distance(const typename V::B* left, const std::uint8
       V::xorb(left[2], V::loadb(right[2] + at)), V::xorb(left[3], V::loadb(right[3] + at)));
 }
 
-// Row costs, pixel by pixel: the blocks of 16 disparities inside the image first, then those
-// that reach beyond its left border (d > x), which cost the most there. kD: the range when
-// fixed at compile time (0: disparities).
+// Row costs, pixel by pixel: the blocks of 16 disparities inside the image first, then the one
+// that reaches beyond its left border (d > x), where the cost is the most, then those wholly
+// beyond it, which are that maximum alone. kD: the range when fixed at compile time (0:
+// disparities).
 template <typename V, int kD = 0>
 void cost_row_range(const std::uint8_t* const* left_planes, const std::uint8_t* const* right_planes,
                     int width, int disparities, std::uint8_t* cost) {
@@ -135,11 +136,13 @@ void cost_row_range(const std::uint8_t* const* left_planes, const std::uint8_t* 
     const int inside = x < 15 ? 0 : std::min(disparities, (x - 15) / 16 * 16 + 16);
     int d = 0;
     for (; d < inside; d += 16) V::storeb(out + d, census_distance<V>(l, right, k + d));
-    for (; d < disparities; d += 16) {
+    if (d < disparities && d <= x) {
       const B beyond = V::gtb(V::addb(V::iotab(), V::splatb(static_cast<std::uint8_t>(d))),
                               V::splatb(static_cast<std::uint8_t>(x)));
       V::storeb(out + d, V::maxb(census_distance<V>(l, right, k + d), V::andb(beyond, max_cost)));
+      d += 16;
     }
+    for (; d < disparities; d += 16) V::storeb(out + d, max_cost);
   }
 }
 
