@@ -265,14 +265,6 @@ struct Avx2x16 {
     const __m128i m = _mm_min_epu16(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1));
     return static_cast<std::uint16_t>(_mm_extract_epi16(_mm_minpos_epu16(m), 0));
   }
-  // The sum of the lanes, for sums below 2^16.
-  static std::uint32_t hsumh(H v) {
-    __m128i x = _mm_add_epi16(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1));
-    x = _mm_add_epi16(x, _mm_srli_si128(x, 8));
-    x = _mm_add_epi16(x, _mm_srli_si128(x, 4));
-    x = _mm_add_epi16(x, _mm_srli_si128(x, 2));
-    return static_cast<std::uint32_t>(_mm_extract_epi16(x, 0));
-  }
   static bool anyh(H mask) { return _mm256_testz_si256(mask, mask) == 0; }
 };
 

@@ -24,7 +24,7 @@
 
 namespace epipole::vision::simd {
 
-// Across-lane reductions: one instruction on AArch64 (UMINV, UMAXV, UADDLV, ADDV), a ladder of
+// Across-lane reductions: one instruction on AArch64 (UMINV, UMAXV, ADDV), a ladder of
 // pairwise steps on ARMv7.
 namespace across {
 #if defined(__aarch64__)
@@ -33,9 +33,6 @@ inline std::uint8_t min_u8(uint8x16_t v) {
 }
 inline std::uint16_t min_u16(uint16x8_t v) {
   return vminvq_u16(v);
-}
-inline std::uint32_t sum_u16(uint16x8_t v) {
-  return vaddlvq_u16(v);
 }
 inline std::uint32_t sum_u32(uint32x4_t v) {
   return vaddvq_u32(v);
@@ -56,10 +53,6 @@ inline std::uint16_t min_u16(uint16x8_t v) {
   m = vpmin_u16(m, m);
   m = vpmin_u16(m, m);
   return vget_lane_u16(m, 0);
-}
-inline std::uint32_t sum_u16(uint16x8_t v) {
-  const uint64x2_t q = vpaddlq_u32(vpaddlq_u16(v));
-  return static_cast<std::uint32_t>(vgetq_lane_u64(q, 0) + vgetq_lane_u64(q, 1));
 }
 inline std::uint32_t sum_u32(uint32x4_t v) {
   const uint32x2_t pair = vadd_u32(vget_low_u32(v), vget_high_u32(v));
@@ -186,10 +179,6 @@ struct Neon {
   }
   static std::uint16_t hminh(H v) {
     return across::min_u16(vminq_u16(v.val[0], v.val[1]));
-  }
-  // The sum of the 8 lanes of the two registers added lane by lane (modulo 2^16).
-  static std::uint32_t hsumh(H v) {
-    return across::sum_u16(vaddq_u16(v.val[0], v.val[1]));
   }
   static bool anyh(H mask) {
     const uint64x2_t halves = vreinterpretq_u64_u16(vorrq_u16(mask.val[0], mask.val[1]));
