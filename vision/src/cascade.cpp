@@ -71,19 +71,24 @@ void resize_coefficients(int source, int size, std::int32_t* offsets, std::uint1
   }
 }
 
-// These kernels have no AVX2 version: that path runs the NEON one.
 IntegralRowKernel* integral_row_kernel(SimdPath path) {
-  return KernelSet<IntegralRowKernel>{integral_row_ref, integral_row_neon, nullptr}.pick(path);
+  return KernelSet<IntegralRowKernel>{integral_row_ref, integral_row_neon,
+                                      EPIPOLE_AVX2_KERNEL(integral_row_avx2)}
+      .pick(path);
 }
+// No AVX2 version (that path runs the NEON one): it is a few adds a word.
 TiltedRowKernel* tilted_row_kernel(SimdPath path) {
   return KernelSet<TiltedRowKernel>{tilted_row_ref, tilted_row_neon, nullptr}.pick(path);
 }
 ResizeColumnsKernel* resize_columns_kernel(SimdPath path) {
-  return KernelSet<ResizeColumnsKernel>{resize_columns_ref, resize_columns_neon, nullptr}.pick(
-      path);
+  return KernelSet<ResizeColumnsKernel>{resize_columns_ref, resize_columns_neon,
+                                        EPIPOLE_AVX2_KERNEL(resize_columns_avx2)}
+      .pick(path);
 }
 ResizeRowsKernel* resize_rows_kernel(SimdPath path) {
-  return KernelSet<ResizeRowsKernel>{resize_rows_ref, resize_rows_neon, nullptr}.pick(path);
+  return KernelSet<ResizeRowsKernel>{resize_rows_ref, resize_rows_neon,
+                                     EPIPOLE_AVX2_KERNEL(resize_rows_avx2)}
+      .pick(path);
 }
 
 }  // namespace kernels

@@ -20,6 +20,9 @@ void integral_row_ref(const std::uint8_t* row, int width, const std::uint32_t* s
 void integral_row_neon(const std::uint8_t* row, int width, const std::uint32_t* sum_above,
                        const std::uint32_t* square_above, std::uint32_t* sum, std::uint32_t* square,
                        std::uint32_t* prefix);
+void integral_row_avx2(const std::uint8_t* row, int width, const std::uint32_t* sum_above,
+                       const std::uint32_t* square_above, std::uint32_t* sum, std::uint32_t* square,
+                       std::uint32_t* prefix);
 using IntegralRowKernel = void(const std::uint8_t*, int, const std::uint32_t*, const std::uint32_t*,
                                std::uint32_t*, std::uint32_t*, std::uint32_t*);
 IntegralRowKernel* integral_row_kernel(SimdPath path);
@@ -49,6 +52,8 @@ void resize_columns_ref(const std::uint8_t* row, int source_width, const std::in
                         const std::uint16_t* weights, int width, std::uint16_t* out);
 void resize_columns_neon(const std::uint8_t* row, int source_width, const std::int32_t* offsets,
                          const std::uint16_t* weights, int width, std::uint16_t* out);
+void resize_columns_avx2(const std::uint8_t* row, int source_width, const std::int32_t* offsets,
+                         const std::uint16_t* weights, int width, std::uint16_t* out);
 using ResizeColumnsKernel = void(const std::uint8_t*, int, const std::int32_t*,
                                  const std::uint16_t*, int, std::uint16_t*);
 ResizeColumnsKernel* resize_columns_kernel(SimdPath path);
@@ -57,6 +62,8 @@ ResizeColumnsKernel* resize_columns_kernel(SimdPath path);
 void resize_rows_ref(const std::uint16_t* top, const std::uint16_t* bottom, std::uint16_t w0,
                      std::uint16_t w1, int width, std::uint8_t* out);
 void resize_rows_neon(const std::uint16_t* top, const std::uint16_t* bottom, std::uint16_t w0,
+                      std::uint16_t w1, int width, std::uint8_t* out);
+void resize_rows_avx2(const std::uint16_t* top, const std::uint16_t* bottom, std::uint16_t w0,
                       std::uint16_t w1, int width, std::uint8_t* out);
 using ResizeRowsKernel = void(const std::uint16_t*, const std::uint16_t*, std::uint16_t,
                               std::uint16_t, int, std::uint8_t*);
