@@ -79,9 +79,15 @@ __m256i sgm_step32(__m256i c, const std::uint8_t* p, __m256i p1, __m256i p2, __m
   return _mm256_add_epi8(best, c);
 }
 
-std::uint8_t hmin32(__m256i v) {
-  return simd::Avx2x16::hminb(
-      _mm_min_epu8(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1)));
+// The smallest of v's 32 bytes in every byte, without leaving the vector unit: it is the
+// horizontal path's step from one pixel to the next, and its latency is the loop's.
+__m256i broadcast_min32(__m256i v) {
+  v = _mm256_min_epu8(v, _mm256_permute2x128_si256(v, v, 0x01));
+  v = _mm256_min_epu8(v, _mm256_shuffle_epi32(v, _MM_SHUFFLE(1, 0, 3, 2)));
+  v = _mm256_min_epu8(v, _mm256_shuffle_epi32(v, _MM_SHUFFLE(2, 3, 0, 1)));
+  v = _mm256_min_epu8(v, _mm256_srli_epi32(v, 16));
+  v = _mm256_min_epu8(v, _mm256_srli_epi16(v, 8));
+  return _mm256_shuffle_epi8(v, _mm256_setzero_si256());  // byte 0 of each half
 }
 
 // The smallest byte of each of a, b, c and d, in bytes 0, 1, 2 and 3: interleaved and halved,
@@ -170,7 +176,7 @@ void sgm_second_pass_avx2(const SgmRow& r) {
   std::uint16_t* const sums = r.sums;
   std::uint8_t* h[2];
   sgm_horizontal_rows(r, h);
-  WtaPixels<V, kD> wta(r.wta, width, D);
+  WtaPixels<V, kD, true> wta(r.wta, width, D);  // SGM's sums are at most 5 * 255
   __m256i h_prev = _mm256_setzero_si256();
   for (int x = 0; x < width; ++x) {
     const std::uint8_t* c = cost + static_cast<std::ptrdiff_t>(x) * D;
@@ -191,7 +197,7 @@ void sgm_second_pass_avx2(const SgmRow& r) {
       V::storeh(s + d, sum);
       return sum;
     });
-    h_prev = _mm256_set1_epi8(static_cast<char>(hmin32(m)));
+    h_prev = broadcast_min32(m);
     std::swap(h[0], h[1]);
   }
   wta.finish();

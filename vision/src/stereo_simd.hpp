@@ -6,6 +6,7 @@
 // bytes, sums in 16-bit lanes.
 #include <algorithm>
 #include <cstdint>
+#include <tuple>
 #include <type_traits>
 
 #include "stereo_census.hpp"
@@ -161,8 +162,9 @@ void cost_row_simd(const std::uint8_t* const* left, const std::uint8_t* const* r
 // a block, no shift. Entries past width - 1 (right pixels left of the image) are written and
 // never read. The disparities need no first value: every sum is below kNoCost (SGM's at most
 // 5 * 255, BM's 21 * 21 * 31), so a right pixel's first candidate, at d = 0, replaces its
-// kNoCost. kD: the range when fixed at compile time (0: the constructor's).
-template <typename V, int kD = 0>
+// kNoCost. kD: the range when fixed at compile time (0: the constructor's). kSmallSums: every
+// sum is below 2048 (SGM's), so a vocabulary's min_first_small may find the winner.
+template <typename V, int kD = 0, bool kSmallSums = false>
 class WtaPixels {
   using H = typename V::H;
 
@@ -208,9 +210,15 @@ class WtaPixels {
       index = V::addh(index, sixteen);
     }
 
-    const std::uint16_t min_cost = V::hminh(m);
-    const int best =
-        V::hminh(V::selecth(V::eqh(m, V::splath(min_cost)), m_index, V::splath(0xFFFF)));
+    int min_cost;
+    int best;
+    if constexpr (kSmallSums && requires { V::min_first_small(m, m_index); }) {
+      std::tie(min_cost, best) = V::min_first_small(m, m_index);
+    } else {
+      min_cost = V::hminh(m);
+      best = V::hminh(V::selecth(V::eqh(m, V::splath(static_cast<std::uint16_t>(min_cost))),
+                                 m_index, V::splath(0xFFFF)));
+    }
     // m_index - (best - 1) is 0, 1 or 2 (as unsigned 16 bits) at the three.
     const H offset = V::subh(m_index, V::splath(static_cast<std::uint16_t>(best - 1)));
     const H near = V::eqh(V::minh(offset, V::splath(2)), offset);

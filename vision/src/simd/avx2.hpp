@@ -12,6 +12,7 @@
 #include <immintrin.h>
 
 #include <cstdint>
+#include <utility>
 
 namespace epipole::vision::simd {
 
@@ -266,6 +267,17 @@ struct Avx2x16 {
     return static_cast<std::uint16_t>(_mm_extract_epi16(_mm_minpos_epu16(m), 0));
   }
   static bool anyh(H mask) { return _mm256_testz_si256(mask, mask) == 0; }
+  // The smallest of 16 lanes of values below 2048 (`m`) and, among the lanes that hold it, the
+  // smallest of `index` (below 256, and lane L's equal to L modulo 16) in one reduction: keys
+  // m << 5 | index >> 3 order by value, then by the index's group of 8; the two halves' minimum
+  // keeps that, and phminposuw gives the first of the 8 lanes with the smallest key.
+  static std::pair<int, int> min_first_small(H m, H index) {
+    const H keys = _mm256_or_si256(_mm256_slli_epi16(m, 5), _mm256_srli_epi16(index, 3));
+    const __m128i folded =
+        _mm_min_epu16(_mm256_castsi256_si128(keys), _mm256_extracti128_si256(keys, 1));
+    const int r = _mm_cvtsi128_si32(_mm_minpos_epu16(folded));
+    return {(r & 0xFFFF) >> 5, (r & 31) << 3 | ((r >> 16) & 7)};
+  }
 };
 
 }  // namespace epipole::vision::simd
