@@ -1,9 +1,9 @@
 // The cascade detector's AVX2 kernels (x86 hosts only): the integral rows 8 pixels at a time
 // (in-vector prefix sums, the running sums kept in every lane), the pyramid's resize 8 pixels
 // at a time along rows (pixel pairs fetched by scalar loads) and 16 down columns, and the window
-// kernel with 8 windows per
-// vector (the generic kernel of cascade_simd.hpp). Every result equals the reference's bit for
-// bit. The tilted integral and the split of integral rows run their NEON kernels.
+// kernel with 8 windows per vector (the generic kernel of cascade_simd.hpp). Every result equals
+// the reference's bit for bit. The tilted integral and the split of integral rows run their
+// NEON kernels.
 #include <immintrin.h>
 
 #include <cstring>
@@ -42,9 +42,7 @@ __m256i last_word(__m256i v) {
 void integral_row_avx2(const std::uint8_t* row, int width, const std::uint32_t* sum_above,
                        const std::uint32_t* square_above, std::uint32_t* sum, std::uint32_t* square,
                        std::uint32_t* prefix) {
-  sum[0] = sum_above[0];
-  if (square != nullptr) square[0] = square_above[0];
-  if (prefix != nullptr) prefix[0] = prefix[1] = 0;
+  integral_first_entries(sum_above, square_above, sum, square, prefix);
   __m256i running = _mm256_setzero_si256();  // the row's sum so far, in every word
   __m256i running_squares = _mm256_setzero_si256();
   int x = 0;

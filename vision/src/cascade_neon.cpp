@@ -18,9 +18,7 @@ namespace epipole::vision::kernels {
 void integral_row_neon(const std::uint8_t* row, int width, const std::uint32_t* sum_above,
                        const std::uint32_t* square_above, std::uint32_t* sum, std::uint32_t* square,
                        std::uint32_t* prefix) {
-  sum[0] = sum_above[0];
-  if (square != nullptr) square[0] = square_above[0];
-  if (prefix != nullptr) prefix[0] = prefix[1] = 0;
+  integral_first_entries(sum_above, square_above, sum, square, prefix);
   std::uint32_t running = 0;
   std::uint32_t running_squares = 0;
   const uint16x8_t zero16 = vdupq_n_u16(0);

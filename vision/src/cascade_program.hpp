@@ -165,6 +165,16 @@ int cascade_row_avx2(const CascadeProgram& program, const std::uint32_t* row, in
                      std::int32_t* hits);
 using CascadeRowKernel = int(const CascadeProgram&, const std::uint32_t*, int, std::int32_t*);
 
+// integral_row_ref's entries before the first pixel: column 0 of each row it writes (the row
+// above's, as nothing is summed yet) and the prefix's two leading zeros.
+inline void integral_first_entries(const std::uint32_t* sum_above,
+                                   const std::uint32_t* square_above, std::uint32_t* sum,
+                                   std::uint32_t* square, std::uint32_t* prefix) {
+  sum[0] = sum_above[0];
+  if (square != nullptr) square[0] = square_above[0];
+  if (prefix != nullptr) prefix[0] = prefix[1] = 0;
+}
+
 // integral_row_ref from column `from` on, continuing the row's running sums (the SIMD kernels'
 // last columns).
 inline void integral_columns(const std::uint8_t* row, int from, int width,
