@@ -8,7 +8,11 @@
 # - hash_dir off: -g puts the working folder into the objects; ignoring it means an object's
 #   debug info may name the folder of the build that first compiled it;
 # - sloppiness pch_defines,time_macros: needed for ccache to cache a file that uses a
-#   precompiled header; include_file_mtime/ctime: a fresh checkout's headers are all new.
+#   precompiled header; include_file_mtime/ctime: a fresh checkout's headers are all new;
+# - pch_external_checksum: a precompiled header (over 100 MB) is known by the checksum that
+#   cmake/ccache-launcher.sh writes beside it when it is made, not hashed again on every compile
+#   that uses it. The namespace keeps these entries apart from those made before the checksum
+#   files: those name the header itself, still match, and would go on hashing it on every hit.
 # Paths compiled into test programs (the tool, the data) live in one generated file
 # (tests/CMakeLists.txt), not in the flags of every file.
 option(EPIPOLE_CCACHE "Compile through ccache when it is found" ON)
@@ -24,7 +28,9 @@ set(_launcher
     CCACHE_BASEDIR=${PROJECT_SOURCE_DIR}
     CCACHE_NOHASHDIR=1
     CCACHE_SLOPPINESS=pch_defines,time_macros,include_file_mtime,include_file_ctime
-    ${EPIPOLE_CCACHE_PROGRAM})
+    CCACHE_PCH_EXTSUM=true
+    CCACHE_NAMESPACE=pch-checksum
+    ${CMAKE_CURRENT_LIST_DIR}/ccache-launcher.sh ${EPIPOLE_CCACHE_PROGRAM})
 set(CMAKE_C_COMPILER_LAUNCHER ${_launcher})
 set(CMAKE_CXX_COMPILER_LAUNCHER ${_launcher})
 message(STATUS "Compiling through ccache (${EPIPOLE_CCACHE_PROGRAM})")

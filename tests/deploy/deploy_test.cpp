@@ -19,7 +19,8 @@
 namespace epipole::test {
 namespace {
 
-const std::string kRun = EPIPOLE_DEPLOY_RUN;  // scripts/deploy/prepare.sh made it
+// scripts/deploy/prepare.sh made it, beside this program
+const std::string kRun = (program_folder() / "run").string();
 
 std::vector<std::string> lines_with(const std::string& text, const std::string& marker) {
   std::vector<std::string> out;

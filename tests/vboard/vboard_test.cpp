@@ -9,6 +9,7 @@
 #include <string>
 #include <variant>
 
+#include "test_paths.hpp"
 #include "trigger_accounting.hpp"
 #include "virtual_board.hpp"
 
@@ -26,7 +27,7 @@ constexpr std::int64_t kEdgeSlackNs = 20'000'000;
 
 // This program's guest architecture and the initramfs its fixture made.
 const std::string kArch = EPIPOLE_VBOARD_ARCH;
-const std::string kInitramfs = EPIPOLE_VBOARD_INITRAMFS;
+const std::string kInitramfs = (program_folder() / ("initramfs-" + kArch + ".cpio")).string();
 
 std::string context(const BoardRun& run) {
   // The guest's shell reports a firmware killed by signal N as exit 128 + N.
