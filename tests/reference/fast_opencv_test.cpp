@@ -3,38 +3,19 @@
 
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "epipole/vision/fast.hpp"
 #include "opencv_view.hpp"
+#include "real_images.hpp"
 #include "test_data.hpp"
 
 namespace epipole::vision {
 namespace {
 
-struct RealImage {
-  const char* name;
-  cv::Mat gray;
-};
-
-std::vector<RealImage> real_images() {
-  std::vector<RealImage> images;
-  images.push_back(
-      {"graf1", cv::imread(test::data_file("samples/graf1.png"), cv::IMREAD_GRAYSCALE)});
-  cv::Mat aloe = cv::imread(test::data_file("samples/aloeL.jpg"), cv::IMREAD_GRAYSCALE);
-  cv::Mat aloe_small;
-  cv::resize(aloe, aloe_small, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
-  images.push_back({"aloeL_640x480", aloe_small});
-  images.push_back(
-      {"left01", cv::imread(test::data_file("samples/left01.jpg"), cv::IMREAD_GRAYSCALE)});
-  for (const auto& image : images) {
-    if (image.gray.empty()) throw std::runtime_error(std::string("cannot read ") + image.name);
-  }
-  return images;
-}
+using test::RealImage;
 
 TEST(FastVsOpenCV, SameCornersAndScoresOnRealImages) {
-  for (const RealImage& image : real_images()) {
+  for (const RealImage& image : test::corner_test_images()) {
     for (const int threshold : {10, 20, 40}) {
       std::vector<cv::KeyPoint> expected;
       cv::FAST(image.gray, expected, threshold, true);

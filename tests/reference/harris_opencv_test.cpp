@@ -34,31 +34,13 @@
 
 #include "epipole/vision/harris.hpp"
 #include "opencv_view.hpp"
+#include "real_images.hpp"
 #include "test_data.hpp"
 
 namespace epipole::vision {
 namespace {
 
-struct RealImage {
-  const char* name;
-  cv::Mat gray;
-};
-
-std::vector<RealImage> real_images() {
-  std::vector<RealImage> images;
-  images.push_back(
-      {"graf1", cv::imread(test::data_file("samples/graf1.png"), cv::IMREAD_GRAYSCALE)});
-  cv::Mat aloe = cv::imread(test::data_file("samples/aloeL.jpg"), cv::IMREAD_GRAYSCALE);
-  cv::Mat aloe_small;
-  cv::resize(aloe, aloe_small, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
-  images.push_back({"aloeL_640x480", aloe_small});
-  images.push_back(
-      {"left01", cv::imread(test::data_file("samples/left01.jpg"), cv::IMREAD_GRAYSCALE)});
-  for (const auto& image : images) {
-    if (image.gray.empty()) throw std::runtime_error(std::string("cannot read ") + image.name);
-  }
-  return images;
-}
+using test::RealImage;
 
 constexpr double kK = 0.04;
 
@@ -93,7 +75,7 @@ Exact exact_harris(const cv::Mat& gray, int block_size) {
 }
 
 TEST(HarrisVsOpenCV, ResponseOnRealImages) {
-  for (const RealImage& image : real_images()) {
+  for (const RealImage& image : test::corner_test_images()) {
     for (const int block : {3, 5, 7}) {
       cv::Mat expected;
       cv::cornerHarris(image.gray, expected, block, 3, kK);
@@ -169,7 +151,7 @@ bool near_tie(cv::Point p, const cv::Mat& r, const cv::Mat& trace, double thresh
 
 TEST(HarrisVsOpenCV, SameCornersAsGoodFeaturesToTrack) {
   std::size_t ties = 0, compared = 0;
-  for (const RealImage& image : real_images()) {
+  for (const RealImage& image : test::corner_test_images()) {
     cv::Mat cv_response;
     cv::cornerHarris(image.gray, cv_response, 3, 3, kK);
     double max_r = 0.0, max_abs = 0.0;
