@@ -164,9 +164,16 @@ void cost_row_simd(const std::uint8_t* const* left, const std::uint8_t* const* r
 // 5 * 255, BM's 21 * 21 * 31), so a right pixel's first candidate, at d = 0, replaces its
 // kNoCost. kD: the range when fixed at compile time (0: the constructor's). kSmallSums: every
 // sum is below 2048 (SGM's), so a vocabulary's min_first_small may find the winner.
+//
+// Where the vocabulary narrows a mask of 16-bit lanes to bytes in one instruction
+// (narrow_maskh: NEON), the disparities, at most 255, are kept as bytes: the right image's,
+// and each lane's best of the pixel. A block then costs one load, select and store of them
+// rather than two each, and one add for the next block's disparities.
 template <typename V, int kD = 0, bool kSmallSums = false>
 class WtaPixels {
+  using B = typename V::B;
   using H = typename V::H;
+  static constexpr bool kByteDisparities = requires(H mask) { V::narrow_maskh(mask); };
 
  public:
   WtaPixels(const WtaRow& row, int width, int disparities)
@@ -191,23 +198,44 @@ class WtaPixels {
   template <typename Sums>
   [[gnu::always_inline]] inline void pixel(int x, const std::uint16_t* s, Sums&& sums) {
     const int D = kD != 0 ? kD : disparities_;
-    const H sixteen = V::splath(16);
-    H index = V::iotah();
     H m = V::splath(kNoCost);
     H second = V::splath(kNoCost);
-    H m_index = V::splath(0);
+    H m_index;
     std::uint16_t* const cost = cost_ + (width_ - 1 - x);
-    std::uint16_t* const disp = disp_ + (width_ - 1 - x);
-    EPIPOLE_UNROLL_RANGE
-    for (int d = 0; d < D; d += 16) {
-      const H v = sums(d);
-      m_index = V::selecth(V::gth(m, v), index, m_index);
-      second = V::minh(second, V::maxh(m, v));
-      m = V::minh(m, v);
-      const H old_cost = V::loadh(cost + d);
-      V::storeh(cost + d, V::minh(old_cost, v));
-      V::storeh(disp + d, V::selecth(V::gth(old_cost, v), index, V::loadh(disp + d)));
-      index = V::addh(index, sixteen);
+    if constexpr (kByteDisparities) {
+      const B sixteen = V::splatb(16);
+      B index = V::iotab();
+      B best = V::zerob();
+      std::uint8_t* const disp = disp_bytes() + (width_ - 1 - x);
+      EPIPOLE_UNROLL_RANGE
+      for (int d = 0; d < D; d += 16) {
+        const H v = sums(d);
+        best = V::selectb(V::narrow_maskh(V::gth(m, v)), index, best);
+        second = V::minh(second, V::maxh(m, v));
+        m = V::minh(m, v);
+        const H old_cost = V::loadh(cost + d);
+        V::storeh(cost + d, V::minh(old_cost, v));
+        V::storeb(disp + d,
+                  V::selectb(V::narrow_maskh(V::gth(old_cost, v)), index, V::loadb(disp + d)));
+        index = V::addb(index, sixteen);
+      }
+      m_index = V::widen(best);
+    } else {
+      const H sixteen = V::splath(16);
+      H index = V::iotah();
+      m_index = V::splath(0);
+      std::uint16_t* const disp = disp_ + (width_ - 1 - x);
+      EPIPOLE_UNROLL_RANGE
+      for (int d = 0; d < D; d += 16) {
+        const H v = sums(d);
+        m_index = V::selecth(V::gth(m, v), index, m_index);
+        second = V::minh(second, V::maxh(m, v));
+        m = V::minh(m, v);
+        const H old_cost = V::loadh(cost + d);
+        V::storeh(cost + d, V::minh(old_cost, v));
+        V::storeh(disp + d, V::selecth(V::gth(old_cost, v), index, V::loadh(disp + d)));
+        index = V::addh(index, sixteen);
+      }
     }
 
     int min_cost;
@@ -231,11 +259,14 @@ class WtaPixels {
   // After the last pixel: every right pixel's winner.
   void finish() {
     for (int xr = 0; xr < width_; ++xr) {
-      row_.right_best[xr] = static_cast<std::int16_t>(disp_[width_ - 1 - xr]);
+      row_.right_best[xr] = static_cast<std::int16_t>(
+          kByteDisparities ? disp_bytes()[width_ - 1 - xr] : disp_[width_ - 1 - xr]);
     }
   }
 
  private:
+  std::uint8_t* disp_bytes() const { return reinterpret_cast<std::uint8_t*>(disp_); }
+
   WtaRow row_;
   int width_;
   int disparities_;

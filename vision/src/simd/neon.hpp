@@ -85,6 +85,7 @@ struct Neon {
   static B maxb(B a, B b) { return vmaxq_u8(a, b); }
   static B gtb(B a, B b) { return vcgtq_u8(a, b); }
   static B ltb(B a, B b) { return vcltq_u8(a, b); }
+  static B selectb(B mask, B a, B b) { return vbslq_u8(mask, a, b); }
   static bool anyb(B mask) { return across::any_u8(mask); }
 #if EPIPOLE_NEON_A64_FORMS
   // A comparison mask as bits: lane i -> bit 4 i (kBitsPerLaneB apart). One narrowing shift
@@ -171,6 +172,15 @@ struct Neon {
   static H selecth(H mask, H a, H b) {
     return {
         {vbslq_u16(mask.val[0], a.val[0], b.val[0]), vbslq_u16(mask.val[1], a.val[1], b.val[1])}};
+  }
+  // A mask of 16-bit lanes (each 0 or 0xFFFF) as the same 16 lanes of bytes: the even bytes,
+  // one UZP1 (VUZP on ARMv7).
+  static B narrow_maskh(H mask) {
+#if EPIPOLE_NEON_A64_FORMS
+    return vuzp1q_u8(vreinterpretq_u8_u16(mask.val[0]), vreinterpretq_u8_u16(mask.val[1]));
+#else
+    return vuzpq_u8(vreinterpretq_u8_u16(mask.val[0]), vreinterpretq_u8_u16(mask.val[1])).val[0];
+#endif
   }
   static H iotah() {
     static constexpr std::uint16_t kIota[16] = {0, 1, 2,  3,  4,  5,  6,  7,
