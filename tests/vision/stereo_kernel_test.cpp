@@ -39,14 +39,16 @@ std::vector<SimdPath> simd_paths() {
 using U8 = std::vector<std::uint8_t>;
 using I16 = std::vector<std::int16_t>;
 
-// The four byte planes of a census row, each `width` long, in one vector.
-struct Planes {
-  explicit Planes(std::size_t width, std::uint8_t fill) : data(4 * width, fill) {
-    for (int p = 0; p < 4; ++p) planes[p] = data.data() + p * width;
+// A census row of n pixels (4n bytes) in `planes` layout, laid out as `layout` from byte
+// `offset` of the result.
+U8 in_layout(const U8& planes, int n, kernels::CensusLayout layout, std::size_t offset) {
+  U8 out(offset + planes.size(), 0);
+  for (int x = 0; x < n; ++x) {
+    kernels::set_census(layout, out.data() + offset, n, x,
+                        kernels::census_at(kernels::CensusLayout::planes, planes.data(), n, x));
   }
-  U8 data;
-  std::uint8_t* planes[4];
-};
+  return out;
+}
 
 struct CensusCase {
   int width;
@@ -69,12 +71,15 @@ TEST_P(StereoCensus, SimdEqualsReference) {
     for (int y = 0; y < c.height; ++y) {
       const std::uint8_t* rows[7];
       for (int i = 0; i < 7; ++i) rows[i] = view.row(std::clamp(y - 3 + i, 0, c.height - 1));
-      Planes expected(n, 1);
-      ref.census(rows, c.width, expected.planes);
+      ASSERT_EQ(ref.census_layout, kernels::CensusLayout::planes);
+      U8 expected(4 * n, 1);
+      ref.census(rows, c.width, expected.data());
       for (const SimdPath path : simd_paths()) {
-        Planes out(n, 2);
-        kernels::stereo_kernels(path).census(rows, c.width, out.planes);
-        ASSERT_EQ(out.data, expected.data) << to_string(path) << " row " << y;
+        const auto simd = kernels::stereo_kernels(path);
+        U8 out(4 * n, 2);
+        simd.census(rows, c.width, out.data());
+        ASSERT_EQ(out, in_layout(expected, c.width, simd.census_layout, 0))
+            << to_string(path) << " row " << y;
       }
     }
   }
@@ -85,26 +90,24 @@ INSTANTIATE_TEST_SUITE_P(Sizes, StereoCensus,
                                            CensusCase{40, 11, 5, 3}, CensusCase{77, 10, 1, 7},
                                            CensusCase{129, 12, 0, 5}));
 
-// Census planes at odd offsets inside larger buffers, so loads are unaligned. 64, 128 and 256
-// have kernels of their own, for the pixels whose range lies inside the image.
+// Census rows at odd offsets inside larger buffers, so loads are unaligned, in each path's
+// layout. 64, 128 and 256 have kernels of their own, for the pixels whose range lies inside the
+// image.
 TEST(StereoKernels, CostEqualsReference) {
   for (const int width : {17, 40, 65, 300}) {
     for (const int D : {16, 32, 48, 64, 128, 256}) {
       const auto n = static_cast<std::size_t>(width);
-      const U8 left = random_u8(4 * n + 3, 255, 1);
-      U8 right = random_u8(4 * (n + D) + 5, 255, 3);
-      const std::uint8_t* l[4];
-      const std::uint8_t* r[4];
-      for (std::size_t p = 0; p < 4; ++p) {
-        l[p] = left.data() + 3 + p * n;
-        r[p] = right.data() + 5 + p * (n + D);
-      }
+      const U8 left = random_u8(4 * n, 255, 1);
+      const U8 right = random_u8(4 * (n + D), 255, 3);
       U8 ref(n * D, 0);
-      kernels::cost_row_ref(l, r, width, D, ref.data());
+      kernels::cost_row_ref(left.data(), right.data(), width, D, ref.data());
       EXPECT_EQ(ref[1], 31) << "d = 1 at x = 0 is beyond the left border";
       for (const SimdPath path : simd_paths()) {
+        const auto simd = kernels::stereo_kernels(path);
+        const U8 l = in_layout(left, width, simd.census_layout, 3);
+        const U8 r = in_layout(right, width + D, simd.census_layout, 5);
         U8 out(n * D, 1);
-        kernels::stereo_kernels(path).cost(l, r, width, D, out.data());
+        simd.cost(l.data() + 3, r.data() + 5, width, D, out.data());
         ASSERT_EQ(out, ref) << to_string(path) << " width " << width << " D " << D;
       }
     }

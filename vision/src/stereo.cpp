@@ -18,7 +18,7 @@ namespace kernels {
 StereoKernels stereo_kernels_neon();
 StereoKernels stereo_kernels_avx2();
 
-void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint8_t* const* planes) {
+std::uint32_t census_bits(const std::uint8_t* const* rows, int width, int x) {
   std::uint32_t bits = 0;
   for (int b = 0; b < kCensusBits; ++b) {
     const CensusOffset o = kCensusOffsets[b];
@@ -26,22 +26,23 @@ void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint8_
     const int xc = std::clamp(x - o.dx, 0, width - 1);
     if (rows[kCensusRadiusY + o.dy][xa] > rows[kCensusRadiusY - o.dy][xc]) bits |= 1u << b;
   }
-  for (int p = 0; p < kCensusPlanes; ++p) planes[p][x] = static_cast<std::uint8_t>(bits >> (8 * p));
+  return bits;
 }
 
-void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* const* planes) {
-  for (int x = 0; x < width; ++x) census_pixel(rows, width, x, planes);
-}
-
-void cost_row_ref(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
-                  int disparities, std::uint8_t* cost) {
+void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* census) {
   for (int x = 0; x < width; ++x) {
+    set_census(CensusLayout::planes, census, width, x, census_bits(rows, width, x));
+  }
+}
+
+void cost_row_ref(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
+                  std::uint8_t* cost) {
+  for (int x = 0; x < width; ++x) {
+    const std::uint32_t l = census_at(CensusLayout::planes, left, width, x);
     for (int d = 0; d < disparities; ++d) {
       const int k = width - 1 - x + d;
-      int bits = 0;
-      for (int p = 0; p < kCensusPlanes; ++p) {
-        bits += std::popcount(static_cast<unsigned>(left[p][x] ^ right[p][k]));
-      }
+      const int bits =
+          std::popcount(l ^ census_at(CensusLayout::planes, right, width + disparities, k));
       cost[static_cast<std::ptrdiff_t>(x) * disparities + d] =
           static_cast<std::uint8_t>(d > x ? kMaxCensusCost : bits);
     }
@@ -165,7 +166,8 @@ void bm_row_ref(const BmRow& r) {
 
 namespace {
 StereoKernels stereo_kernels_ref() {
-  return {census_row_ref, cost_row_ref, sgm_row_ref, box_columns_ref, bm_row_ref};
+  return {CensusLayout::planes, census_row_ref,  cost_row_ref,
+          sgm_row_ref,          box_columns_ref, bm_row_ref};
 }
 }  // namespace
 
@@ -190,6 +192,17 @@ void reverse_bytes(const std::uint8_t* src, int n, std::uint8_t* dst) {
   for (; i < n; ++i) dst[n - 1 - i] = src[i];
 }
 
+// The census of a row of n pixels into `reversed`, which holds `padded` >= n: its pixel k is
+// pixel n - 1 - k of `census` (k < n).
+void reverse_census(kernels::CensusLayout layout, const std::uint8_t* census, int n, int padded,
+                    std::uint8_t* reversed) {
+  if (layout == kernels::CensusLayout::planes) {
+    for (std::ptrdiff_t p = 0; p < 4; ++p) reverse_bytes(census + p * n, n, reversed + p * padded);
+    return;
+  }
+  for (int i = 0; i < n; ++i) std::memcpy(reversed + 4 * (n - 1 - i), census + 4 * i, 4);
+}
+
 constexpr int kWarmupRows = 24;  // SGM: rows aggregated above a stripe before it is output
 std::size_t bytes_of(const auto& v) {
   return v.size() * sizeof(v[0]);
@@ -197,7 +210,7 @@ std::size_t bytes_of(const auto& v) {
 }  // namespace
 
 struct StereoMatcher::Worker {
-  std::vector<std::uint8_t> left_census, right_census, reversed;  // kCensusPlanes planes each
+  std::vector<std::uint8_t> left_census, right_census, reversed;  // in the kernels' layout
   std::vector<std::uint8_t> cost;         // SGM: one row; BM: a ring of block_size + 1 rows
   std::vector<std::uint8_t> paths[2][3];  // SGM: previous/current row of the 3 downward paths
   std::vector<std::uint8_t> mins[2][3];
@@ -216,12 +229,6 @@ struct StereoMatcher::Worker {
       for (int k = 0; k < 3; ++k) n += bytes_of(paths[i][k]) + bytes_of(mins[i][k]);
     }
     return n;
-  }
-  std::uint8_t* left_plane(int p) { return left_census.data() + p * best.size(); }
-  std::uint8_t* right_plane(int p) { return right_census.data() + p * best.size(); }
-  std::uint8_t* reversed_plane(int p) {
-    return reversed.data() +
-           static_cast<std::size_t>(p) * (reversed.size() / kernels::kCensusPlanes);
   }
   void cost_row(GrayView left, GrayView right, int y, int disparities, std::uint8_t* cost_out);
 };
@@ -267,13 +274,13 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
   const std::size_t stride = static_cast<std::size_t>(D) + 32;
   const std::size_t uw = static_cast<std::size_t>(W);
   const std::size_t ud = static_cast<std::size_t>(D);
-  constexpr std::size_t kPlanes = kernels::kCensusPlanes;
+  constexpr std::size_t kCensusBytes = 4;
   for (int t = 0; t < config.threads; ++t) {
     auto w = std::make_unique<Worker>();
     w->kernels = kernels::stereo_kernels(path);
-    w->left_census.assign(kPlanes * uw, 0);
-    w->right_census.assign(kPlanes * uw, 0);
-    w->reversed.assign(kPlanes * (uw + ud), 0);
+    w->left_census.assign(kCensusBytes * uw, 0);
+    w->right_census.assign(kCensusBytes * uw, 0);
+    w->reversed.assign(kCensusBytes * (uw + ud), 0);
     w->sums.assign(wd, 0);
     w->window.assign(2 * (uw + ud), 0);
     w->best.assign(uw, -1);
@@ -370,27 +377,17 @@ void StereoMatcher::reset_history() {
 // The census of row y of both images (the right one reversed), then its cost into `cost`.
 void StereoMatcher::Worker::cost_row(GrayView left, GrayView right, int y, int disparities,
                                      std::uint8_t* cost_out) {
-  constexpr int kPlanes = kernels::kCensusPlanes;
-  std::uint8_t* left_planes[kPlanes];
-  std::uint8_t* right_planes[kPlanes];
-  const std::uint8_t* left_in[kPlanes];
-  const std::uint8_t* reversed_in[kPlanes];
-  for (int p = 0; p < kPlanes; ++p) {
-    left_planes[p] = left_plane(p);
-    right_planes[p] = right_plane(p);
-    left_in[p] = left_planes[p];
-    reversed_in[p] = reversed_plane(p);
-  }
   const int width = left.width();
   const std::uint8_t* rows[7];
   for (const GrayView* image : {&left, &right}) {
     for (int i = 0; i < 7; ++i) {
       rows[i] = image->row(std::clamp(y - kernels::kCensusRadiusY + i, 0, left.height() - 1));
     }
-    kernels.census(rows, width, image == &left ? left_planes : right_planes);
+    kernels.census(rows, width, image == &left ? left_census.data() : right_census.data());
   }
-  for (int p = 0; p < kPlanes; ++p) reverse_bytes(right_planes[p], width, reversed_plane(p));
-  kernels.cost(left_in, reversed_in, width, disparities, cost_out);
+  reverse_census(kernels.census_layout, right_census.data(), width, width + disparities,
+                 reversed.data());
+  kernels.cost(left_census.data(), reversed.data(), width, disparities, cost_out);
 }
 
 namespace {

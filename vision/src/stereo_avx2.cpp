@@ -8,8 +8,8 @@ namespace epipole::vision::kernels {
 
 namespace {
 
-void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
-                   int disparities, std::uint8_t* cost) {
+void cost_row_avx2(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
+                   std::uint8_t* cost) {
   using V = simd::Avx2x16;
   const __m256i table = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2,
                                          1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
@@ -21,19 +21,20 @@ void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* r
         _mm256_shuffle_epi8(table, _mm256_and_si256(v, low)),
         _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(v, 4), low)));
   };
-  static_assert(kCensusPlanes == 4);
-  // The plane pointers in registers: read through `left` and `right` in the loop, they were
-  // reloaded and the splats went through the stack, which took half of this kernel's time.
-  const std::uint8_t* const l0 = left[0];
-  const std::uint8_t* const l1 = left[1];
-  const std::uint8_t* const l2 = left[2];
-  const std::uint8_t* const l3 = left[3];
-  const std::uint8_t* const r0 = right[0];
-  const std::uint8_t* const r1 = right[1];
-  const std::uint8_t* const r2 = right[2];
-  const std::uint8_t* const r3 = right[3];
+  // The plane pointers in registers: read through arrays in the loop, they were reloaded and
+  // the splats went through the stack, which took half of this kernel's time.
+  const std::ptrdiff_t n = width;
+  const std::ptrdiff_t padded = n + disparities;
+  const std::uint8_t* const l0 = left;
+  const std::uint8_t* const l1 = left + n;
+  const std::uint8_t* const l2 = left + 2 * n;
+  const std::uint8_t* const l3 = left + 3 * n;
+  const std::uint8_t* const r0 = right;
+  const std::uint8_t* const r1 = right + padded;
+  const std::uint8_t* const r2 = right + 2 * padded;
+  const std::uint8_t* const r3 = right + 3 * padded;
   for (int x = 0; x < width; ++x) {
-    const __m256i l[kCensusPlanes] = {
+    const __m256i l[4] = {
         _mm256_set1_epi8(static_cast<char>(l0[x])), _mm256_set1_epi8(static_cast<char>(l1[x])),
         _mm256_set1_epi8(static_cast<char>(l2[x])), _mm256_set1_epi8(static_cast<char>(l3[x]))};
     const std::ptrdiff_t k = width - 1 - x;
@@ -49,7 +50,7 @@ void cost_row_avx2(const std::uint8_t* const* left, const std::uint8_t* const* r
     }
     if (d < computed && disparities - d == 16) {  // 16 left
       const auto half = [&](int p) {
-        return V::xorb(_mm256_castsi256_si128(l[p]), V::loadb(right[p] + k + d));
+        return V::xorb(_mm256_castsi256_si128(l[p]), V::loadb(right + p * padded + k + d));
       };
       V::storeb(out + d, V::popcount4(half(0), half(1), half(2), half(3)));
     }
@@ -218,8 +219,9 @@ void sgm_row_avx2(const SgmRow& r) {
 }  // namespace
 
 StereoKernels stereo_kernels_avx2() {
-  return {census_row_simd<simd::Avx2x16>, cost_row_avx2, sgm_row_avx2,
-          box_columns_simd<simd::Avx2x16>, bm_row_simd<simd::Avx2x16>};
+  constexpr CensusLayout kLayout = CensusLayout::planes;
+  return {kLayout,      census_row_simd<simd::Avx2x16, kLayout>, cost_row_avx2,
+          sgm_row_avx2, box_columns_simd<simd::Avx2x16>,         bm_row_simd<simd::Avx2x16>};
 }
 
 }  // namespace epipole::vision::kernels

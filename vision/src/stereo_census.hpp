@@ -8,7 +8,6 @@ constexpr int kCensusBits = 31;
 constexpr int kCensusRadiusX = 4;
 constexpr int kCensusRadiusY = 3;
 constexpr int kMaxCensusCost = 31;
-constexpr int kCensusPlanes = 4;  // bytes of a census: bits 0..7, 8..15, 16..23, 24..30
 
 struct CensusOffset {
   int dx;

@@ -10,19 +10,43 @@
 
 namespace epipole::vision::kernels {
 
-// The census of a row in four byte planes: bits 0..7 of every pixel in planes[0], 8..15 in
-// planes[1], 16..23 in planes[2], 24..30 in planes[3]. Census: 9x7 centre-symmetric, bit
+// A row's census of n pixels: 4n bytes in the layout of the kernel set that writes and reads
+// it (StereoKernels::census_layout). The census is 9x7 centre-symmetric, bit
 // b = I(x+dx_b, y+dy_b) > I(x-dx_b, y-dy_b) for the 31 offsets of the upper half window.
-// rows[0..6] are rows y-3..y+3 (clamped at the image border by the caller); columns are clamped
-// too.
-using CensusRowKernel = void(const std::uint8_t* const* rows, int width,
-                             std::uint8_t* const* planes);
+//   planes: four byte planes one after the other: bits 0..7 of pixel x at [x], 8..15 at
+//           [n + x], 16..23 at [2n + x], 24..30 at [3n + x] (the reference, AVX2, ARMv7 NEON:
+//           a plane's 16 pixels are one load);
+//   words:  pixel x's bits as one little-endian 32-bit word at [4x] (AArch64 NEON: a pixel's
+//           census is one splat load, and 16 pixels' are four loads that CNT and ADDP count).
+enum class CensusLayout : std::uint8_t { planes, words };
+// Where byte p (bits 8p..8p+7) of pixel x's census is, in a row of n pixels.
+inline std::ptrdiff_t census_byte(CensusLayout layout, int n, int x, int p) {
+  return layout == CensusLayout::planes ? static_cast<std::ptrdiff_t>(p) * n + x
+                                        : static_cast<std::ptrdiff_t>(x) * 4 + p;
+}
+inline std::uint32_t census_at(CensusLayout layout, const std::uint8_t* census, int n, int x) {
+  std::uint32_t bits = 0;
+  for (int p = 0; p < 4; ++p) {
+    bits |= static_cast<std::uint32_t>(census[census_byte(layout, n, x, p)]) << (8 * p);
+  }
+  return bits;
+}
+inline void set_census(CensusLayout layout, std::uint8_t* census, int n, int x,
+                       std::uint32_t bits) {
+  for (int p = 0; p < 4; ++p) {
+    census[census_byte(layout, n, x, p)] = static_cast<std::uint8_t>(bits >> (8 * p));
+  }
+}
+
+// The census of a row into `census` (width pixels). rows[0..6] are rows y-3..y+3 (clamped at
+// the image border by the caller); columns are clamped too.
+using CensusRowKernel = void(const std::uint8_t* const* rows, int width, std::uint8_t* census);
 // Matching cost of one row: cost[x * D + d] = Hamming distance (0..31) between the left census
 // at x and the right census at x - d, and 31 (kMaxCensusCost) where d > x (beyond the left
-// border). The right census comes reversed: right[p][k] is plane p of right pixel
-// width - 1 - k, for k < width + D (the caller pads k >= width).
-using CostRowKernel = void(const std::uint8_t* const* left, const std::uint8_t* const* right,
-                           int width, int disparities, std::uint8_t* cost);
+// border). left holds width pixels; right holds width + D, reversed: its pixel k is right
+// pixel width - 1 - k, for k < width (the caller pads k >= width).
+using CostRowKernel = void(const std::uint8_t* left, const std::uint8_t* right, int width,
+                           int disparities, std::uint8_t* cost);
 
 // Winner take all of one row of aggregated costs S(x, d) (each below kNoCost), as the last step
 // of the SGM and BM row kernels. disparity[x]: d * 16 with parabolic sub-pixel, or
@@ -117,6 +141,7 @@ struct BmRow {
 using BmRowKernel = void(const BmRow& row);
 
 struct StereoKernels {
+  CensusLayout census_layout;  // of what census writes and cost reads
   CensusRowKernel* census;
   CostRowKernel* cost;
   SgmRowKernel* sgm;
@@ -126,9 +151,10 @@ struct StereoKernels {
 
 StereoKernels stereo_kernels(SimdPath path);
 
-void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* const* planes);
-void cost_row_ref(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
-                  int disparities, std::uint8_t* cost);
+// The reference's census and cost: the planes layout.
+void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* census);
+void cost_row_ref(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
+                  std::uint8_t* cost);
 void sgm_row_ref(const SgmRow& row);
 void box_columns_ref(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub, int n);
 void bm_row_ref(const BmRow& row);
@@ -139,7 +165,7 @@ void box_wta_ref(const std::uint16_t* columns, int width, int disparities, int r
 // The definition of the winner take all over a whole row of sums [x * D + d].
 void wta_row_ref(const std::uint16_t* sums, int width, int disparities, const WtaRow& wta);
 
-// One pixel of the census (clamped columns), shared by every path for the border columns.
-void census_pixel(const std::uint8_t* const* rows, int width, int x, std::uint8_t* const* planes);
+// The census bits of pixel x (clamped columns), shared by every path for the border columns.
+std::uint32_t census_bits(const std::uint8_t* const* rows, int width, int x);
 
 }  // namespace epipole::vision::kernels

@@ -42,12 +42,13 @@ void with_common_range(int disparities, Run&& run) {
   }
 }
 
-// The census of the 16 pixels from x, whose columns x - 4 .. x + 19 are readable.
-template <typename V>
-inline void census_vector(const std::uint8_t* const* rows, int x, std::uint8_t* const* planes,
+// The census of the 16 pixels from x, whose columns x - 4 .. x + 19 are readable, into a row of
+// n pixels from pixel `at`.
+template <typename V, CensusLayout kLayout>
+inline void census_vector(const std::uint8_t* const* rows, int x, std::uint8_t* census, int n,
                           int at) {
   using B = typename V::B;
-  B acc[kCensusPlanes] = {V::zerob(), V::zerob(), V::zerob(), V::zerob()};
+  B acc[4] = {V::zerob(), V::zerob(), V::zerob(), V::zerob()};
 #pragma GCC unroll 31
   for (int b = 0; b < kCensusBits; ++b) {
     const CensusOffset o = kCensusOffsets[b];
@@ -56,40 +57,44 @@ inline void census_vector(const std::uint8_t* const* rows, int x, std::uint8_t* 
     acc[b / 8] =
         V::set_if_greater(acc[b / 8], a, c, V::splatb(static_cast<std::uint8_t>(1u << (b % 8))));
   }
-  for (int p = 0; p < kCensusPlanes; ++p) V::storeb(planes[p] + at, acc[p]);
+  if constexpr (kLayout == CensusLayout::words) {
+    V::store_interleaved4(census + static_cast<std::ptrdiff_t>(at) * 4, acc);
+  } else {
+    for (int p = 0; p < 4; ++p) V::storeb(census + census_byte(kLayout, n, at, p), acc[p]);
+  }
 }
 
-template <typename V>
-void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* const* planes) {
+template <typename V, CensusLayout kLayout>
+void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* census) {
   constexpr int kLanes = 16;
   constexpr int kR = kCensusRadiusX;
   if (width < kLanes + 2 * kR) {
-    for (int x = 0; x < width; ++x) census_pixel(rows, width, x, planes);
+    for (int x = 0; x < width; ++x)
+      set_census(kLayout, census, width, x, census_bits(rows, width, x));
     return;
   }
   // Interior columns [kR, width - kR); the last vector may overlap the previous one.
   const int end = width - kR;
   for (int x = kR; x < end; x += kLanes) {
     const int at = std::min(x, end - kLanes);
-    census_vector<V>(rows, at, planes, at);
+    census_vector<V, kLayout>(rows, at, census, width, at);
   }
   // The kR border columns on each side: one vector over a copy of the rows with the columns
-  // clamped, the same values census_pixel reads.
+  // clamped, the same values census_bits reads.
   constexpr int kSpan = kLanes + 2 * kR;
   std::uint8_t copy[7][kSpan];
   const std::uint8_t* copy_rows[7];
-  std::uint8_t lanes[kCensusPlanes][kLanes];
-  std::uint8_t* const lane_planes[kCensusPlanes] = {lanes[0], lanes[1], lanes[2], lanes[3]};
+  std::uint8_t lanes[4 * kLanes];                // the 16 pixels' census, in kLayout
   for (const int first : {0, width - kLanes}) {  // image column of lane 0
     for (int r = 0; r < 7; ++r) {
       for (int i = 0; i < kSpan; ++i)
         copy[r][i] = rows[r][std::clamp(first - kR + i, 0, width - 1)];
       copy_rows[r] = copy[r];
     }
-    census_vector<V>(copy_rows, kR, lane_planes, 0);
+    census_vector<V, kLayout>(copy_rows, kR, lanes, kLanes, 0);
     const int begin = first == 0 ? 0 : width - kR;
     for (int x = begin; x < begin + kR; ++x) {
-      for (int p = 0; p < kCensusPlanes; ++p) planes[p][x] = lanes[p][x - first];
+      set_census(kLayout, census, width, x, census_at(kLayout, lanes, kLanes, x - first));
     }
   }
 }
@@ -104,54 +109,90 @@ inline typename V::B census_distance(const typename V::B* left, const std::uint8
       V::xorb(left[2], V::loadb(right[2] + at)), V::xorb(left[3], V::loadb(right[3] + at)));
 }
 
+// One pixel's census against 16 of the reversed right row's, in either layout: what the cost
+// row needs of it.
+template <typename V, CensusLayout kLayout>
+class CensusPixel;
+
+template <typename V>
+class CensusPixel<V, CensusLayout::planes> {
+ public:
+  CensusPixel(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities) {
+    // The planes in locals: the byte stores into the cost row may alias what they point to,
+    // and the compiler would load them again after each one.
+#pragma GCC unroll 4
+    for (int p = 0; p < 4; ++p) {
+      left_[p] = left + static_cast<std::ptrdiff_t>(p) * width;
+      right_[p] = right + static_cast<std::ptrdiff_t>(p) * (width + disparities);
+    }
+  }
+  void load(int x) {
+#pragma GCC unroll 4
+    for (int p = 0; p < 4; ++p) l_[p] = V::load_splatb(left_[p] + x);
+  }
+  // The distances to right pixels k .. k + 15.
+  typename V::B distance(std::ptrdiff_t k) const {
+    return census_distance<V>(l_, right_, k);
+  }
+
+ private:
+  const std::uint8_t* left_[4];
+  const std::uint8_t* right_[4];
+  typename V::B l_[4];
+};
+
+template <typename V>
+class CensusPixel<V, CensusLayout::words> {
+ public:
+  CensusPixel(const std::uint8_t* left, const std::uint8_t* right, int, int)
+      : left_(left), right_(right) {}
+  void load(int x) { l_ = V::load_splat_word(left_ + static_cast<std::ptrdiff_t>(x) * 4); }
+  typename V::B distance(std::ptrdiff_t k) const { return V::popcount_words16(l_, right_ + k * 4); }
+
+ private:
+  const std::uint8_t* left_;
+  const std::uint8_t* right_;
+  typename V::B l_;
+};
+
 // Row costs, pixel by pixel: the blocks of 16 disparities inside the image first, then the one
 // that reaches beyond its left border (d > x), where the cost is the most, then those wholly
 // beyond it, which are that maximum alone. kD: the range when fixed at compile time (0:
 // disparities).
-template <typename V, int kD = 0>
-void cost_row_range(const std::uint8_t* const* left_planes, const std::uint8_t* const* right_planes,
-                    int width, int disparities, std::uint8_t* cost) {
+template <typename V, CensusLayout kLayout, int kD = 0>
+void cost_row_range(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
+                    std::uint8_t* cost) {
   using B = typename V::B;
-  // The planes in locals: the byte stores into `cost` may alias what the arguments point to,
-  // and the compiler would load them again after each one.
-  const std::uint8_t* left[kCensusPlanes];
-  const std::uint8_t* right[kCensusPlanes];
-#pragma GCC unroll 4
-  for (int p = 0; p < kCensusPlanes; ++p) {
-    left[p] = left_planes[p];
-    right[p] = right_planes[p];
-  }
+  CensusPixel<V, kLayout> pixel(left, right, width, disparities);
   const B max_cost = V::splatb(kMaxCensusCost);
   for (int x = 0; x < width; ++x) {
-    B l[kCensusPlanes];
-#pragma GCC unroll 4
-    for (int p = 0; p < kCensusPlanes; ++p) l[p] = V::load_splatb(left[p] + x);
+    pixel.load(x);
     const std::ptrdiff_t k = width - 1 - x;
     std::uint8_t* out = cost + static_cast<std::ptrdiff_t>(x) * disparities;
     // Block d lies inside when its last disparity does: d + 15 <= x.
     if (kD != 0 && x >= kD - 1) {
       EPIPOLE_UNROLL_RANGE
-      for (int d = 0; d < kD; d += 16) V::storeb(out + d, census_distance<V>(l, right, k + d));
+      for (int d = 0; d < kD; d += 16) V::storeb(out + d, pixel.distance(k + d));
       continue;
     }
     const int inside = x < 15 ? 0 : std::min(disparities, (x - 15) / 16 * 16 + 16);
     int d = 0;
-    for (; d < inside; d += 16) V::storeb(out + d, census_distance<V>(l, right, k + d));
+    for (; d < inside; d += 16) V::storeb(out + d, pixel.distance(k + d));
     if (d < disparities && d <= x) {
       const B beyond = V::gtb(V::addb(V::iotab(), V::splatb(static_cast<std::uint8_t>(d))),
                               V::splatb(static_cast<std::uint8_t>(x)));
-      V::storeb(out + d, V::maxb(census_distance<V>(l, right, k + d), V::andb(beyond, max_cost)));
+      V::storeb(out + d, V::maxb(pixel.distance(k + d), V::andb(beyond, max_cost)));
       d += 16;
     }
     for (; d < disparities; d += 16) V::storeb(out + d, max_cost);
   }
 }
 
-template <typename V>
-void cost_row_simd(const std::uint8_t* const* left, const std::uint8_t* const* right, int width,
-                   int disparities, std::uint8_t* cost) {
+template <typename V, CensusLayout kLayout>
+void cost_row_simd(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
+                   std::uint8_t* cost) {
   with_common_range(disparities, [&](auto range) {
-    cost_row_range<V, range.value>(left, right, width, disparities, cost);
+    cost_row_range<V, kLayout, range.value>(left, right, width, disparities, cost);
   });
 }
 
