@@ -98,6 +98,15 @@ void DepthCells::measure(ImageView<const std::int16_t> disparity,
   std::fill(histogram_.begin(), histogram_.end(), 0u);
   std::fill(sums_.begin(), sums_.end(), std::uint64_t{0});
   std::fill(cell_pixels_.begin(), cell_pixels_.end(), 0u);
+  // In locals: the counts' stores may alias the members, and the compiler would load them
+  // again for every pixel.
+  const int width = config_.width;
+  const int min_confidence = config_.min_confidence;
+  const std::uint8_t* const column_of = horizontal_.cell_of.data();
+  std::uint32_t* const histogram = histogram_.data();
+  std::uint64_t* const sums = sums_.data();
+  // A pixel counts when 1 <= v < D * 16: a disparity, and its integer part below D.
+  const auto counted = static_cast<unsigned>(D * vision::kDisparityScale - 1);
   for (int y = band_first_; y < band_end_; ++y) {
     const std::int16_t* row = disparity.row(y);
     const std::uint8_t* trust = trusted_only ? confidence.row(y) : nullptr;
@@ -107,16 +116,14 @@ void DepthCells::measure(ImageView<const std::int16_t> disparity,
       cell_pixels_[static_cast<std::size_t>(first_cell + k)] +=
           column_pixels_[static_cast<std::size_t>(k)];
     }
-    for (int x = 0; x < config_.width; ++x) {
+    for (int x = 0; x < width; ++x) {
       const int v = row[x];
-      if (v <= 0) continue;
-      const int d = v / vision::kDisparityScale;
-      if (d >= D) continue;
-      if (trust != nullptr && trust[x] < config_.min_confidence) continue;
-      const int c = first_cell + horizontal_.cell_of[static_cast<std::size_t>(x)];
-      const auto bin = static_cast<std::size_t>(c * D + d);
-      ++histogram_[bin];
-      sums_[bin] += static_cast<std::uint64_t>(v);
+      if (static_cast<unsigned>(v - 1) >= counted) continue;
+      if (trust != nullptr && trust[x] < min_confidence) continue;
+      const unsigned d = static_cast<unsigned>(v) / vision::kDisparityScale;  // v > 0
+      const std::size_t bin = static_cast<std::size_t>(first_cell + column_of[x]) * D + d;
+      ++histogram[bin];
+      sums[bin] += static_cast<std::uint64_t>(v);
     }
   }
   for (std::size_t c = 0; c < cells; ++c) {
