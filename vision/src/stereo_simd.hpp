@@ -196,9 +196,41 @@ void cost_row_simd(const std::uint8_t* left, const std::uint8_t* right, int widt
   });
 }
 
+// The disparities of 16 lanes as WtaPixels keeps them: bytes where the vocabulary narrows a
+// mask of 16-bit lanes to bytes in one instruction (narrow_maskh: NEON), 16-bit lanes
+// otherwise.
+template <typename V, bool kBytes = requires(typename V::H mask) {
+  V::narrow_maskh(mask);
+}
+> struct DisparityLanes {
+  using T = typename V::B;
+  using Value = std::uint8_t;
+  static T iota() { return V::iotab(); }
+  static T splat(Value v) { return V::splatb(v); }
+  static T add(T a, T b) { return V::addb(a, b); }
+  static T select(typename V::H mask, T a, T b) { return V::selectb(V::narrow_maskh(mask), a, b); }
+  static T load(const Value* p) { return V::loadb(p); }
+  static void store(Value* p, T v) { V::storeb(p, v); }
+  static typename V::H widen(T v) { return V::widen(v); }
+  static T reverse(T v) requires requires { V::reverseb(v); }
+  { return V::reverseb(v); }
+};
+template <typename V>
+struct DisparityLanes<V, false> {
+  using T = typename V::H;
+  using Value = std::uint16_t;
+  static T iota() { return V::iotah(); }
+  static T splat(Value v) { return V::splath(v); }
+  static T add(T a, T b) { return V::addh(a, b); }
+  static T select(T mask, T a, T b) { return V::selecth(mask, a, b); }
+  static T load(const Value* p) { return V::loadh(p); }
+  static void store(Value* p, T v) { V::storeh(p, v); }
+  static T widen(T v) { return v; }
+};
+
 // Winner take all, one pixel at a time in increasing x (wta_row_ref defines the result).
 // The right image's candidates, a (cost, disparity) pair for each right pixel xr, are kept in
-// reverse order (entry width - 1 - xr), so that pixel x's disparities d .. d + 15 meet right
+// reverse order (entry width - 1 - x), so that pixel x's disparities d .. d + 15 meet right
 // pixels x - d .. x - d - 15 at the consecutive entries width - 1 - x + d ..: one load and store
 // a block, no shift. Entries past width - 1 (right pixels left of the image) are written and
 // never read. The disparities need no first value: every sum is below kNoCost (SGM's at most
@@ -206,15 +238,15 @@ void cost_row_simd(const std::uint8_t* left, const std::uint8_t* right, int widt
 // kNoCost. kD: the range when fixed at compile time (0: the constructor's). kSmallSums: every
 // sum is below 2048 (SGM's), so a vocabulary's min_first_small may find the winner.
 //
-// Where the vocabulary narrows a mask of 16-bit lanes to bytes in one instruction
-// (narrow_maskh: NEON), the disparities, at most 255, are kept as bytes: the right image's,
-// and each lane's best of the pixel. A block then costs one load, select and store of them
-// rather than two each, and one add for the next block's disparities.
+// The disparities, at most 255, are kept as bytes where the vocabulary allows
+// (DisparityLanes): the right image's, and each lane's best of the pixel. A block then costs one
+// load, select and store of them rather than two each, and one add for the next block's
+// disparities.
 template <typename V, int kD = 0, bool kSmallSums = false>
 class WtaPixels {
-  using B = typename V::B;
   using H = typename V::H;
-  static constexpr bool kByteDisparities = requires(H mask) { V::narrow_maskh(mask); };
+  using Lanes = DisparityLanes<V>;
+  using Disparity = typename Lanes::Value;
 
  public:
   WtaPixels(const WtaRow& row, int width, int disparities)
@@ -223,8 +255,10 @@ class WtaPixels {
         disparities_(disparities),
         ratio_(uniqueness_ratio(row.uniqueness)),
         cost_(row.window),
-        disp_(row.window + width + disparities) {
-    std::fill_n(cost_, width + disparities, kNoCost);
+        disp_(reinterpret_cast<Disparity*>(row.window + width + disparities)) {
+    // kNoCost everywhere, 16 at a time (the last 16 may overlap the ones before).
+    const int n = width + disparities;
+    for (int i = 0; i < n; i += 16) V::storeh(cost_ + std::min(i, n - 16), V::splath(kNoCost));
   }
 
   // The winner of pixel x. sums(d) gives the sums of disparities d .. d + 15 and must have
@@ -241,43 +275,23 @@ class WtaPixels {
     const int D = kD != 0 ? kD : disparities_;
     H m = V::splath(kNoCost);
     H second = V::splath(kNoCost);
-    H m_index;
     std::uint16_t* const cost = cost_ + (width_ - 1 - x);
-    if constexpr (kByteDisparities) {
-      const B sixteen = V::splatb(16);
-      B index = V::iotab();
-      B best = V::zerob();
-      std::uint8_t* const disp = disp_bytes() + (width_ - 1 - x);
-      EPIPOLE_UNROLL_RANGE
-      for (int d = 0; d < D; d += 16) {
-        const H v = sums(d);
-        best = V::selectb(V::narrow_maskh(V::gth(m, v)), index, best);
-        second = V::minh(second, V::maxh(m, v));
-        m = V::minh(m, v);
-        const H old_cost = V::loadh(cost + d);
-        V::storeh(cost + d, V::minh(old_cost, v));
-        V::storeb(disp + d,
-                  V::selectb(V::narrow_maskh(V::gth(old_cost, v)), index, V::loadb(disp + d)));
-        index = V::addb(index, sixteen);
-      }
-      m_index = V::widen(best);
-    } else {
-      const H sixteen = V::splath(16);
-      H index = V::iotah();
-      m_index = V::splath(0);
-      std::uint16_t* const disp = disp_ + (width_ - 1 - x);
-      EPIPOLE_UNROLL_RANGE
-      for (int d = 0; d < D; d += 16) {
-        const H v = sums(d);
-        m_index = V::selecth(V::gth(m, v), index, m_index);
-        second = V::minh(second, V::maxh(m, v));
-        m = V::minh(m, v);
-        const H old_cost = V::loadh(cost + d);
-        V::storeh(cost + d, V::minh(old_cost, v));
-        V::storeh(disp + d, V::selecth(V::gth(old_cost, v), index, V::loadh(disp + d)));
-        index = V::addh(index, sixteen);
-      }
+    Disparity* const disp = disp_ + (width_ - 1 - x);
+    const auto sixteen = Lanes::splat(16);
+    auto index = Lanes::iota();
+    auto best_index = Lanes::splat(0);
+    EPIPOLE_UNROLL_RANGE
+    for (int d = 0; d < D; d += 16) {
+      const H v = sums(d);
+      best_index = Lanes::select(V::gth(m, v), index, best_index);
+      second = V::minh(second, V::maxh(m, v));
+      m = V::minh(m, v);
+      const H old_cost = V::loadh(cost + d);
+      V::storeh(cost + d, V::minh(old_cost, v));
+      Lanes::store(disp + d, Lanes::select(V::gth(old_cost, v), index, Lanes::load(disp + d)));
+      index = Lanes::add(index, sixteen);
     }
+    const H m_index = Lanes::widen(best_index);
 
     int min_cost;
     int best;
@@ -297,23 +311,29 @@ class WtaPixels {
                  row_.confidence != nullptr ? others : kNoCost);
   }
 
-  // After the last pixel: every right pixel's winner.
+  // After the last pixel: every right pixel's winner (width >= 16).
   void finish() {
-    for (int xr = 0; xr < width_; ++xr) {
-      row_.right_best[xr] = static_cast<std::int16_t>(
-          kByteDisparities ? disp_bytes()[width_ - 1 - xr] : disp_[width_ - 1 - xr]);
+    if constexpr (requires(typename Lanes::T v) { Lanes::reverse(v); }) {
+      // 16 at a time; the last 16 may overlap the ones before.
+      for (int xr0 = 0; xr0 < width_; xr0 += 16) {
+        const int xr = std::min(xr0, width_ - 16);
+        const auto winners = Lanes::reverse(Lanes::load(disp_ + (width_ - 16 - xr)));
+        V::storeh(reinterpret_cast<std::uint16_t*>(row_.right_best + xr), Lanes::widen(winners));
+      }
+    } else {
+      for (int xr = 0; xr < width_; ++xr) {
+        row_.right_best[xr] = static_cast<std::int16_t>(disp_[width_ - 1 - xr]);
+      }
     }
   }
 
  private:
-  std::uint8_t* disp_bytes() const { return reinterpret_cast<std::uint8_t*>(disp_); }
-
   WtaRow row_;
   int width_;
   int disparities_;
   std::uint32_t ratio_;
   std::uint16_t* cost_;
-  std::uint16_t* disp_;
+  Disparity* disp_;
 };
 
 // One path step for 16 disparities at d: c + min(p[d], p[d-1] + P1, p[d+1] + P1,

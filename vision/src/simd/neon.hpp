@@ -126,6 +126,11 @@ struct Neon {
   static B popcount4(B a, B b, B c, B d) {
     return vaddq_u8(vaddq_u8(vcntq_u8(a), vcntq_u8(b)), vaddq_u8(vcntq_u8(c), vcntq_u8(d)));
   }
+  // The 16 lanes in reverse order.
+  static B reverseb(B v) {
+    const B halves = vrev64q_u8(v);
+    return vextq_u8(halves, halves, 8);
+  }
   static std::uint8_t hminb(B v) {
     return across::min_u8(v);
   }
