@@ -1,6 +1,7 @@
 #include "epipole/vision/stereo.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cstdlib>
 #include <cstring>
 
@@ -200,7 +201,15 @@ void reverse_census(kernels::CensusLayout layout, const std::uint8_t* census, in
     for (std::ptrdiff_t p = 0; p < 4; ++p) reverse_bytes(census + p * n, n, reversed + p * padded);
     return;
   }
-  for (int i = 0; i < n; ++i) std::memcpy(reversed + 4 * (n - 1 - i), census + 4 * i, 4);
+  // Two words at a time: swapping the halves of their 8 bytes swaps them.
+  int i = 0;
+  for (; i + 2 <= n; i += 2) {
+    std::uint64_t pair;
+    std::memcpy(&pair, census + 4 * i, 8);
+    pair = std::rotr(pair, 32);
+    std::memcpy(reversed + 4 * (n - 2 - i), &pair, 8);
+  }
+  if (i < n) std::memcpy(reversed, census + 4 * i, 4);
 }
 
 constexpr int kWarmupRows = 24;  // SGM: rows aggregated above a stripe before it is output

@@ -6,6 +6,7 @@
 // bytes, sums in 16-bit lanes.
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <tuple>
 #include <type_traits>
 
@@ -86,9 +87,17 @@ void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* c
   const std::uint8_t* copy_rows[7];
   std::uint8_t lanes[4 * kLanes];                // the 16 pixels' census, in kLayout
   for (const int first : {0, width - kLanes}) {  // image column of lane 0
+    // Columns first - kR .. first + kLanes + kR - 1: the edge column kR times past the border
+    // (width >= kSpan).
     for (int r = 0; r < 7; ++r) {
-      for (int i = 0; i < kSpan; ++i)
-        copy[r][i] = rows[r][std::clamp(first - kR + i, 0, width - 1)];
+      constexpr int kInside = kSpan - kR;
+      if (first == 0) {
+        std::memset(copy[r], rows[r][0], kR);
+        std::memcpy(copy[r] + kR, rows[r], kInside);
+      } else {
+        std::memcpy(copy[r], rows[r] + width - kInside, kInside);
+        std::memset(copy[r] + kInside, rows[r][width - 1], kR);
+      }
       copy_rows[r] = copy[r];
     }
     census_vector<V, kLayout>(copy_rows, kR, lanes, kLanes, 0);
