@@ -223,7 +223,10 @@ class Bench {
                          board_.detector.cascade.string() + " in the data cache");
       }
     }
-    opencv_pipeline_.emplace(board_, calibration_, xml);
+    opencv_pipeline_.emplace(board_, calibration_, xml, options_.opencv_sgbm == "3way");
+    if (board_.stereo.method == vision::StereoMethod::sgm) {
+      notes_.push_back("opencv sgm: StereoSGBM, mode " + options_.opencv_sgbm);
+    }
     notes_.push_back("opencv has no sparse matching: its pair is without that stage");
   }
 
@@ -367,6 +370,11 @@ void add_bench_options(CLI::App& command, BenchOptions& options) {
   cmd->add_flag("--no-rectify-ahead{false}", options.rectify_ahead,
                 "Rectify each pair when it is processed, not in the gaps while the one before "
                 "ends (the firmware's loop does that when the next pair is already there)");
+  cmd->add_option("--opencv-sgbm", options.opencv_sgbm,
+                  "OpenCV's mode of StereoSGBM beside SGM: 3way (MODE_SGBM_3WAY) or default "
+                  "(MODE_SGBM)")
+      ->check(CLI::IsMember({"3way", "default"}))
+      ->capture_default_str();
   cmd->add_flag("--json", options.json, "Print the figures as JSON");
 }
 

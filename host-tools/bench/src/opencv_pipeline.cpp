@@ -25,7 +25,7 @@ void rectification_maps(const calib::StereoCalibration& c, const calib::CameraCa
                               {c.width, c.height}, CV_16SC2, map1, map2);
 }
 
-cv::Ptr<cv::StereoMatcher> stereo_matcher(const vision::StereoConfig& s) {
+cv::Ptr<cv::StereoMatcher> stereo_matcher(const vision::StereoConfig& s, bool sgbm_3way) {
   if (s.method == vision::StereoMethod::bm) {
     auto bm = cv::StereoBM::create(s.max_disparity, std::max(5, s.block_size | 1));
     bm->setUniquenessRatio(s.uniqueness);
@@ -35,16 +35,17 @@ cv::Ptr<cv::StereoMatcher> stereo_matcher(const vision::StereoConfig& s) {
     return bm;
   }
   constexpr int kBlock = 5;
-  return cv::StereoSGBM::create(0, s.max_disparity, kBlock, 8 * kBlock * kBlock,
-                                32 * kBlock * kBlock, s.lr_max_diff, 63, s.uniqueness,
-                                s.speckle_size, s.speckle_range, cv::StereoSGBM::MODE_SGBM_3WAY);
+  return cv::StereoSGBM::create(
+      0, s.max_disparity, kBlock, 8 * kBlock * kBlock, 32 * kBlock * kBlock, s.lr_max_diff, 63,
+      s.uniqueness, s.speckle_size, s.speckle_range,
+      sgbm_3way ? cv::StereoSGBM::MODE_SGBM_3WAY : cv::StereoSGBM::MODE_SGBM);
 }
 
 }  // namespace
 
 OpenCvPipeline::OpenCvPipeline(const firmware::BoardConfig& board,
                                const std::optional<calib::StereoCalibration>& calibration,
-                               const std::filesystem::path& cascade_xml)
+                               const std::filesystem::path& cascade_xml, bool sgbm_3way)
     : corners_(board.corners), detector_(board.detector) {
   const auto enabled = [&](Stage s) { return protocol::has_stage(board.stages, s); };
   if (enabled(Stage::rectify) && calibration) {
@@ -54,7 +55,7 @@ OpenCvPipeline::OpenCvPipeline(const firmware::BoardConfig& board,
   }
   if (enabled(Stage::corners)) stages_ |= stage_bit(Stage::corners);
   if (enabled(Stage::disparity)) {
-    matcher_ = stereo_matcher(board.stereo);
+    matcher_ = stereo_matcher(board.stereo, sgbm_3way);
     stages_ |= stage_bit(Stage::disparity);
   }
   if (enabled(Stage::detect) && !cascade_xml.empty()) {

@@ -2,8 +2,8 @@
 
 // The work of the firmware's stages done by OpenCV, for `epipole bench` to set beside the
 // firmware: remap of both images, FAST (or Harris) corners on both, StereoSGBM in 3-way mode
-// (or StereoBM) with the same disparity range, CascadeClassifier on the left image. The sparse
-// matcher has no OpenCV counterpart.
+// (or its default mode, or StereoBM) with the same disparity range, CascadeClassifier on the left
+// image. The sparse matcher has no OpenCV counterpart.
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/objdetect.hpp>
@@ -24,10 +24,11 @@ class OpenCvPipeline {
   using Times = std::array<double, protocol::kStageCount>;
 
   // The stages the board enables that OpenCV can do: rectification needs the calibration,
-  // detection OpenCV's XML of the board's cascade (`cascade_xml`, empty: none).
+  // detection OpenCV's XML of the board's cascade (`cascade_xml`, empty: none). SGM:
+  // StereoSGBM in 3-way mode, or in its default mode (MODE_SGBM) without `sgbm_3way`.
   OpenCvPipeline(const firmware::BoardConfig& board,
                  const std::optional<calib::StereoCalibration>& calibration,
-                 const std::filesystem::path& cascade_xml);
+                 const std::filesystem::path& cascade_xml, bool sgbm_3way = true);
 
   // The stages that run here (a subset of the board's).
   protocol::StageMask stages() const { return stages_; }

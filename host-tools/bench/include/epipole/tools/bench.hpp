@@ -32,6 +32,7 @@ struct BenchOptions {
   bool rectify_ahead = true;
   bool epipole = true;  // false: OpenCV's side only (--opencv-only: one side's instruction count)
   bool opencv = true;
+  std::string opencv_sgbm = "3way";  // OpenCV's SGM: StereoSGBM's mode, 3way or default
   bool json = false;
 };
 
