@@ -105,8 +105,9 @@ void DepthCells::measure(ImageView<const std::int16_t> disparity,
   const std::uint8_t* const column_of = horizontal_.cell_of.data();
   std::uint32_t* const histogram = histogram_.data();
   std::uint64_t* const sums = sums_.data();
-  // A pixel counts when 1 <= v < D * 16: a disparity, and its integer part below D.
-  const auto counted = static_cast<unsigned>(D * vision::kDisparityScale - 1);
+  // A pixel counts when 1 <= v < D * kDisparityScale (a disparity whose integer part is below
+  // D): v - 1 is one of the `counted_values` below that.
+  const auto counted_values = static_cast<unsigned>(D * vision::kDisparityScale - 1);
   for (int y = band_first_; y < band_end_; ++y) {
     const std::int16_t* row = disparity.row(y);
     const std::uint8_t* trust = trusted_only ? confidence.row(y) : nullptr;
@@ -118,7 +119,7 @@ void DepthCells::measure(ImageView<const std::int16_t> disparity,
     }
     for (int x = 0; x < width; ++x) {
       const int v = row[x];
-      if (static_cast<unsigned>(v - 1) >= counted) continue;
+      if (static_cast<unsigned>(v - 1) >= counted_values) continue;
       if (trust != nullptr && trust[x] < min_confidence) continue;
       const unsigned d = static_cast<unsigned>(v) / vision::kDisparityScale;  // v > 0
       const std::size_t bin = static_cast<std::size_t>(first_cell + column_of[x]) * D + d;

@@ -87,8 +87,30 @@ TEST_P(StereoCensus, SimdEqualsReference) {
 
 INSTANTIATE_TEST_SUITE_P(Sizes, StereoCensus,
                          ::testing::Values(CensusCase{16, 8, 0, 0}, CensusCase{17, 9, 3, 1},
-                                           CensusCase{40, 11, 5, 3}, CensusCase{77, 10, 1, 7},
-                                           CensusCase{129, 12, 0, 5}));
+                                           CensusCase{24, 8, 0, 0}, CensusCase{25, 9, 2, 1},
+                                           CensusCase{31, 8, 1, 3}, CensusCase{40, 11, 5, 3},
+                                           CensusCase{77, 10, 1, 7}, CensusCase{129, 12, 0, 5}));
+
+// The right row's census reversed in either layout, odd and even lengths, its padding untouched.
+TEST(StereoKernels, ReverseCensusReversesEachLayout) {
+  for (const kernels::CensusLayout layout :
+       {kernels::CensusLayout::planes, kernels::CensusLayout::words}) {
+    for (const int n : {1, 2, 7, 16, 17, 40}) {
+      const int padded = n + 5;
+      const U8 census =
+          random_u8(4 * static_cast<std::size_t>(n), 255, static_cast<std::uint32_t>(n));
+      U8 reversed(4 * static_cast<std::size_t>(padded), 0xAB);
+      kernels::reverse_census(layout, census.data(), n, padded, reversed.data());
+      for (int k = 0; k < padded; ++k) {
+        const std::uint32_t expected =
+            k < n ? kernels::census_at(layout, census.data(), n, n - 1 - k) : 0xABABABABu;
+        ASSERT_EQ(kernels::census_at(layout, reversed.data(), padded, k), expected)
+            << (layout == kernels::CensusLayout::words ? "words" : "planes") << " n " << n
+            << " pixel " << k;
+      }
+    }
+  }
+}
 
 // Census rows at odd offsets inside larger buffers, so loads are unaligned, in each path's
 // layout. 64, 128 and 256 have kernels of their own, for the pixels whose range lies inside the

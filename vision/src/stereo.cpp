@@ -166,6 +166,37 @@ void bm_row_ref(const BmRow& r) {
 }
 
 namespace {
+// dst[n - 1 - i] = src[i], eight bytes at a time.
+void reverse_bytes(const std::uint8_t* src, int n, std::uint8_t* dst) {
+  int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    std::uint64_t v;
+    std::memcpy(&v, src + i, 8);
+    v = __builtin_bswap64(v);
+    std::memcpy(dst + n - 8 - i, &v, 8);
+  }
+  for (; i < n; ++i) dst[n - 1 - i] = src[i];
+}
+}  // namespace
+
+void reverse_census(CensusLayout layout, const std::uint8_t* census, int n, int padded,
+                    std::uint8_t* reversed) {
+  if (layout == CensusLayout::planes) {
+    for (std::ptrdiff_t p = 0; p < 4; ++p) reverse_bytes(census + p * n, n, reversed + p * padded);
+    return;
+  }
+  // Two words at a time: swapping the halves of their 8 bytes swaps them.
+  int i = 0;
+  for (; i + 2 <= n; i += 2) {
+    std::uint64_t pair;
+    std::memcpy(&pair, census + 4 * i, 8);
+    pair = std::rotr(pair, 32);
+    std::memcpy(reversed + 4 * (n - 2 - i), &pair, 8);
+  }
+  if (i < n) std::memcpy(reversed, census + 4 * i, 4);
+}
+
+namespace {
 StereoKernels stereo_kernels_ref() {
   return {CensusLayout::planes, census_row_ref,  cost_row_ref,
           sgm_row_ref,          box_columns_ref, bm_row_ref};
@@ -181,37 +212,6 @@ StereoKernels stereo_kernels(SimdPath path) {
 }  // namespace kernels
 
 namespace {
-// dst[n - 1 - i] = src[i], eight bytes at a time.
-void reverse_bytes(const std::uint8_t* src, int n, std::uint8_t* dst) {
-  int i = 0;
-  for (; i + 8 <= n; i += 8) {
-    std::uint64_t v;
-    std::memcpy(&v, src + i, 8);
-    v = __builtin_bswap64(v);
-    std::memcpy(dst + n - 8 - i, &v, 8);
-  }
-  for (; i < n; ++i) dst[n - 1 - i] = src[i];
-}
-
-// The census of a row of n pixels into `reversed`, which holds `padded` >= n: its pixel k is
-// pixel n - 1 - k of `census` (k < n).
-void reverse_census(kernels::CensusLayout layout, const std::uint8_t* census, int n, int padded,
-                    std::uint8_t* reversed) {
-  if (layout == kernels::CensusLayout::planes) {
-    for (std::ptrdiff_t p = 0; p < 4; ++p) reverse_bytes(census + p * n, n, reversed + p * padded);
-    return;
-  }
-  // Two words at a time: swapping the halves of their 8 bytes swaps them.
-  int i = 0;
-  for (; i + 2 <= n; i += 2) {
-    std::uint64_t pair;
-    std::memcpy(&pair, census + 4 * i, 8);
-    pair = std::rotr(pair, 32);
-    std::memcpy(reversed + 4 * (n - 2 - i), &pair, 8);
-  }
-  if (i < n) std::memcpy(reversed, census + 4 * i, 4);
-}
-
 constexpr int kWarmupRows = 24;  // SGM: rows aggregated above a stripe before it is output
 std::size_t bytes_of(const auto& v) {
   return v.size() * sizeof(v[0]);
@@ -394,8 +394,8 @@ void StereoMatcher::Worker::cost_row(GrayView left, GrayView right, int y, int d
     }
     kernels.census(rows, width, image == &left ? left_census.data() : right_census.data());
   }
-  reverse_census(kernels.census_layout, right_census.data(), width, width + disparities,
-                 reversed.data());
+  kernels::reverse_census(kernels.census_layout, right_census.data(), width, width + disparities,
+                          reversed.data());
   kernels.cost(left_census.data(), reversed.data(), width, disparities, cost_out);
 }
 

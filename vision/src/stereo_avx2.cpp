@@ -21,8 +21,8 @@ void cost_row_avx2(const std::uint8_t* left, const std::uint8_t* right, int widt
         _mm256_shuffle_epi8(table, _mm256_and_si256(v, low)),
         _mm256_shuffle_epi8(table, _mm256_and_si256(_mm256_srli_epi16(v, 4), low)));
   };
-  // The plane pointers in registers: read through arrays in the loop, they were reloaded and
-  // the splats went through the stack, which took half of this kernel's time.
+  // The plane pointers in registers: read through the caller's arrays in the loop, they were
+  // reloaded and the splats went through the stack, which took half of this kernel's time.
   const std::ptrdiff_t n = width;
   const std::ptrdiff_t padded = n + disparities;
   const std::uint8_t* const l0 = left;
@@ -49,10 +49,11 @@ void cost_row_avx2(const std::uint8_t* left, const std::uint8_t* right, int widt
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + d), sum);
     }
     if (d < computed && disparities - d == 16) {  // 16 left
-      const auto half = [&](int p) {
-        return V::xorb(_mm256_castsi256_si128(l[p]), V::loadb(right + p * padded + k + d));
+      const auto half = [&](__m256i l_p, const std::uint8_t* r_p) {
+        return V::xorb(_mm256_castsi256_si128(l_p), V::loadb(r_p + k + d));
       };
-      V::storeb(out + d, V::popcount4(half(0), half(1), half(2), half(3)));
+      V::storeb(out + d,
+                V::popcount4(half(l[0], r0), half(l[1], r1), half(l[2], r2), half(l[3], r3)));
     }
     if (x < disparities - 1) {  // beyond the left border
       std::fill(out + x + 1, out + disparities, static_cast<std::uint8_t>(kMaxCensusCost));

@@ -16,8 +16,9 @@ namespace epipole::vision::kernels {
 //   planes: four byte planes one after the other: bits 0..7 of pixel x at [x], 8..15 at
 //           [n + x], 16..23 at [2n + x], 24..30 at [3n + x] (the reference, AVX2, ARMv7 NEON:
 //           a plane's 16 pixels are one load);
-//   words:  pixel x's bits as one little-endian 32-bit word at [4x] (AArch64 NEON: a pixel's
-//           census is one splat load, and 16 pixels' are four loads that CNT and ADDP count).
+//   words:  pixel x's four bytes together, byte p at [4x + p] (AArch64 NEON: a pixel's census
+//           is one splat load of a word, and 16 pixels' are four loads that CNT and ADDP
+//           count).
 enum class CensusLayout : std::uint8_t { planes, words };
 // Where byte p (bits 8p..8p+7) of pixel x's census is, in a row of n pixels.
 inline std::ptrdiff_t census_byte(CensusLayout layout, int n, int x, int p) {
@@ -38,6 +39,11 @@ inline void set_census(CensusLayout layout, std::uint8_t* census, int n, int x,
   }
 }
 
+// The census of a row of n pixels into `reversed`, which holds `padded` >= n pixels: its pixel
+// k is pixel n - 1 - k of `census` (k < n); the ones from n on are left as they are.
+void reverse_census(CensusLayout layout, const std::uint8_t* census, int n, int padded,
+                    std::uint8_t* reversed);
+
 // The census of a row into `census` (width pixels). rows[0..6] are rows y-3..y+3 (clamped at
 // the image border by the caller); columns are clamped too.
 using CensusRowKernel = void(const std::uint8_t* const* rows, int width, std::uint8_t* census);
@@ -54,7 +60,8 @@ using CostRowKernel = void(const std::uint8_t* left, const std::uint8_t* right, 
 // right_best[xr]: the right image's best disparity at xr, the smallest S(xr + d, d) over
 // 0 <= d < min(D, width - xr), the smallest d among equal costs. window: 2 * (width + D)
 // values of scratch. confidence[x] (when not null): confidence_of() the winner's cost and the
-// lowest cost outside best +-1, 0 where there is no winner.
+// lowest cost outside best +-1, 0 where there is no winner. The SIMD kernels need width >= 16
+// (the matcher's: D < width).
 constexpr std::uint16_t kNoCost = 0x7FFF;
 struct WtaRow {
   int uniqueness;
@@ -135,7 +142,7 @@ struct BmRow {
   int width;
   int disparities;
   int radius;
-  std::uint16_t* sums;  // width * D values of scratch (width >= 2)
+  std::uint16_t* sums;  // width * D values of scratch (width >= 16, as WtaRow)
   WtaRow wta;
 };
 using BmRowKernel = void(const BmRow& row);

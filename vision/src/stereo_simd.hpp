@@ -127,8 +127,9 @@ template <typename V>
 class CensusPixel<V, CensusLayout::planes> {
  public:
   CensusPixel(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities) {
-    // The planes in locals: the byte stores into the cost row may alias what they point to,
-    // and the compiler would load them again after each one.
+    // The plane pointers in this object's members, not read through the caller's arrays: the
+    // byte stores into the cost row may alias those, and the compiler would load them again
+    // after each one.
 #pragma GCC unroll 4
     for (int p = 0; p < 4; ++p) {
       left_[p] = left + static_cast<std::ptrdiff_t>(p) * width;
@@ -239,7 +240,7 @@ struct DisparityLanes<V, false> {
 
 // Winner take all, one pixel at a time in increasing x (wta_row_ref defines the result).
 // The right image's candidates, a (cost, disparity) pair for each right pixel xr, are kept in
-// reverse order (entry width - 1 - x), so that pixel x's disparities d .. d + 15 meet right
+// reverse order (entry width - 1 - xr), so that pixel x's disparities d .. d + 15 meet right
 // pixels x - d .. x - d - 15 at the consecutive entries width - 1 - x + d ..: one load and store
 // a block, no shift. Entries past width - 1 (right pixels left of the image) are written and
 // never read. The disparities need no first value: every sum is below kNoCost (SGM's at most

@@ -214,6 +214,8 @@ class Bench {
   // OpenCV does the stages the firmware does, where it has them (no sparse matching); detection
   // with the XML the board's compiled cascade was made from.
   void make_opencv_pipeline() {
+    require(options_.opencv_sgbm == "3way" || options_.opencv_sgbm == "default",
+            "OpenCV's SGBM mode '", options_.opencv_sgbm, "' is neither 3way nor default");
     const firmware::Pipeline pipeline(board_, calibration_, path_);  // what the board can run
     std::filesystem::path xml;
     if (protocol::has_stage(pipeline.available() & board_.stages, Stage::detect)) {

@@ -9,6 +9,7 @@
 // vectors: ARMv7 has neither), except in the AArch64 forms of the across-lane reductions
 // (`across`), the mask bits (`bitsb`), the cascade's variance, subset lookup and stage test, each
 // beside a portable one.
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -140,25 +141,25 @@ struct Neon {
   static void store_interleaved4(std::uint8_t* p, const B (&acc)[4]) {
     vst4q_u8(p, (uint8x16x4_t{{acc[0], acc[1], acc[2], acc[3]}}));
   }
-  // The word at p (any alignment) in each of the 4 word lanes.
+  // The word at p (any alignment) in each of the 4 word lanes: as bytes, p's four in each
+  // word lane (little-endian, as every target here is).
   static B load_splat_word(const std::uint8_t* p) {
+    static_assert(std::endian::native == std::endian::little);
     std::uint32_t word;
     std::memcpy(&word, p, sizeof word);
     return vreinterpretq_u8_u32(vdupq_n_u32(word));
   }
-  // The Hamming distances between `word` (load_splat_word) and the 16 words from p, as 16 bytes.
+#if EPIPOLE_NEON_A64_FORMS
+  // The Hamming distances between `word` (load_splat_word) and the 16 words from p, as 16
+  // bytes. AArch64 only (full-width ADDP): ARMv7 keeps the census in planes.
   static B popcount_words16(B word, const std::uint8_t* p) {
     const B c0 = vcntq_u8(veorq_u8(word, vld1q_u8(p)));
     const B c1 = vcntq_u8(veorq_u8(word, vld1q_u8(p + 16)));
     const B c2 = vcntq_u8(veorq_u8(word, vld1q_u8(p + 32)));
     const B c3 = vcntq_u8(veorq_u8(word, vld1q_u8(p + 48)));
-#if EPIPOLE_NEON_A64_FORMS
     return vpaddq_u8(vpaddq_u8(c0, c1), vpaddq_u8(c2, c3));
-#else
-    const auto pairs = [](B c) { return vpadd_u8(vget_low_u8(c), vget_high_u8(c)); };
-    return vcombine_u8(vpadd_u8(pairs(c0), pairs(c1)), vpadd_u8(pairs(c2), pairs(c3)));
-#endif
   }
+#endif
 
   // Halves: the same 16 lanes as unsigned 16-bit values, in two registers.
   using H = uint16x8x2_t;
