@@ -182,18 +182,19 @@ void reverse_bytes(const std::uint8_t* src, int n, std::uint8_t* dst) {
 void reverse_census(CensusLayout layout, const std::uint8_t* census, int n, int padded,
                     std::uint8_t* reversed) {
   if (layout == CensusLayout::planes) {
-    for (std::ptrdiff_t p = 0; p < 4; ++p) reverse_bytes(census + p * n, n, reversed + p * padded);
+    for (std::ptrdiff_t p = 0; p < kCensusBytes; ++p)
+      reverse_bytes(census + p * n, n, reversed + p * padded);
     return;
   }
   // Two words at a time: swapping the halves of their 8 bytes swaps them.
   int i = 0;
   for (; i + 2 <= n; i += 2) {
     std::uint64_t pair;
-    std::memcpy(&pair, census + 4 * i, 8);
+    std::memcpy(&pair, census + kCensusBytes * i, sizeof pair);
     pair = std::rotr(pair, 32);
-    std::memcpy(reversed + 4 * (n - 2 - i), &pair, 8);
+    std::memcpy(reversed + kCensusBytes * (n - 2 - i), &pair, sizeof pair);
   }
-  if (i < n) std::memcpy(reversed, census + 4 * i, 4);
+  if (i < n) std::memcpy(reversed, census + kCensusBytes * i, kCensusBytes);
 }
 
 namespace {
@@ -283,13 +284,12 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
   const std::size_t stride = static_cast<std::size_t>(D) + 32;
   const std::size_t uw = static_cast<std::size_t>(W);
   const std::size_t ud = static_cast<std::size_t>(D);
-  constexpr std::size_t kCensusBytes = 4;
   for (int t = 0; t < config.threads; ++t) {
     auto w = std::make_unique<Worker>();
     w->kernels = kernels::stereo_kernels(path);
-    w->left_census.assign(kCensusBytes * uw, 0);
-    w->right_census.assign(kCensusBytes * uw, 0);
-    w->reversed.assign(kCensusBytes * (uw + ud), 0);
+    w->left_census.assign(kernels::kCensusBytes * uw, 0);
+    w->right_census.assign(kernels::kCensusBytes * uw, 0);
+    w->reversed.assign(kernels::kCensusBytes * (uw + ud), 0);
     w->sums.assign(wd, 0);
     w->window.assign(2 * (uw + ud), 0);
     w->best.assign(uw, -1);

@@ -34,7 +34,7 @@ void cost_row_avx2(const std::uint8_t* left, const std::uint8_t* right, int widt
   const std::uint8_t* const r2 = right + 2 * padded;
   const std::uint8_t* const r3 = right + 3 * padded;
   for (int x = 0; x < width; ++x) {
-    const __m256i l[4] = {
+    const __m256i l[kCensusBytes] = {
         _mm256_set1_epi8(static_cast<char>(l0[x])), _mm256_set1_epi8(static_cast<char>(l1[x])),
         _mm256_set1_epi8(static_cast<char>(l2[x])), _mm256_set1_epi8(static_cast<char>(l3[x]))};
     const std::ptrdiff_t k = width - 1 - x;

@@ -20,21 +20,23 @@ namespace epipole::vision::kernels {
 //           is one splat load of a word, and 16 pixels' are four loads that CNT and ADDP
 //           count).
 enum class CensusLayout : std::uint8_t { planes, words };
+// A pixel's census: 31 bits in 4 bytes, in either layout.
+inline constexpr int kCensusBytes = 4;
 // Where byte p (bits 8p..8p+7) of pixel x's census is, in a row of n pixels.
 inline std::ptrdiff_t census_byte(CensusLayout layout, int n, int x, int p) {
   return layout == CensusLayout::planes ? static_cast<std::ptrdiff_t>(p) * n + x
-                                        : static_cast<std::ptrdiff_t>(x) * 4 + p;
+                                        : static_cast<std::ptrdiff_t>(x) * kCensusBytes + p;
 }
 inline std::uint32_t census_at(CensusLayout layout, const std::uint8_t* census, int n, int x) {
   std::uint32_t bits = 0;
-  for (int p = 0; p < 4; ++p) {
+  for (int p = 0; p < kCensusBytes; ++p) {
     bits |= static_cast<std::uint32_t>(census[census_byte(layout, n, x, p)]) << (8 * p);
   }
   return bits;
 }
 inline void set_census(CensusLayout layout, std::uint8_t* census, int n, int x,
                        std::uint32_t bits) {
-  for (int p = 0; p < 4; ++p) {
+  for (int p = 0; p < kCensusBytes; ++p) {
     census[census_byte(layout, n, x, p)] = static_cast<std::uint8_t>(bits >> (8 * p));
   }
 }

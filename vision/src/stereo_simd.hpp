@@ -49,7 +49,7 @@ template <typename V, CensusLayout kLayout>
 inline void census_vector(const std::uint8_t* const* rows, int x, std::uint8_t* census, int n,
                           int at) {
   using B = typename V::B;
-  B acc[4] = {V::zerob(), V::zerob(), V::zerob(), V::zerob()};
+  B acc[kCensusBytes] = {V::zerob(), V::zerob(), V::zerob(), V::zerob()};
 #pragma GCC unroll 31
   for (int b = 0; b < kCensusBits; ++b) {
     const CensusOffset o = kCensusOffsets[b];
@@ -59,9 +59,11 @@ inline void census_vector(const std::uint8_t* const* rows, int x, std::uint8_t* 
         V::set_if_greater(acc[b / 8], a, c, V::splatb(static_cast<std::uint8_t>(1u << (b % 8))));
   }
   if constexpr (kLayout == CensusLayout::words) {
-    V::store_interleaved4(census + static_cast<std::ptrdiff_t>(at) * 4, acc);
+    V::store_interleaved4(census + static_cast<std::ptrdiff_t>(at) * kCensusBytes, acc);
   } else {
-    for (int p = 0; p < 4; ++p) V::storeb(census + census_byte(kLayout, n, at, p), acc[p]);
+    for (int p = 0; p < kCensusBytes; ++p) {
+      V::storeb(census + census_byte(kLayout, n, at, p), acc[p]);
+    }
   }
 }
 
@@ -85,7 +87,7 @@ void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* c
   constexpr int kSpan = kLanes + 2 * kR;
   std::uint8_t copy[7][kSpan];
   const std::uint8_t* copy_rows[7];
-  std::uint8_t lanes[4 * kLanes];                // the 16 pixels' census, in kLayout
+  std::uint8_t lanes[kCensusBytes * kLanes];     // the 16 pixels' census, in kLayout
   for (const int first : {0, width - kLanes}) {  // image column of lane 0
     // Columns first - kR .. first + kLanes + kR - 1: the edge column kR times past the border
     // (width >= kSpan).
@@ -131,14 +133,14 @@ class CensusPixel<V, CensusLayout::planes> {
     // byte stores into the cost row may alias those, and the compiler would load them again
     // after each one.
 #pragma GCC unroll 4
-    for (int p = 0; p < 4; ++p) {
+    for (int p = 0; p < kCensusBytes; ++p) {
       left_[p] = left + static_cast<std::ptrdiff_t>(p) * width;
       right_[p] = right + static_cast<std::ptrdiff_t>(p) * (width + disparities);
     }
   }
   void load(int x) {
 #pragma GCC unroll 4
-    for (int p = 0; p < 4; ++p) l_[p] = V::load_splatb(left_[p] + x);
+    for (int p = 0; p < kCensusBytes; ++p) l_[p] = V::load_splatb(left_[p] + x);
   }
   // The distances to right pixels k .. k + 15.
   typename V::B distance(std::ptrdiff_t k) const {
@@ -146,9 +148,9 @@ class CensusPixel<V, CensusLayout::planes> {
   }
 
  private:
-  const std::uint8_t* left_[4];
-  const std::uint8_t* right_[4];
-  typename V::B l_[4];
+  const std::uint8_t* left_[kCensusBytes];
+  const std::uint8_t* right_[kCensusBytes];
+  typename V::B l_[kCensusBytes];
 };
 
 template <typename V>
@@ -156,8 +158,12 @@ class CensusPixel<V, CensusLayout::words> {
  public:
   CensusPixel(const std::uint8_t* left, const std::uint8_t* right, int, int)
       : left_(left), right_(right) {}
-  void load(int x) { l_ = V::load_splat_word(left_ + static_cast<std::ptrdiff_t>(x) * 4); }
-  typename V::B distance(std::ptrdiff_t k) const { return V::popcount_words16(l_, right_ + k * 4); }
+  void load(int x) {
+    l_ = V::load_splat_word(left_ + static_cast<std::ptrdiff_t>(x) * kCensusBytes);
+  }
+  typename V::B distance(std::ptrdiff_t k) const {
+    return V::popcount_words16(l_, right_ + k * kCensusBytes);
+  }
 
  private:
   const std::uint8_t* left_;
