@@ -182,8 +182,9 @@ void reverse_bytes(const std::uint8_t* src, int n, std::uint8_t* dst) {
 void reverse_census(CensusLayout layout, const std::uint8_t* census, int n, int padded,
                     std::uint8_t* reversed) {
   if (layout == CensusLayout::planes) {
-    for (std::ptrdiff_t p = 0; p < kCensusBytes; ++p)
+    for (std::ptrdiff_t p = 0; p < kCensusBytes; ++p) {
       reverse_bytes(census + p * n, n, reversed + p * padded);
+    }
     return;
   }
   // Two words at a time: swapping the halves of their 8 bytes swaps them.
