@@ -2,7 +2,8 @@
 # Every test: installs what is missing, fetches the data sets, builds the host, host-asan, host-tsan,
 # aarch64 and armhf presets and runs all their tests (the cross-built ones under qemu-user),
 # then builds the libFuzzer targets (fuzz preset) and runs each from its seed corpus. The cross
-# presets also build the board's .deb and check its contents (scripts/check-package.sh). The soak
+# presets also build the board's .deb and check its contents (scripts/check-package.sh). What the
+# emulated boards boot (scripts/prepare-boards.sh) is made beside the host build, and the soak
 # (5 minutes of the simulated board with faults) runs beside the presets after host. Then the
 # virtual board's tests, and the deployment test installs the arm64 package on Debian booted with
 # systemd (as root: debootstrap makes its root filesystem once). Last, it
@@ -27,13 +28,52 @@ for preset in $presets; do
   esac
 done
 
+# Background jobs run in their own sessions, so that stopping one stops what it started too (a
+# QEMU guest, ctest's test programs); a failure of this script stops them all.
+background=()
+stop_background() {
+  for pid in "${background[@]}"; do kill -- "-$pid" 2>/dev/null || true; done
+}
+trap stop_background EXIT
+start_background() {  # LOG COMMAND...: the job's pid is in $!
+  local log=$1
+  shift
+  setsid "$@" >"$log" 2>&1 </dev/null &
+  background+=($!)
+}
+
 timings=""
+with_boards=false
+[[ " $presets " == *" host "* && " $presets " == *" aarch64 "* ]] && with_boards=true
+if $with_boards; then
+  # Downloads, a kernel module build and an emulated Debian install (about 7 minutes, two thirds
+  # of the machine): beside the host build it fills what the compiler leaves idle.
+  echo "=== boards: the emulated boards' kernels and root filesystem, made beside the host build"
+  boards_log=$(mktemp)
+  start_background "$boards_log" ./scripts/prepare-boards.sh
+  boards_pid=$!
+fi
+
 for preset in $presets; do
   echo "=== $preset: configure and build"
   phase=$SECONDS
   cmake --preset "$preset" >/dev/null
   cmake --build --preset "$preset"
   built=$((SECONDS - phase))
+  if [[ $preset == host && -n ${boards_pid:-} ]]; then
+    # Its guest is not left running beside the tests, whose programs it would slow.
+    echo "=== boards: waiting for scripts/prepare-boards.sh"
+    boards_status=0
+    wait "$boards_pid" || boards_status=$?
+    cat "$boards_log"
+    rm -f "$boards_log"
+    if [[ $boards_status -ne 0 ]]; then
+      echo "run-tests: scripts/prepare-boards.sh failed" >&2
+      exit 1
+    fi
+    timings+="  boards: made beside the host build, waited for $((SECONDS - phase - built)) s more"$'\n'
+    built=$((SECONDS - phase))
+  fi
   echo "=== $preset: test"
   phase=$SECONDS
   # The virtual board (label vboard) boots the aarch64 build's firmware too, and the deployment
@@ -49,10 +89,9 @@ for preset in $presets; do
     # one core beside the next presets' builds; its result is waited for before the virtual board.
     echo "=== soak: 5 minutes of the simulated board with faults, in the background"
     soak_log=$(mktemp)
-    EPIPOLE_SOAK_SECONDS=300 ctest --preset host -L soak --output-junit junit-soak.xml \
-      --output-on-failure -V >"$soak_log" 2>&1 &
+    start_background "$soak_log" env EPIPOLE_SOAK_SECONDS=300 ctest --preset host -L soak \
+      --output-junit junit-soak.xml --output-on-failure -V
     soak_pid=$!
-    trap 'kill "$soak_pid" 2>/dev/null || true' EXIT  # a failure below stops it too
   fi
 done
 
@@ -68,11 +107,10 @@ if [[ -n ${soak_pid:-} ]]; then
     exit 1
   fi
   rm -f "$soak_log"
-  trap - EXIT
   timings+="  soak: 300 s, beside the presets after host"$'\n'
 fi
 
-if [[ " $presets " == *" host "* && " $presets " == *" aarch64 "* ]]; then
+if $with_boards; then
   echo "=== vboard: the firmware on the virtual board (amd64 and arm64, docs/vboard.md)"
   phase=$SECONDS
   # No test is run twice: a failure that comes one run in four (a crash, a race) must show.
@@ -95,7 +133,7 @@ if [[ " $presets " == *" host "* ]]; then
   echo "=== demo: the main job (scripts/run-demo.sh) in a fresh copy of the tree, then a check of what it wrote"
   phase=$SECONDS
   demo=$(mktemp -d)
-  trap 'rm -rf "$demo"' EXIT
+  trap 'rm -rf "$demo"; stop_background' EXIT
   mkdir "$demo/src" "$demo/data"
   git ls-files -z --cached --others --exclude-standard |
     while IFS= read -r -d '' f; do
