@@ -13,6 +13,11 @@
 #   cmake/ccache-launcher.sh writes beside it when it is made, not hashed again on every compile
 #   that uses it. The namespace keeps these entries apart from those made before the checksum
 #   files: those name the header itself, still match, and would go on hashing it on every hit.
+# - depend_mode: on a miss ccache runs the compiler only, and takes the headers a file read from
+#   the dependency file the compiler writes anyway (-MD, as Ninja asks), rather than running the
+#   preprocessor first to hash its output. On a new machine every file misses: two of the host
+#   preset's files, each compiled three times, took 45.4 s of CPU with that pass, 40.0 s in depend
+#   mode and 40.9 s without ccache.
 # Paths compiled into test programs (the tool, the data) live in one generated file
 # (tests/CMakeLists.txt), not in the flags of every file.
 option(EPIPOLE_CCACHE "Compile through ccache when it is found" ON)
@@ -30,6 +35,7 @@ set(_launcher
     CCACHE_SLOPPINESS=pch_defines,time_macros,include_file_mtime,include_file_ctime
     CCACHE_PCH_EXTSUM=true
     CCACHE_NAMESPACE=pch-checksum
+    CCACHE_DEPEND=true
     ${CMAKE_CURRENT_LIST_DIR}/ccache-launcher.sh ${EPIPOLE_CCACHE_PROGRAM})
 set(CMAKE_C_COMPILER_LAUNCHER ${_launcher})
 set(CMAKE_CXX_COMPILER_LAUNCHER ${_launcher})
