@@ -46,8 +46,8 @@ timings=""
 with_boards=false
 [[ " $presets " == *" host "* && " $presets " == *" aarch64 "* ]] && with_boards=true
 if $with_boards; then
-  # Downloads, a kernel module build and an emulated Debian install (about 7 minutes, two thirds
-  # of the machine): beside the host build it fills what the compiler leaves idle.
+  # Downloads, a kernel module build and an emulated Debian install (alone about 7 minutes at
+  # two thirds of the machine), made beside the host build rather than left to the last tiers.
   echo "=== boards: the emulated boards' kernels and root filesystem, made beside the host build"
   boards_log=$(mktemp)
   start_background "$boards_log" ./scripts/prepare-boards.sh
@@ -85,8 +85,9 @@ for preset in $presets; do
   esac
   timings+="  $preset: built in $built s, tested in $((SECONDS - phase)) s"$'\n'
   if [[ $preset == host ]]; then
-    # The soak (label soak, docs/testing.md): 5 minutes of the simulated board with faults, on
-    # one core beside the next presets' builds; its result is waited for before the virtual board.
+    # The soak (label soak, docs/testing.md): 5 minutes of the simulated board with faults (its
+    # pool has two threads: alone it keeps both cores busy) beside the next presets' builds; its
+    # result is waited for before the virtual board.
     echo "=== soak: 5 minutes of the simulated board with faults, in the background"
     soak_log=$(mktemp)
     start_background "$soak_log" env EPIPOLE_SOAK_SECONDS=300 ctest --preset host -L soak \
