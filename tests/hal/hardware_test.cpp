@@ -14,24 +14,24 @@
 namespace epipole::hal {
 namespace {
 
-constexpr int kW = 32;
-constexpr int kH = 16;
+constexpr int kSceneWidth = 32;
+constexpr int kSceneHeight = 16;
 
 HardwareConfig simulated(int images) {
   HardwareConfig c;
   c.camera_backend = "sim";
   for (auto [camera, name] : {std::pair{&c.left, "left"}, std::pair{&c.right, "right"}}) {
     camera->device = name;
-    camera->width = kW;
-    camera->height = kH;
+    camera->width = kSceneWidth;
+    camera->height = kSceneHeight;
     camera->trigger = TriggerMode::external;
   }
   c.trigger_backend = "sim";
   c.trigger.line = "sim";
   c.trigger.rate_hz = 50;
   for (int i = 0; i < images; ++i) {
-    c.sim.left.emplace_back(kW, kH);
-    c.sim.right.emplace_back(kW, kH);
+    c.sim.left.emplace_back(kSceneWidth, kSceneHeight);
+    c.sim.right.emplace_back(kSceneWidth, kSceneHeight);
   }
   return c;
 }
@@ -42,7 +42,7 @@ TEST(Hardware, ASimulatedBoardRunsOnItsVirtualClockWithItsScene) {
   Hardware hw(std::move(c));
   EXPECT_EQ(hw.clock().id(), ClockId::virtual_clock);
   EXPECT_EQ(hw.scene_images(), 3u);
-  EXPECT_EQ(hw.scene_bytes(), 2u * 3u * GrayImage(kW, kH).size_bytes())
+  EXPECT_EQ(hw.scene_bytes(), 2u * 3u * GrayImage(kSceneWidth, kSceneHeight).size_bytes())
       << "rows padded as allocated";
   ASSERT_NE(hw.trigger(), nullptr);
   EXPECT_EQ(hw.serial(), nullptr) << "no link asked for";

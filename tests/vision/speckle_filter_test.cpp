@@ -174,14 +174,14 @@ TEST(SpeckleFilter, LongRunsAndAStrideWiderThanTheImage) {
 TEST(SpeckleFilter, ARingIsOneRegionAndOcclusionMarksStay) {
   // A ring of 10 pixels around a hole (176 is within 1 px of 160), and a lone pixel: with
   // min_size 10 the ring stays, the lone pixel goes.
-  constexpr std::int16_t X = kInvalidDisparity;
-  constexpr std::int16_t O = -2;        // another negative value: kept as it is
-  Row d = {160, 160, 160, 160, X, O,    //
-           160, X,   X,   160, X, 320,  //
-           160, 176, 160, 160, X, X};
+  constexpr std::int16_t N = kInvalidDisparity;  // no disparity
+  constexpr std::int16_t O = -2;                 // another negative value: kept as it is
+  Row d = {160, 160, 160, 160, N, O,             //
+           160, N,   N,   160, N, 320,           //
+           160, 176, 160, 160, N, N};
   SpeckleFilter filter(6, 3, 10, 1);
   filter.apply(ImageView<std::int16_t>(d.data(), 6, 3, 6), SimdPath::neon);
-  EXPECT_EQ(d, (Row{160, 160, 160, 160, X, O, 160, X, X, 160, X, X, 160, 176, 160, 160, X, X}));
+  EXPECT_EQ(d, (Row{160, 160, 160, 160, N, O, 160, N, N, 160, N, N, 160, 176, 160, 160, N, N}));
 }
 
 TEST(SpeckleFilter, BadInputIsAClearError) {
