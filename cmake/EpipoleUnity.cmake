@@ -5,20 +5,26 @@
 #
 # CMake's own UNITY_BUILD (3.25) includes the files by absolute path, so a clone in another folder
 # would miss every entry of the compiler cache; these batches include them by a path relative to
-# the batch. Call it after every source of TARGET is added. Left out, and compiled alone: sources
-# with their own flags, definitions or include folders, generated ones, and those marked
-# SKIP_UNITY_BUILD_INCLUSION (a file whose types of an anonymous namespace are members of a class
-# it defines: included, GCC treats it as a header, -Wsubobject-linkage).
+# the batch. Call it once every source of TARGET is added and has its own settings (a deferred
+# call does that). Left out, and compiled alone: sources with their own flags, definitions or
+# include folders, generated ones, and those marked SKIP_UNITY_BUILD_INCLUSION by hand (e.g. a
+# file whose types of an anonymous namespace are members of a class it defines: included, GCC
+# treats it as a header, -Wsubobject-linkage). In a batch, a name that two files define at file
+# scope is an error with the same signature and an overload with another, and a file-scope
+# `using namespace` reaches the files after it.
 function(epipole_unity target)
   cmake_parse_arguments(ARG "" "BATCH" "" ${ARGN})
-  if(NOT ARG_BATCH)
+  if(NOT DEFINED ARG_BATCH)
     set(ARG_BATCH 8)
+  elseif(NOT ARG_BATCH MATCHES "^[1-9][0-9]*$")
+    message(FATAL_ERROR "epipole_unity(${target}): BATCH ${ARG_BATCH} is not a positive count")
   endif()
   get_target_property(sources ${target} SOURCES)
   get_target_property(source_dir ${target} SOURCE_DIR)
   get_target_property(binary_dir ${target} BINARY_DIR)
   set(own_flags SKIP_UNITY_BUILD_INCLUSION COMPILE_OPTIONS COMPILE_DEFINITIONS COMPILE_FLAGS
-                INCLUDE_DIRECTORIES SKIP_PRECOMPILE_HEADERS GENERATED)
+                INCLUDE_DIRECTORIES SKIP_PRECOMPILE_HEADERS GENERATED HEADER_FILE_ONLY
+                OBJECT_DEPENDS OBJECT_OUTPUTS)
   set(alone "")
   set(batched "")
   foreach(source IN LISTS sources)
@@ -40,22 +46,27 @@ function(epipole_unity target)
       list(APPEND batched ${path})
     endif()
   endforeach()
+  list(REMOVE_DUPLICATES batched)
   list(LENGTH batched count)
   if(count LESS 2)
     return()
   endif()
 
-  # As few batches as ARG_BATCH allows, of even sizes (9 files: 5 and 4, not 8 and 1).
+  # As few batches as ARG_BATCH allows, of even sizes (9 files in batches of 8: 5 and 4).
   math(EXPR batches "(${count} + ${ARG_BATCH} - 1) / ${ARG_BATCH}")
-  math(EXPR size "(${count} + ${batches} - 1) / ${batches}")
+  math(EXPR base "${count} / ${batches}")
+  math(EXPR larger "${count} % ${batches}")  # the first batches take one more file
   set(generated "")
   set(batch "")
   set(index 0)
   foreach(path IN LISTS batched)
     list(APPEND batch ${path})
     list(LENGTH batch taken)
-    math(EXPR left "${count} - ${index} * ${size} - ${taken}")
-    if(taken EQUAL size OR left EQUAL 0)
+    set(size ${base})
+    if(index LESS larger)
+      math(EXPR size "${base} + 1")
+    endif()
+    if(taken EQUAL size)
       set(file ${binary_dir}/unity/${target}_${index}.cpp)
       _epipole_unity_write(${file} ${target} ${batch})
       list(APPEND generated ${file})
