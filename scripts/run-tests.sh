@@ -3,10 +3,11 @@
 # aarch64 and armhf presets and runs all their tests (the cross-built ones under qemu-user),
 # then builds the libFuzzer targets (fuzz preset) and runs each from its seed corpus. The cross
 # presets also build the board's .deb and check its contents (scripts/check-package.sh). What the
-# emulated boards boot (scripts/prepare-boards.sh) is made beside the host build, and the soak
-# (5 minutes of the simulated board with faults) runs beside the presets after host. Then the
+# emulated boards boot (scripts/prepare-boards.sh) is made beside the host build. Then the
 # virtual board's tests, and the deployment test installs the arm64 package on Debian booted with
-# systemd (as root: debootstrap makes its root filesystem once). Last, it
+# systemd (as root: debootstrap makes its root filesystem once); the soak (5 minutes of the
+# simulated board with faults) runs beside those two at idle priority, in the time their
+# emulated boards leave the cores waiting (without the boards: beside the presets after host). Last, it
 # runs the main job (scripts/run-demo.sh) in a fresh copy of the tree with a fresh copy of the
 # data sets and checks what it wrote (scripts/check-demo.sh): a broken main job fails the tests.
 # This is the README's test command and what CI runs.
@@ -41,6 +42,31 @@ start_background() {  # LOG COMMAND...: the job's pid is in $!
   setsid "$@" >"$log" 2>&1 </dev/null &
   background+=($!)
 }
+# PID LOG WHAT [PATTERN]: waits for a background job; shows its log (only the lines matching
+# PATTERN when given and the job passed) and stops here when it failed.
+wait_background() {
+  local pid=$1 log=$2 what=$3 pattern=${4:-} status=0
+  wait "$pid" || status=$?
+  if [[ $status -ne 0 || -z $pattern ]]; then
+    cat "$log"
+  else
+    grep -E "$pattern" "$log" || true
+  fi
+  rm -f "$log"
+  if [[ $status -ne 0 ]]; then
+    echo "run-tests: $what failed" >&2
+    exit 1
+  fi
+}
+# The soak (label soak, docs/testing.md): 5 minutes of the simulated board with faults, its pool
+# two threads. PRIORITY: chrt's arguments, e.g. --idle 0 (only when nothing else wants a core).
+start_soak() {
+  soak_log=$(mktemp)
+  start_background "$soak_log" chrt "$@" env EPIPOLE_SOAK_SECONDS=300 ctest --preset host -L soak \
+    --output-junit junit-soak.xml --output-on-failure -V
+  soak_pid=$!
+  soak_start=$SECONDS
+}
 
 timings=""
 with_boards=false
@@ -63,14 +89,7 @@ for preset in $presets; do
   if [[ $preset == host && -n ${boards_pid:-} ]]; then
     # Its guest is not left running beside the tests, whose programs it would slow.
     echo "=== boards: waiting for scripts/prepare-boards.sh"
-    boards_status=0
-    wait "$boards_pid" || boards_status=$?
-    cat "$boards_log"
-    rm -f "$boards_log"
-    if [[ $boards_status -ne 0 ]]; then
-      echo "run-tests: scripts/prepare-boards.sh failed" >&2
-      exit 1
-    fi
+    wait_background "$boards_pid" "$boards_log" scripts/prepare-boards.sh
     timings+="  boards: made beside the host build, waited for $((SECONDS - phase - built)) s more"$'\n'
     built=$((SECONDS - phase))
   fi
@@ -84,34 +103,21 @@ for preset in $presets; do
     armhf) ./scripts/check-package.sh build/armhf armhf ;;
   esac
   timings+="  $preset: built in $built s, tested in $((SECONDS - phase)) s"$'\n'
-  if [[ $preset == host ]]; then
-    # The soak (label soak, docs/testing.md): 5 minutes of the simulated board with faults (its
-    # pool has two threads: alone it keeps both cores busy) beside the next presets' builds; its
-    # result is waited for before the virtual board.
+  if [[ $preset == host ]] && ! $with_boards; then
+    # Alone the soak keeps both cores busy: here it shares them with the next presets.
     echo "=== soak: 5 minutes of the simulated board with faults, in the background"
-    soak_log=$(mktemp)
-    start_background "$soak_log" env EPIPOLE_SOAK_SECONDS=300 ctest --preset host -L soak \
-      --output-junit junit-soak.xml --output-on-failure -V
-    soak_pid=$!
+    start_soak --other 0
+    soak_beside="the presets after host"
   fi
 done
 
-if [[ -n ${soak_pid:-} ]]; then
-  echo "=== soak: its result"
-  soak_status=0
-  wait "$soak_pid" || soak_status=$?
-  grep -E '^[0-9]+: soak:|tests passed|tests failed|Failure' "$soak_log" || true
-  if [[ $soak_status -ne 0 ]]; then
-    cat "$soak_log"
-    rm -f "$soak_log"
-    echo "run-tests: the soak failed" >&2
-    exit 1
-  fi
-  rm -f "$soak_log"
-  timings+="  soak: 300 s, beside the presets after host"$'\n'
-fi
-
 if $with_boards; then
+  # The emulated boards leave the cores waiting about half of their 5 minutes (their guests'
+  # boots, the deployment test's pauses): the soak runs in that time, and as a SCHED_IDLE job
+  # takes none from them.
+  echo "=== soak: 5 minutes of the simulated board with faults, in the background at idle priority"
+  start_soak --idle 0
+  soak_beside="the virtual board and the deployment test, at idle priority"
   echo "=== vboard: the firmware on the virtual board (amd64 and arm64, docs/vboard.md)"
   phase=$SECONDS
   # No test is run twice: a failure that comes one run in four (a crash, a race) must show.
@@ -147,6 +153,12 @@ if [[ " $presets " == *" host "* ]]; then
   EPIPOLE_DATA_DIR="$demo/data" "$demo/src/scripts/run-demo.sh" "$demo/out"
   ./scripts/check-demo.sh "$demo/out"
   timings+="  demo: ran and checked in $((SECONDS - phase)) s"$'\n'
+fi
+
+if [[ -n ${soak_pid:-} ]]; then
+  echo "=== soak: its result"
+  wait_background "$soak_pid" "$soak_log" "the soak" '^[0-9]+: soak:|tests passed|tests failed|Failure'
+  timings+="  soak: 300 s beside $soak_beside, done $((SECONDS - soak_start)) s after its start"$'\n'
 fi
 
 printf "%s" "$timings"
