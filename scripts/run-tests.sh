@@ -112,9 +112,9 @@ for preset in $presets; do
 done
 
 if $with_boards; then
-  # The emulated boards leave the cores waiting about half of their 5 minutes (their guests'
-  # boots, the deployment test's pauses): the soak runs in that time, and as a SCHED_IDLE job
-  # takes none from them.
+  # The emulated boards leave about two fifths of the cores idle in their 5 minutes (their
+  # guests' boots, the deployment test's pauses): the soak runs in that time, and as a SCHED_IDLE
+  # job takes none from them.
   echo "=== soak: 5 minutes of the simulated board with faults, in the background at idle priority"
   start_soak --idle 0
   soak_beside="the virtual board and the deployment test, at idle priority"

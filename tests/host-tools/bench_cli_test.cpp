@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "run_tool.hpp"
@@ -18,17 +19,26 @@ namespace {
 // LeakSanitizer's check at exit then now and again crashes in its own tracer ("LeakSanitizer has
 // encountered a fatal error", exit 134) in the host-asan preset. The bench's processes run
 // without that check (AddressSanitizer's other checks stay on); the code they run is leak-checked
-// by the in-process tests of the same libraries.
-class NoLeakCheckAtExit : public ::testing::Environment {
- public:
+// by the in-process tests of the same libraries. The other tools' tests in this program keep it.
+class BenchCli : public ::testing::Test {
+ protected:
   void SetUp() override {
     const char* options = std::getenv("ASAN_OPTIONS");
-    const std::string value = std::string(options != nullptr ? options : "") +
-                              (options != nullptr ? ":" : "") + "detect_leaks=0";
+    saved_ = options != nullptr ? std::optional<std::string>(options) : std::nullopt;
+    const std::string value = saved_.value_or("") + (saved_ ? ":" : "") + "detect_leaks=0";
     ::setenv("ASAN_OPTIONS", value.c_str(), 1);
   }
+  void TearDown() override {
+    if (saved_) {
+      ::setenv("ASAN_OPTIONS", saved_->c_str(), 1);
+    } else {
+      ::unsetenv("ASAN_OPTIONS");
+    }
+  }
+
+ private:
+  std::optional<std::string> saved_;
 };
-const auto* const no_leak_check = ::testing::AddGlobalTestEnvironment(new NoLeakCheckAtExit);
 
 using epipole::test::line_count;
 using epipole::test::run_tool;
@@ -43,7 +53,7 @@ void expect_timing(const nlohmann::json& t, const std::string& what) {
   EXPECT_GT(t["mean_ms"].get<double>(), 0.0) << what;
 }
 
-TEST(BenchCli, EveryStageOfBothSidesForEachThreadCount) {
+TEST_F(BenchCli, EveryStageOfBothSidesForEachThreadCount) {
   const auto r = run_tool(
       "bench " + board("sim") + " --scene aloe -n 3 --warmup 1 --threads 1,2 --json", false);
   ASSERT_EQ(r.exit_code, 0) << r.out;
@@ -96,7 +106,7 @@ TEST(BenchCli, EveryStageOfBothSidesForEachThreadCount) {
   EXPECT_EQ(b["runs"][1]["epipole"]["found"], found);
 }
 
-TEST(BenchCli, TableAndImagesForABoardWithoutScenes) {
+TEST_F(BenchCli, TableAndImagesForABoardWithoutScenes) {
   const auto table =
       run_tool("bench " + board("sim") + " --scene aloe -n 1 --warmup 0 --threads 1");
   ASSERT_EQ(table.exit_code, 0) << table.out;
@@ -118,7 +128,7 @@ TEST(BenchCli, TableAndImagesForABoardWithoutScenes) {
   EXPECT_TRUE(b["runs"][0]["epipole"]["stages"].contains("disparity"));
 }
 
-TEST(BenchCli, BadArgumentsAreUsageErrorsAndBadInputOneLine) {
+TEST_F(BenchCli, BadArgumentsAreUsageErrorsAndBadInputOneLine) {
   for (const std::string& args :
        {std::string("--threads 0"), std::string("--threads 1,x"), std::string("-n 0"),
         std::string("--left nowhere.png"), std::string("--left nowhere.png --right nowhere.png")}) {
