@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/race_annotations.hpp"
 #include "epipole/vision/disparity_filters.hpp"
 #include "kernel_set.hpp"
 #include "stereo_census.hpp"
@@ -242,6 +243,27 @@ struct StereoMatcher::Worker {
     return n;
   }
   void cost_row(GrayView left, GrayView right, int y, int disparities, std::uint8_t* cost_out);
+
+  // Every buffer, as written by the stripe that has this worker (race_annotations.hpp).
+  void race_check_buffers() {
+    const auto written = [](auto& v) { race_check_write(v.data(), bytes_of(v)); };
+    written(left_census);
+    written(right_census);
+    written(reversed);
+    written(cost);
+    written(scratch);
+    written(columns);
+    written(sums);
+    written(window);
+    written(best);
+    written(right_best);
+    for (int i = 0; i < 2; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        written(paths[i][k]);
+        written(mins[i][k]);
+      }
+    }
+  }
 };
 
 StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPool* pool)
@@ -438,6 +460,23 @@ void StereoMatcher::run_stripe(int stripe, int worker) {
   const int stripes = config_.threads;
   const int y0 = stripe * config_.height / stripes;
   const int y1 = (stripe + 1) * config_.height / stripes;
+  // What the stripe's kernels read and write, for ThreadSanitizer, which the stereo kernels are
+  // compiled without (race_annotations.hpp): the images' rows its census windows cover, its
+  // output rows, its worker's buffers.
+  const int H = config_.height;
+  const int first_cost_row = config_.method == StereoMethod::sgm
+                                 ? std::max(0, y0 - kWarmupRows)
+                                 : std::max(0, y0 - config_.block_size / 2);
+  const int last_cost_row = config_.method == StereoMethod::sgm
+                                ? y1 - 1
+                                : std::min(H - 1, y1 - 1 + config_.block_size / 2);
+  for (const GrayView image : {left_, right_}) {
+    race_check_rows(image, std::max(0, first_cost_row - kernels::kCensusRadiusY),
+                    std::min(H, last_cost_row + kernels::kCensusRadiusY + 1));
+  }
+  race_check_rows(disparity_, y0, y1);
+  if (!confidence_.empty()) race_check_rows(confidence_.view(), y0, y1);
+  w.race_check_buffers();
   if (config_.method == StereoMethod::sgm) {
     sgm_stripe(w, y0, y1);
   } else {

@@ -1,0 +1,60 @@
+#pragma once
+
+// What a kernel compiled without ThreadSanitizer's instrumentation reads and writes, told to it
+// by the instrumented code that calls the kernel, a range at a time. ThreadSanitizer checks
+// each 16- or 32-byte vector access through its slow range path, which in the host-tsan
+// preset cost most of a run (vision/CMakeLists.txt says which kernels are left out). Between
+// two synchronisations one range access per buffer is the same to its race detection as the
+// kernel's own accesses. Without ThreadSanitizer these do nothing.
+#include <cstddef>
+#include <type_traits>
+
+#include "epipole/core/image.hpp"
+
+#if defined(__SANITIZE_THREAD__)
+#define EPIPOLE_TSAN 1
+#elif defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define EPIPOLE_TSAN 1
+#endif
+#endif
+
+#ifdef EPIPOLE_TSAN
+// ThreadSanitizer's runtime entry points for accesses of any size (what the compiler's own
+// instrumentation calls).
+extern "C" void __tsan_read_range(void* addr, unsigned long size);   // NOLINT
+extern "C" void __tsan_write_range(void* addr, unsigned long size);  // NOLINT
+#endif
+
+namespace epipole {
+
+inline void race_check_read([[maybe_unused]] const void* data, [[maybe_unused]] std::size_t bytes) {
+#ifdef EPIPOLE_TSAN
+  if (bytes > 0) __tsan_read_range(const_cast<void*>(data), bytes);
+#endif
+}
+
+inline void race_check_write([[maybe_unused]] void* data, [[maybe_unused]] std::size_t bytes) {
+#ifdef EPIPOLE_TSAN
+  if (bytes > 0) __tsan_write_range(data, bytes);
+#endif
+}
+
+// Rows y0..y1 (exclusive) of an image, each row's pixels only (not the stride's gap, which may
+// be another image's): read from a view of const pixels, written to any other.
+template <typename T>
+void race_check_rows([[maybe_unused]] ImageView<T> image, [[maybe_unused]] int y0,
+                     [[maybe_unused]] int y1) {
+#ifdef EPIPOLE_TSAN
+  const std::size_t bytes = static_cast<std::size_t>(image.width()) * sizeof(T);
+  for (int y = y0; y < y1; ++y) {
+    if constexpr (std::is_const_v<T>) {
+      race_check_read(image.row(y), bytes);
+    } else {
+      race_check_write(image.row(y), bytes);
+    }
+  }
+#endif
+}
+
+}  // namespace epipole
