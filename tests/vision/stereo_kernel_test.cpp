@@ -389,6 +389,32 @@ TEST(StereoMatcher, PathsAndThreadsAgree) {
   }
 }
 
+// Stripes without a row of their own (more threads than rows) write nothing: SGM's warm-up
+// would otherwise put its winners into the next stripe's first row while that stripe runs.
+TEST(StereoMatcher, MoreStripesThanRowsGiveWhatOneStripeGives) {
+  const int width = 48;
+  const int height = 8;
+  test::BufferImage left(width, height, width, 1);
+  test::fill(left.view(), test::Pattern::blobs, 5);
+  test::BufferImage right(width, height, width, 2);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x)
+      right.view()(x, y) = left.cview()(std::min(width - 1, x + 4), y);
+  }
+  for (const StereoMethod method : {StereoMethod::sgm, StereoMethod::bm}) {
+    StereoConfig config{.width = width, .height = height, .max_disparity = 16};
+    config.method = method;
+    const auto one = disparities(config, SimdPath::reference, left.cview(), right.cview());
+    config.threads = 13;
+    for (const SimdPath path : simd_paths()) {
+      for (int run = 0; run < 5; ++run) {
+        EXPECT_EQ(disparities(config, path, left.cview(), right.cview()), one)
+            << to_string(path) << (method == StereoMethod::sgm ? " sgm" : " bm");
+      }
+    }
+  }
+}
+
 TEST(StereoMatcher, BadInputIsAClearError) {
   const auto message = [](const auto& make) -> std::string {
     try {

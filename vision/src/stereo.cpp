@@ -460,6 +460,9 @@ void StereoMatcher::run_stripe(int stripe, int worker) {
   const int stripes = config_.threads;
   const int y0 = stripe * config_.height / stripes;
   const int y1 = (stripe + 1) * config_.height / stripes;
+  // With more stripes than rows some have none; SGM's warm-up would still write its winners
+  // into row y0, which is the next stripe's.
+  if (y0 == y1) return;
   // What the stripe's kernels read and write, for ThreadSanitizer, which the stereo kernels are
   // compiled without (race_annotations.hpp): the images' rows its census windows cover, its
   // output rows, its worker's buffers.
