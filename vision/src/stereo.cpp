@@ -233,37 +233,31 @@ struct StereoMatcher::Worker {
   std::vector<std::int16_t> best, right_best;
   kernels::StereoKernels kernels;  // the path's, picked once
 
-  std::size_t bytes() const {
-    std::size_t n = bytes_of(left_census) + bytes_of(right_census) + bytes_of(reversed) +
-                    bytes_of(cost) + bytes_of(scratch) + bytes_of(columns) + bytes_of(sums) +
-                    bytes_of(window) + bytes_of(best) + bytes_of(right_best);
-    for (int i = 0; i < 2; ++i) {
-      for (int k = 0; k < 3; ++k) n += bytes_of(paths[i][k]) + bytes_of(mins[i][k]);
-    }
-    return n;
-  }
-  void cost_row(GrayView left, GrayView right, int y, int disparities, std::uint8_t* cost_out);
-
-  // Every buffer, as written by the stripe that has this worker (race_annotations.hpp).
-  void race_check_buffers() {
-    const auto written = [](auto& v) { race_check_write(v.data(), bytes_of(v)); };
-    written(left_census);
-    written(right_census);
-    written(reversed);
-    written(cost);
-    written(scratch);
-    written(columns);
-    written(sums);
-    written(window);
-    written(best);
-    written(right_best);
+  // f(buffer) for every buffer (self: a Worker, const or not).
+  static void each_buffer(auto& self, auto&& f) {
+    f(self.left_census);
+    f(self.right_census);
+    f(self.reversed);
+    f(self.cost);
+    f(self.scratch);
+    f(self.columns);
+    f(self.sums);
+    f(self.window);
+    f(self.best);
+    f(self.right_best);
     for (int i = 0; i < 2; ++i) {
       for (int k = 0; k < 3; ++k) {
-        written(paths[i][k]);
-        written(mins[i][k]);
+        f(self.paths[i][k]);
+        f(self.mins[i][k]);
       }
     }
   }
+  std::size_t bytes() const {
+    std::size_t n = 0;
+    each_buffer(*this, [&](const auto& v) { n += bytes_of(v); });
+    return n;
+  }
+  void cost_row(GrayView left, GrayView right, int y, int disparities, std::uint8_t* cost_out);
 };
 
 StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPool* pool)
@@ -414,6 +408,7 @@ void StereoMatcher::Worker::cost_row(GrayView left, GrayView right, int y, int d
   for (const GrayView* image : {&left, &right}) {
     for (int i = 0; i < 7; ++i) {
       rows[i] = image->row(std::clamp(y - kernels::kCensusRadiusY + i, 0, left.height() - 1));
+      race_check_read(rows[i], static_cast<std::size_t>(width));  // race_annotations.hpp
     }
     kernels.census(rows, width, image == &left ? left_census.data() : right_census.data());
   }
@@ -432,6 +427,9 @@ constexpr std::int16_t kOccluded = 2 * kInvalidDisparity;
 // into `confidence` (null: none wanted).
 kernels::WtaRow wta_row(const StereoConfig& config, StereoMatcher::Worker& w, std::int16_t* out,
                         std::uint8_t* confidence) {
+  const auto width = static_cast<std::size_t>(config.width);
+  race_check_write(out, width * sizeof(*out));  // race_annotations.hpp
+  if (confidence != nullptr) race_check_write(confidence, width);
   return kernels::WtaRow{config.uniqueness, out,       w.best.data(), w.right_best.data(),
                          w.window.data(),   confidence};
 }
@@ -463,23 +461,10 @@ void StereoMatcher::run_stripe(int stripe, int worker) {
   // With more stripes than rows some have none; SGM's warm-up would still write its winners
   // into row y0, which is the next stripe's.
   if (y0 == y1) return;
-  // What the stripe's kernels read and write, for ThreadSanitizer, which the stereo kernels are
-  // compiled without (race_annotations.hpp): the images' rows its census windows cover, its
-  // output rows, its worker's buffers.
-  const int H = config_.height;
-  const int first_cost_row = config_.method == StereoMethod::sgm
-                                 ? std::max(0, y0 - kWarmupRows)
-                                 : std::max(0, y0 - config_.block_size / 2);
-  const int last_cost_row = config_.method == StereoMethod::sgm
-                                ? y1 - 1
-                                : std::min(H - 1, y1 - 1 + config_.block_size / 2);
-  for (const GrayView image : {left_, right_}) {
-    race_check_rows(image, std::max(0, first_cost_row - kernels::kCensusRadiusY),
-                    std::min(H, last_cost_row + kernels::kCensusRadiusY + 1));
-  }
-  race_check_rows(disparity_, y0, y1);
-  if (!confidence_.empty()) race_check_rows(confidence_.view(), y0, y1);
-  w.race_check_buffers();
+  // For ThreadSanitizer, which the stereo kernels are compiled without (race_annotations.hpp):
+  // the stripe's kernels write every buffer of its worker. The image rows they read and the
+  // output rows they write are told where each row is handed to them (cost_row, wta_row).
+  Worker::each_buffer(w, [](auto& v) { race_check_write(v.data(), bytes_of(v)); });
   if (config_.method == StereoMethod::sgm) {
     sgm_stripe(w, y0, y1);
   } else {

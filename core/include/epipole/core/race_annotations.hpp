@@ -7,9 +7,6 @@
 // two synchronisations one range access per buffer is the same to its race detection as the
 // kernel's own accesses. Without ThreadSanitizer these do nothing.
 #include <cstddef>
-#include <type_traits>
-
-#include "epipole/core/image.hpp"
 
 #if defined(__SANITIZE_THREAD__)
 #define EPIPOLE_TSAN 1
@@ -37,23 +34,6 @@ inline void race_check_read([[maybe_unused]] const void* data, [[maybe_unused]] 
 inline void race_check_write([[maybe_unused]] void* data, [[maybe_unused]] std::size_t bytes) {
 #ifdef EPIPOLE_TSAN
   if (bytes > 0) __tsan_write_range(data, bytes);
-#endif
-}
-
-// Rows y0..y1 (exclusive) of an image, each row's pixels only (not the stride's gap, which may
-// be another image's): read from a view of const pixels, written to any other.
-template <typename T>
-void race_check_rows([[maybe_unused]] ImageView<T> image, [[maybe_unused]] int y0,
-                     [[maybe_unused]] int y1) {
-#ifdef EPIPOLE_TSAN
-  const std::size_t bytes = static_cast<std::size_t>(image.width()) * sizeof(T);
-  for (int y = y0; y < y1; ++y) {
-    if constexpr (std::is_const_v<T>) {
-      race_check_read(image.row(y), bytes);
-    } else {
-      race_check_write(image.row(y), bytes);
-    }
-  }
 #endif
 }
 
