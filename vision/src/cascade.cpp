@@ -12,6 +12,7 @@
 #include "cascade_kernels.hpp"
 #include "cascade_program.hpp"
 #include "epipole/core/error.hpp"
+#include "epipole/core/race_annotations.hpp"
 #include "kernel_set.hpp"
 
 namespace epipole::vision {
@@ -125,40 +126,64 @@ CascadeConfig checked(const CascadeConfig& c) {
 // What one worker needs to search a pyramid level: the level image, its integral planes and
 // their scratch rows, the resize coefficients, and the raw hits of the levels it searched.
 struct CascadeWorker {
-  CascadeWorker(const CascadeConfig& c, std::ptrdiff_t stride, std::ptrdiff_t plane_entries,
-                int plane_count, bool tilted)
-      : level(c.max_width, c.max_height) {
-    const auto w = static_cast<std::size_t>(c.max_width);
-    const auto h = static_cast<std::size_t>(c.max_height);
-    planes = std::make_unique<std::uint32_t[]>(static_cast<std::size_t>(plane_count) *
-                                               static_cast<std::size_t>(plane_entries));
+  CascadeWorker(const CascadeConfig& c, std::ptrdiff_t row_stride, std::ptrdiff_t plane_entries,
+                int plane_count, bool has_tilted)
+      : level(c.max_width, c.max_height),
+        width(static_cast<std::size_t>(c.max_width)),
+        height(static_cast<std::size_t>(c.max_height)),
+        stride(static_cast<std::size_t>(row_stride)),
+        plane_size(static_cast<std::size_t>(plane_count) * static_cast<std::size_t>(plane_entries)),
+        tilted(has_tilted),
+        hit_capacity(static_cast<std::size_t>(c.max_raw_hits)) {
+    planes = std::make_unique<std::uint32_t[]>(plane_size);
     if (tilted) {
-      prefix = std::make_unique<std::uint32_t[]>(w + 2);
-      for (auto& r : tilted_rows) r = std::make_unique<std::uint32_t[]>(w + 2);
+      prefix = std::make_unique<std::uint32_t[]>(width + 2);
+      for (auto& r : tilted_rows) r = std::make_unique<std::uint32_t[]>(width + 2);
     }
     // Split levels: two rows of sums and squares (by row parity), and one tilted row.
-    for (auto& r : scratch)
-      r = std::make_unique<std::uint32_t[]>(2 * static_cast<std::size_t>(stride));
-    column_offsets = std::make_unique<std::int32_t[]>(w);
-    column_weights = std::make_unique<std::uint16_t[]>(2 * w);
-    row_offsets = std::make_unique<std::int32_t[]>(h);
-    row_weights = std::make_unique<std::uint16_t[]>(2 * h);
-    for (auto& r : resized_rows) r = std::make_unique<std::uint16_t[]>(w);
-    row_hits = std::make_unique<std::int32_t[]>(w + 1);
-    hits = std::make_unique<Detection[]>(static_cast<std::size_t>(c.max_raw_hits));
+    for (auto& r : scratch) r = std::make_unique<std::uint32_t[]>(2 * stride);
+    column_offsets = std::make_unique<std::int32_t[]>(width);
+    column_weights = std::make_unique<std::uint16_t[]>(2 * width);
+    row_offsets = std::make_unique<std::int32_t[]>(height);
+    row_weights = std::make_unique<std::uint16_t[]>(2 * height);
+    for (auto& r : resized_rows) r = std::make_unique<std::uint16_t[]>(width);
+    row_hits = std::make_unique<std::int32_t[]>(width + 1);
+    hits = std::make_unique<Detection[]>(hit_capacity);
   }
 
-  static std::size_t bytes(const CascadeConfig& c, std::ptrdiff_t stride,
-                           std::ptrdiff_t plane_entries, int plane_count, bool tilted) {
-    const auto w = static_cast<std::size_t>(c.max_width);
-    const auto h = static_cast<std::size_t>(c.max_height);
-    return w * h + static_cast<std::size_t>(plane_count * plane_entries) * 4 +
-           (tilted ? 5 * (w + 2) * 4 : 0) + 3 * 2 * static_cast<std::size_t>(stride) * 4 +
-           w * (4 + 2 * 2 + 2 * 2 + 4) + h * (4 + 2 * 2) + 4 +
-           static_cast<std::size_t>(c.max_raw_hits) * sizeof(Detection);
+  // Every buffer, as f(data, bytes): what bytes() counts, and what a level's search tells
+  // ThreadSanitizer it writes (the kernels it calls are not instrumented: race_annotations.hpp).
+  template <typename F>
+  void each_buffer(F&& f) {
+    f(level.view().data(), level.size_bytes());
+    f(planes.get(), plane_size * 4);
+    if (tilted) {
+      f(prefix.get(), (width + 2) * 4);
+      for (auto& r : tilted_rows) f(r.get(), (width + 2) * 4);
+    }
+    for (auto& r : scratch) f(r.get(), 2 * stride * 4);
+    f(column_offsets.get(), width * 4);
+    f(column_weights.get(), 2 * width * 2);
+    f(row_offsets.get(), height * 4);
+    f(row_weights.get(), 2 * height * 2);
+    for (auto& r : resized_rows) f(r.get(), width * 2);
+    f(row_hits.get(), (width + 1) * 4);
+    f(hits.get(), hit_capacity * sizeof(Detection));
+  }
+
+  std::size_t bytes() {
+    std::size_t total = 0;
+    each_buffer([&](const void*, std::size_t n) { total += n; });
+    return total;
   }
 
   GrayImage level;
+  std::size_t width;   // the largest level's
+  std::size_t height;  // the largest level's
+  std::size_t stride;  // of a plane row
+  std::size_t plane_size;
+  bool tilted;
+  std::size_t hit_capacity;
   std::unique_ptr<std::uint32_t[]> planes;
   std::unique_ptr<std::uint32_t[]> prefix;
   std::unique_ptr<std::uint32_t[]> tilted_rows[4];
@@ -225,8 +250,7 @@ struct CascadeDetector::State {
 
   std::size_t working_set_bytes() const {
     const auto hits = static_cast<std::size_t>(config.max_raw_hits);
-    return programs[0].bytes() + programs[1].bytes() +
-           workers.size() * CascadeWorker::bytes(config, stride, plane, plane_count(), tilted) +
+    return programs[0].bytes() + programs[1].bytes() + workers.size() * workers.front()->bytes() +
            static_cast<std::size_t>(max_levels) * (4 + sizeof(LevelHits)) +
            hits * (2 * sizeof(Detection) + 3 * 4) +
            static_cast<std::size_t>(config.max_detections) * sizeof(Detection);
@@ -415,6 +439,12 @@ void CascadeDetector::State::search_level(int index, CascadeWorker& w) {
   const int hit_width = round_even(static_cast<float>(window_width) * scale);
   const int hit_height = round_even(static_cast<float>(window_height) * scale);
 
+  // The kernels below are not instrumented under ThreadSanitizer (vision/CMakeLists.txt): what
+  // they read of the shared image and may write of this worker's buffers, told to it here.
+  race_check_read(image.data(), static_cast<std::size_t>(image.height() - 1) *
+                                        static_cast<std::size_t>(image.stride()) +
+                                    static_cast<std::size_t>(image.width()));
+  w.each_buffer([](void* data, std::size_t bytes) { race_check_write(data, bytes); });
   GrayView level_view = image;
   if (width != image.width() || height != image.height()) {
     resize_level(w, width, height);
