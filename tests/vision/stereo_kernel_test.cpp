@@ -319,15 +319,35 @@ TEST(StereoKernels, BmRowEqualsReference) {
     const U8 entering = random_u8(n * D, 31, 24), leaving = random_u8(n * D, 31, 25);
     for (const SimdPath path : simd_paths()) {
       for (const int radius : {1, 3, 10}) {
+        // A row between the first and the last, as BmRow promises it: each column the sum of
+        // 2 * radius + 1 costs (31 to 2 * radius * 31 here, so that a row entering and one
+        // leaving keep it one), and beyond the left border (d > c) every cost the census's
+        // maximum.
+        const int column_max = (2 * radius + 1) * 31;
+        U16 inner_base = base;
+        U8 inner_entering = entering, inner_leaving = leaving;
+        for (std::size_t c = 0; c < n; ++c) {
+          for (std::size_t d = 0; d < static_cast<std::size_t>(D); ++d) {
+            std::uint16_t& column = inner_base[c * D + d];
+            if (d > c) {
+              column = static_cast<std::uint16_t>(column_max);
+              inner_entering[c * D + d] = inner_leaving[c * D + d] = 31;
+            } else {
+              column = static_cast<std::uint16_t>(31 + column % (column_max - 61));
+            }
+          }
+        }
         for (const bool enters : {false, true}) {
           for (const bool leaves : {false, true}) {
+            const bool inner = enters && leaves;
             for (const bool confidence : {false, true}) {
               const auto run = [&](kernels::BmRowKernel* kernel, U16& columns, WtaOut& out) {
                 U16 sums(n * D, 3);
-                kernel({enters ? entering.data() : nullptr, leaves ? leaving.data() : nullptr,
-                        columns.data(), width, D, radius, sums.data(), out.row(10)});
+                kernel({enters ? (inner ? inner_entering : entering).data() : nullptr,
+                        leaves ? (inner ? inner_leaving : leaving).data() : nullptr, columns.data(),
+                        width, D, radius, sums.data(), out.row(10)});
               };
-              U16 ref_columns = base, columns = base;
+              U16 ref_columns = inner ? inner_base : base, columns = ref_columns;
               WtaOut ref(n, D), out(n, D, confidence);
               run(kernels::bm_row_ref, ref_columns, ref);
               run(kernels::stereo_kernels(path).bm, columns, out);
