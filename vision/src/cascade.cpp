@@ -153,27 +153,29 @@ struct CascadeWorker {
 
   // Every buffer, as f(data, bytes): what bytes() counts, and what a level's search tells
   // ThreadSanitizer it writes (the kernels it calls are not instrumented: race_annotations.hpp).
-  template <typename F>
-  void each_buffer(F&& f) {
-    f(level.view().data(), level.size_bytes());
-    f(planes.get(), plane_size * 4);
-    if (tilted) {
-      f(prefix.get(), (width + 2) * 4);
-      for (auto& r : tilted_rows) f(r.get(), (width + 2) * 4);
+  template <typename Self, typename F>
+  static void each_buffer(Self& self, F&& f) {
+    const std::size_t w = self.width;
+    const std::size_t h = self.height;
+    f(self.level.view().data(), self.level.size_bytes());
+    f(self.planes.get(), self.plane_size * 4);
+    if (self.tilted) {
+      f(self.prefix.get(), (w + 2) * 4);
+      for (auto& r : self.tilted_rows) f(r.get(), (w + 2) * 4);
     }
-    for (auto& r : scratch) f(r.get(), 2 * stride * 4);
-    f(column_offsets.get(), width * 4);
-    f(column_weights.get(), 2 * width * 2);
-    f(row_offsets.get(), height * 4);
-    f(row_weights.get(), 2 * height * 2);
-    for (auto& r : resized_rows) f(r.get(), width * 2);
-    f(row_hits.get(), (width + 1) * 4);
-    f(hits.get(), hit_capacity * sizeof(Detection));
+    for (auto& r : self.scratch) f(r.get(), 2 * self.stride * 4);
+    f(self.column_offsets.get(), w * 4);
+    f(self.column_weights.get(), 2 * w * 2);
+    f(self.row_offsets.get(), h * 4);
+    f(self.row_weights.get(), 2 * h * 2);
+    for (auto& r : self.resized_rows) f(r.get(), w * 2);
+    f(self.row_hits.get(), (w + 1) * 4);
+    f(self.hits.get(), self.hit_capacity * sizeof(Detection));
   }
 
-  std::size_t bytes() {
+  std::size_t bytes() const {
     std::size_t total = 0;
-    each_buffer([&](const void*, std::size_t n) { total += n; });
+    each_buffer(*this, [&](const void*, std::size_t n) { total += n; });
     return total;
   }
 
@@ -444,7 +446,8 @@ void CascadeDetector::State::search_level(int index, CascadeWorker& w) {
   race_check_read(image.data(), static_cast<std::size_t>(image.height() - 1) *
                                         static_cast<std::size_t>(image.stride()) +
                                     static_cast<std::size_t>(image.width()));
-  w.each_buffer([](void* data, std::size_t bytes) { race_check_write(data, bytes); });
+  CascadeWorker::each_buffer(w,
+                             [](void* data, std::size_t bytes) { race_check_write(data, bytes); });
   GrayView level_view = image;
   if (width != image.width() || height != image.height()) {
     resize_level(w, width, height);

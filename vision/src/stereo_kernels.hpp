@@ -139,8 +139,8 @@ using BoxColumnsKernel = void(std::uint16_t* sums, const std::uint8_t* add, cons
 // it (either may be null), and the box and its winner are taken. With both rows, as between the
 // image's first and last rows, the caller promises what cost_row gives and the matcher keeps:
 // every column sums 2 * radius + 1 rows, and the costs of column c at d > c (beyond the left
-// border), entering and leaving, are kMaxCensusCost. The SIMD kernels then leave out what that
-// decides (bm_row_sweep).
+// border), entering and leaving, are kMaxCensusCost (with radius >= 1: blocks of 3 and more). The
+// SIMD kernels then leave out what that decides (bm_row_sweep).
 struct BmRow {
   const std::uint8_t* entering;
   const std::uint8_t* leaving;

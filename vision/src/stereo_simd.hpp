@@ -602,10 +602,14 @@ void bm_row_sweep(const BmRow& r) {
       for (; x < stop; ++x) band_pixel(x, kEnd);
       current = kEnd;
     };
-    [&]<int... kBlock>(std::integer_sequence<int, kBlock...>) {
-      (band(std::integral_constant<int, 16 * (kBlock + 1)>{}), ...);
+    // (With R = 0 a winner could be a block's last disparity, and its sub-pixel step would read
+    // the next block's stale sums.)
+    if (R > 0) {
+      [&]<int... kBlock>(std::integer_sequence<int, kBlock...>) {
+        (band(std::integral_constant<int, 16 * (kBlock + 1)>{}), ...);
+      }
+      (std::make_integer_sequence<int, kD / 16 - 1>{});
     }
-    (std::make_integer_sequence<int, kD / 16 - 1>{});
   }
   count_blocks(x, D);
   for (; x < W - R; ++x) {
