@@ -1,20 +1,26 @@
 // vboard-trigger: the virtual board's trigger source, run inside the guest. vivid's cameras have
 // no trigger input and run free, so the trigger follows them: the driver reads the left camera's
-// frame completions from the kernel's vb2_buf_done trace events (tracefs, on the CLOCK_MONOTONIC
-// trace clock, enabled before the camera streams: the Nth completion is frame N-1, as long as
-// vivid never finds its queue empty, which the firmware's spare buffers see to) and makes each
-// next frame's edge half a period before it is due, pulling the gpio-sim line up and down
-// through its sysfs `pull` attribute. A slave trigger numbers the edges it sees from 0, so edge
-// N comes before frame N, as on a triggered board; edges the driver is behind on (after a pause)
-// come at once, 1 ms apart. It prints each edge with the CLOCK_MONOTONIC times just before and
-// after it was made, and each completion it read, for the host to check the edge times the
-// firmware reports. It can stop after every N edges for a while and start again (the
+// frame completions from the kernel's trace events (tracefs, on the CLOCK_MONOTONIC trace clock,
+// enabled before the camera streams): vb2_buf_done gives a buffer's completion time, and the
+// v4l2_dqbuf of the same buffer, when the firmware takes it, its frame's sequence number. Counting
+// completions is not enough: vivid numbers its frames by the time since it started streaming, so
+// when its thread runs late (an emulated CPU on a loaded host) it skips the numbers of the frames
+// it missed. The driver makes each next frame's edge half a period before it is due, pulling the
+// gpio-sim line up and down through its sysfs `pull` attribute. A slave trigger numbers the edges
+// it sees from 0, so edge N comes before frame N, as on a triggered board; edges the driver is
+// behind on (after a pause) come at once, 1 ms apart. It prints each edge with the CLOCK_MONOTONIC
+// times just before and after it was made, and each completion it read, for the host to check the
+// edge times the firmware reports. It can stop after every N edges for a while and start again (the
 // trigger-loss fault).
 //
-//   vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ [--pause-every N --pause-ms MS]
+//   vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ CAMERA [--pause-every N --pause-ms MS]
+//
+// CAMERA: the left camera's device node (its minor number picks its v4l2_dqbuf events).
 #include <fcntl.h>
 #include <linux/gpio.h>
 #include <sys/ioctl.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <array>
@@ -90,16 +96,39 @@ void pull(int fd, const char* direction, const char* path) {
   }
 }
 
-// One "vivid-000-vid-c-PID [CPU] FLAGS TIME: vb2_buf_done: ..." line of the trace: a buffer of
-// the first vivid instance (the left camera, /dev/video0) completed at TIME.
-bool parse_frame(const char* line, std::int64_t& time_ns) {
+// The value after "NAME = " in a trace event's fields (from `fields`), or -1.
+long long field(const char* fields, const char* name) {
+  const std::string key = std::string(name) + " = ";
+  const char* at = std::strstr(fields, key.c_str());
+  return at == nullptr ? -1 : std::strtoll(at + key.size(), nullptr, 10);
+}
+
+// One "vivid-000-vid-c-PID [CPU] FLAGS TIME: vb2_buf_done: ... index = I ..." line of the trace:
+// buffer I of the first vivid instance (the left camera) completed at TIME.
+bool parse_done(const char* line, long& index, std::int64_t& time_ns) {
   const char* event = std::strstr(line, ": vb2_buf_done: ");
   const char* task = std::strstr(line, "vivid-000-vid-c-");
   if (event == nullptr || task == nullptr || task > event) return false;
+  index = static_cast<long>(field(event, "index"));
   const char* start = event;
   while (start > line && start[-1] != ' ') --start;
   time_ns = static_cast<std::int64_t>(std::strtod(start, nullptr) * 1e9);
-  return true;
+  return index >= 0;
+}
+
+// One "...: v4l2_dqbuf: minor = M, index = I, ..., flags = F, ..., sequence = S" line: the
+// firmware took buffer I of the device of minor M, holding frame S (false for another device);
+// `error`: the buffer holds no frame (flag ERROR: the camera stopped under it).
+bool parse_dequeued(const char* line, long device_minor, long& index, long& sequence, bool& error) {
+  const char* event = std::strstr(line, ": v4l2_dqbuf: ");
+  if (event == nullptr || field(event, "minor") != device_minor) return false;
+  index = static_cast<long>(field(event, "index"));
+  sequence = static_cast<long>(field(event, "sequence"));
+  const char* flags = std::strstr(event, "flags = ");
+  const char* flags_end = flags == nullptr ? nullptr : std::strchr(flags, ',');
+  const char* error_flag = std::strstr(event, "ERROR");
+  error = error_flag != nullptr && (flags_end == nullptr || error_flag < flags_end);
+  return index >= 0 && sequence >= 0;
 }
 
 class Line {
@@ -132,18 +161,21 @@ class Line {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 6) {
+  if (argc < 7) {
     fail(
-        "usage: vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ [--pause-every N --pause-ms "
-        "MS]");
+        "usage: vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ CAMERA [--pause-every N "
+        "--pause-ms MS]");
   }
   const char* chip_path = argv[1];
   const auto offset = static_cast<unsigned>(number(argv[2], "OFFSET"));
   const char* trace_path = argv[4];
   const long rate = number(argv[5], "RATE_HZ");
   if (rate < 1 || rate > 1000) fail("RATE_HZ: " + std::to_string(rate) + " is not within 1..1000");
+  struct stat camera {};
+  if (stat(argv[6], &camera) != 0) fail(std::string(argv[6]) + ": " + std::strerror(errno));
+  const auto camera_minor = static_cast<long>(minor(camera.st_rdev));
   long pause_every = 0, pause_ms = 0;
-  for (int i = 6; i + 1 < argc; i += 2) {
+  for (int i = 7; i + 1 < argc; i += 2) {
     const std::string option = argv[i];
     if (option == "--pause-every") {
       pause_every = number(argv[i + 1], "--pause-every");
@@ -183,11 +215,34 @@ int main(int argc, char** argv) {
   std::int64_t resume = 0;
   long paused_at = 0;
   std::array<char, 1024> text{};
-  long sequence = -1;
+  std::array<std::int64_t, 64> done_at{};  // by buffer index: its completion not yet taken
+  long sequence = -1;                      // the last frame followed
+  long last_taken = -1;                    // vivid's number of it
+  long base = 0;                           // what vivid's numbers are counted from
   while (std::fgets(text.data(), text.size(), trace) != nullptr) {
-    std::int64_t done = 0;
-    if (!parse_frame(text.data(), done)) continue;
-    ++sequence;
+    long index = 0;
+    std::int64_t completed = 0;
+    if (parse_done(text.data(), index, completed)) {
+      if (index < static_cast<long>(done_at.size())) {
+        done_at[static_cast<std::size_t>(index)] = completed;
+      }
+      continue;
+    }
+    long taken = 0;
+    bool error = false;
+    if (!parse_dequeued(text.data(), camera_minor, index, taken, error) ||
+        index >= static_cast<long>(done_at.size())) {
+      continue;
+    }
+    const std::int64_t done = done_at[static_cast<std::size_t>(index)];
+    done_at[static_cast<std::size_t>(index)] = 0;
+    if (error || done == 0) continue;
+    // vivid loaded again counts from 0 again; its frames go on after the last one here, as the
+    // firmware's edges do.
+    if (taken < last_taken) base = sequence + 1;
+    last_taken = taken;
+    if (base + taken <= sequence) continue;
+    sequence = base + taken;
     std::printf("vboard-trigger: frame %ld %lld\n", sequence, static_cast<long long>(done));
     if (now_ns() < resume) continue;
     if (pause_every > 0 && line.edges() > 0 && line.edges() % pause_every == 0 &&
