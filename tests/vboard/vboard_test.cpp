@@ -65,6 +65,14 @@ void expect_triggers_accounted(const BoardRun& run) {
       << "no health message after a frame summary";
 }
 
+// Whether the pair carries the trigger time of the driver's edge of its number.
+bool carries_its_edge(const BoardRun& run, const FrameSummary& f) {
+  const auto edge = run.edges.find(f.frame);
+  const auto t = static_cast<std::int64_t>(f.trigger_ns);
+  return edge != run.edges.end() && t >= edge->second.before_ns &&
+         t <= edge->second.after_ns + kEdgeSlackNs;
+}
+
 // Each frame summary: numbers increasing (stale pairs are skipped, so not one by one). A frame
 // whose edge the driver made before the left camera completed it carries that edge's time: the
 // gpio-sim edge of its number, between the driver's times before and after making it. Most
@@ -195,13 +203,10 @@ TEST(EPIPOLE_VBOARD_SUITE, TriggerStopsAndRestarts) {
     return static_cast<std::int64_t>(f.frame) >= run.pauses.front();
   });
   expect_triggered_frames(run, 0, static_cast<std::size_t>(first_after - frames.begin()));
-  const auto carries_its_edge = [&](const FrameSummary& f) {
-    const auto edge = run.edges.find(f.frame);
-    const auto t = static_cast<std::int64_t>(f.trigger_ns);
-    return edge != run.edges.end() && t >= edge->second.before_ns &&
-           t <= edge->second.after_ns + kEdgeSlackNs;
-  };
-  EXPECT_GT(std::count_if(first_after, frames.end(), carries_its_edge), 0) << context(run);
+  EXPECT_GT(std::count_if(first_after, frames.end(),
+                          [&](const FrameSummary& f) { return carries_its_edge(run, f); }),
+            0)
+      << context(run);
 }
 // Both cameras disappear under the firmware (unbound from vivid, as if unplugged) 4 s after it
 // started; vivid is unloaded as soon as the firmware has let go of them and loaded again. The
@@ -246,11 +251,7 @@ TEST(EPIPOLE_VBOARD_SUITE, CameraModuleUnloadedAndReloaded) {
     }
     ++summaries;
     last_frame = f->frame;
-    const auto edge = run.edges.find(f->frame);
-    const auto t = static_cast<std::int64_t>(f->trigger_ns);
-    const bool own_edge = edge != run.edges.end() && t >= edge->second.before_ns &&
-                          t <= edge->second.after_ns + kEdgeSlackNs;
-    std::uint64_t& last = own_edge ? last_edge : last_stamp;
+    std::uint64_t& last = carries_its_edge(run, *f) ? last_edge : last_stamp;
     EXPECT_GT(f->trigger_ns, last) << "message " << i;
     last = f->trigger_ns;
     if (i >= back) ++frames_after;
