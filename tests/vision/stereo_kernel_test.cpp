@@ -10,6 +10,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "random_image.hpp"
+#include "stereo_census.hpp"
 #include "stereo_kernels.hpp"
 
 namespace epipole::vision {
@@ -72,14 +73,23 @@ TEST_P(StereoCensus, SimdEqualsReference) {
       const std::uint8_t* rows[7];
       for (int i = 0; i < 7; ++i) rows[i] = view.row(std::clamp(y - 3 + i, 0, c.height - 1));
       ASSERT_EQ(ref.census_layout, kernels::CensusLayout::planes);
-      U8 expected(4 * n, 1);
-      ref.census(rows, c.width, expected.data());
-      for (const SimdPath path : simd_paths()) {
-        const auto simd = kernels::stereo_kernels(path);
-        U8 out(4 * n, 2);
-        simd.census(rows, c.width, out.data());
-        ASSERT_EQ(out, in_layout(expected, c.width, simd.census_layout, 0))
-            << to_string(path) << " row " << y;
+      for (const int bits : {kernels::kCensusBits, kernels::kSparseCensusBits}) {
+        U8 expected(4 * n, 1);
+        ref.census(rows, c.width, bits, expected.data());
+        for (int x = 0; x < c.width; ++x) {
+          ASSERT_EQ(
+              kernels::census_at(kernels::CensusLayout::planes, expected.data(), c.width, x) >>
+                  bits,
+              0u)
+              << "bits past the census's are 0";
+        }
+        for (const SimdPath path : simd_paths()) {
+          const auto simd = kernels::stereo_kernels(path);
+          U8 out(4 * n, 2);
+          simd.census(rows, c.width, bits, out.data());
+          ASSERT_EQ(out, in_layout(expected, c.width, simd.census_layout, 0))
+              << to_string(path) << " row " << y << " bits " << bits;
+        }
       }
     }
   }
@@ -119,18 +129,27 @@ TEST(StereoKernels, CostEqualsReference) {
   for (const int width : {17, 40, 65, 300}) {
     for (const int D : {16, 32, 48, 64, 128, 256}) {
       const auto n = static_cast<std::size_t>(width);
-      const U8 left = random_u8(4 * n, 255, 1);
-      const U8 right = random_u8(4 * (n + D), 255, 3);
-      U8 ref(n * D, 0);
-      kernels::cost_row_ref(left.data(), right.data(), width, D, ref.data());
-      EXPECT_EQ(ref[1], 31) << "d = 1 at x = 0 is beyond the left border";
-      for (const SimdPath path : simd_paths()) {
-        const auto simd = kernels::stereo_kernels(path);
-        const U8 l = in_layout(left, width, simd.census_layout, 3);
-        const U8 r = in_layout(right, width + D, simd.census_layout, 5);
-        U8 out(n * D, 1);
-        simd.cost(l.data() + 3, r.data() + 5, width, D, out.data());
-        ASSERT_EQ(out, ref) << to_string(path) << " width " << width << " D " << D;
+      // Random censuses, in planes. Bits 16..30 too: a kernel that counts them in the sparse
+      // census's cost fails. (No census has bit 31.)
+      U8 left = random_u8(4 * n, 255, 1);
+      U8 right = random_u8(4 * (n + D), 255, 3);
+      for (auto [planes, pixels] : {std::pair{&left, n}, std::pair{&right, n + D}}) {
+        for (std::size_t x = 0; x < pixels; ++x) (*planes)[3 * pixels + x] &= 0x7F;
+      }
+      for (const int bits : {kernels::kCensusBits, kernels::kSparseCensusBits}) {
+        U8 ref(n * D, 0);
+        kernels::cost_row_ref(left.data(), right.data(), width, D, bits, ref.data());
+        EXPECT_EQ(ref[1], bits) << "d = 1 at x = 0 is beyond the left border";
+        EXPECT_LE(*std::max_element(ref.begin(), ref.end()), bits);
+        for (const SimdPath path : simd_paths()) {
+          const auto simd = kernels::stereo_kernels(path);
+          const U8 l = in_layout(left, width, simd.census_layout, 3);
+          const U8 r = in_layout(right, width + D, simd.census_layout, 5);
+          U8 out(n * D, 1);
+          simd.cost(l.data() + 3, r.data() + 5, width, D, bits, out.data());
+          ASSERT_EQ(out, ref) << to_string(path) << " width " << width << " D " << D << " bits "
+                              << bits;
+        }
       }
     }
   }
@@ -273,7 +292,8 @@ TEST(StereoKernels, WtaEqualsReference) {
             WtaOut out(n, D, uniqueness != 5);
             U16 unchanged = columns;
             kernels::stereo_kernels(path).bm({nullptr, nullptr, unchanged.data(), width, D, 0,
-                                              sums.data(), out.row(uniqueness)});
+                                              kernels::kCensusBits, sums.data(),
+                                              out.row(uniqueness)});
             expect_same_wta(out, ref,
                             cat(to_string(path), " width ", width, " D ", D, " max ", max,
                                 " uniqueness ", uniqueness));
@@ -316,45 +336,51 @@ TEST(StereoKernels, BmRowEqualsReference) {
     const auto n = static_cast<std::size_t>(width);
     U16 base = random_u16(n * D, 900, 23);
     for (auto& v : base) v = static_cast<std::uint16_t>(v + 100);  // a leaving row never wraps
-    const U8 entering = random_u8(n * D, 31, 24), leaving = random_u8(n * D, 31, 25);
-    for (const SimdPath path : simd_paths()) {
-      for (const int radius : {1, 3, 10}) {
-        // A row between the first and the last, as BmRow promises it: each column the sum of
-        // 2 * radius + 1 costs (31 to 2 * radius * 31 here, so that a row entering and one
-        // leaving keep it one), and beyond the left border (d > c) every cost the census's
-        // maximum.
-        const int column_max = (2 * radius + 1) * 31;
-        U16 inner_base = base;
-        U8 inner_entering = entering, inner_leaving = leaving;
-        for (std::size_t c = 0; c < n; ++c) {
-          for (std::size_t d = 0; d < static_cast<std::size_t>(D); ++d) {
-            std::uint16_t& column = inner_base[c * D + d];
-            if (d > c) {
-              column = static_cast<std::uint16_t>(column_max);
-              inner_entering[c * D + d] = inner_leaving[c * D + d] = 31;
-            } else {
-              column = static_cast<std::uint16_t>(31 + column % (column_max - 61));
+    // The costs of either census.
+    for (const int max_cost : {kernels::kCensusBits, kernels::kSparseCensusBits}) {
+      const U8 entering = random_u8(n * D, max_cost, 24), leaving = random_u8(n * D, max_cost, 25);
+      for (const SimdPath path : simd_paths()) {
+        for (const int radius : {1, 3, 10}) {
+          // A row between the first and the last, as BmRow promises it: each column the sum of
+          // 2 * radius + 1 costs (max_cost to 2 * radius * max_cost here, so that a row entering
+          // and one leaving keep it one), and beyond the left border (d > c) every cost
+          // max_cost.
+          const int column_max = (2 * radius + 1) * max_cost;
+          U16 inner_base = base;
+          U8 inner_entering = entering, inner_leaving = leaving;
+          for (std::size_t c = 0; c < n; ++c) {
+            for (std::size_t d = 0; d < static_cast<std::size_t>(D); ++d) {
+              std::uint16_t& column = inner_base[c * D + d];
+              if (d > c) {
+                column = static_cast<std::uint16_t>(column_max);
+                inner_entering[c * D + d] = inner_leaving[c * D + d] =
+                    static_cast<std::uint8_t>(max_cost);
+              } else {
+                column =
+                    static_cast<std::uint16_t>(max_cost + column % (column_max - 2 * max_cost + 1));
+              }
             }
           }
-        }
-        for (const bool enters : {false, true}) {
-          for (const bool leaves : {false, true}) {
-            const bool inner = enters && leaves;
-            for (const bool confidence : {false, true}) {
-              const auto run = [&](kernels::BmRowKernel* kernel, U16& columns, WtaOut& out) {
-                U16 sums(n * D, 3);
-                kernel({enters ? (inner ? inner_entering : entering).data() : nullptr,
-                        leaves ? (inner ? inner_leaving : leaving).data() : nullptr, columns.data(),
-                        width, D, radius, sums.data(), out.row(10)});
-              };
-              U16 ref_columns = inner ? inner_base : base, columns = ref_columns;
-              WtaOut ref(n, D), out(n, D, confidence);
-              run(kernels::bm_row_ref, ref_columns, ref);
-              run(kernels::stereo_kernels(path).bm, columns, out);
-              const std::string where = cat(to_string(path), " width ", width, " radius ", radius,
-                                            " enters ", enters, " leaves ", leaves);
-              ASSERT_EQ(columns, ref_columns) << where;
-              expect_same_wta(out, ref, where);
+          for (const bool enters : {false, true}) {
+            for (const bool leaves : {false, true}) {
+              const bool inner = enters && leaves;
+              for (const bool confidence : {false, true}) {
+                const auto run = [&](kernels::BmRowKernel* kernel, U16& columns, WtaOut& out) {
+                  U16 sums(n * D, 3);
+                  kernel({enters ? (inner ? inner_entering : entering).data() : nullptr,
+                          leaves ? (inner ? inner_leaving : leaving).data() : nullptr,
+                          columns.data(), width, D, radius, max_cost, sums.data(), out.row(10)});
+                };
+                U16 ref_columns = inner ? inner_base : base, columns = ref_columns;
+                WtaOut ref(n, D), out(n, D, confidence);
+                run(kernels::bm_row_ref, ref_columns, ref);
+                run(kernels::stereo_kernels(path).bm, columns, out);
+                const std::string where =
+                    cat(to_string(path), " width ", width, " radius ", radius, " max cost ",
+                        max_cost, " enters ", enters, " leaves ", leaves);
+                ASSERT_EQ(columns, ref_columns) << where;
+                expect_same_wta(out, ref, where);
+              }
             }
           }
         }

@@ -20,9 +20,9 @@ namespace kernels {
 StereoKernels stereo_kernels_neon();
 StereoKernels stereo_kernels_avx2();
 
-std::uint32_t census_bits(const std::uint8_t* const* rows, int width, int x) {
+std::uint32_t census_bits(const std::uint8_t* const* rows, int width, int x, int count) {
   std::uint32_t bits = 0;
-  for (int b = 0; b < kCensusBits; ++b) {
+  for (int b = 0; b < count; ++b) {
     const CensusOffset o = kCensusOffsets[b];
     const int xa = std::clamp(x + o.dx, 0, width - 1);
     const int xc = std::clamp(x - o.dx, 0, width - 1);
@@ -31,22 +31,23 @@ std::uint32_t census_bits(const std::uint8_t* const* rows, int width, int x) {
   return bits;
 }
 
-void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* census) {
+void census_row_ref(const std::uint8_t* const* rows, int width, int bits, std::uint8_t* census) {
   for (int x = 0; x < width; ++x) {
-    set_census(CensusLayout::planes, census, width, x, census_bits(rows, width, x));
+    set_census(CensusLayout::planes, census, width, x, census_bits(rows, width, x, bits));
   }
 }
 
 void cost_row_ref(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
-                  std::uint8_t* cost) {
+                  int bits, std::uint8_t* cost) {
+  const std::uint32_t compared = (1u << bits) - 1;
   for (int x = 0; x < width; ++x) {
     const std::uint32_t l = census_at(CensusLayout::planes, left, width, x);
     for (int d = 0; d < disparities; ++d) {
       const int k = width - 1 - x + d;
-      const int bits =
-          std::popcount(l ^ census_at(CensusLayout::planes, right, width + disparities, k));
+      const int differ = std::popcount(
+          (l ^ census_at(CensusLayout::planes, right, width + disparities, k)) & compared);
       cost[static_cast<std::ptrdiff_t>(x) * disparities + d] =
-          static_cast<std::uint8_t>(d > x ? kMaxCensusCost : bits);
+          static_cast<std::uint8_t>(d > x ? bits : differ);
     }
   }
 }
@@ -257,7 +258,8 @@ struct StereoMatcher::Worker {
     each_buffer(*this, [&](const auto& v) { n += bytes_of(v); });
     return n;
   }
-  void cost_row(GrayView left, GrayView right, int y, int disparities, std::uint8_t* cost_out);
+  void cost_row(GrayView left, GrayView right, int y, int disparities, int bits,
+                std::uint8_t* cost_out);
 };
 
 StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPool* pool)
@@ -400,9 +402,10 @@ void StereoMatcher::reset_history() {
   if (temporal_) temporal_->reset();
 }
 
-// The census of row y of both images (the right one reversed), then its cost into `cost`.
+// The census of row y of both images (the right one reversed), then its cost into `cost`: the
+// census's first `bits` bits.
 void StereoMatcher::Worker::cost_row(GrayView left, GrayView right, int y, int disparities,
-                                     std::uint8_t* cost_out) {
+                                     int bits, std::uint8_t* cost_out) {
   const int width = left.width();
   const std::uint8_t* rows[7];
   for (const GrayView* image : {&left, &right}) {
@@ -410,11 +413,11 @@ void StereoMatcher::Worker::cost_row(GrayView left, GrayView right, int y, int d
       rows[i] = image->row(std::clamp(y - kernels::kCensusRadiusY + i, 0, left.height() - 1));
       race_check_read(rows[i], static_cast<std::size_t>(width));  // race_annotations.hpp
     }
-    kernels.census(rows, width, image == &left ? left_census.data() : right_census.data());
+    kernels.census(rows, width, bits, image == &left ? left_census.data() : right_census.data());
   }
   kernels::reverse_census(kernels.census_layout, right_census.data(), width, width + disparities,
                           reversed.data());
-  kernels.cost(left_census.data(), reversed.data(), width, disparities, cost_out);
+  kernels.cost(left_census.data(), reversed.data(), width, disparities, bits, cost_out);
 }
 
 namespace {
@@ -489,7 +492,7 @@ void StereoMatcher::sgm_stripe(Worker& w, int y0, int y1) {
     std::fill(w.mins[prev][dir].begin(), w.mins[prev][dir].end(), std::uint8_t{0});
   }
   for (int y = std::max(0, y0 - kWarmupRows); y < y1; ++y) {
-    w.cost_row(left_, right_, y, D, w.cost.data());
+    w.cost_row(left_, right_, y, D, kernels::kCensusBits, w.cost.data());
     kernels::SgmRow row{};
     row.cost = w.cost.data();
     row.width = W;
@@ -514,7 +517,8 @@ void StereoMatcher::sgm_stripe(Worker& w, int y0, int y1) {
   }
 }
 
-// Block matching: a ring of cost rows y - r - 1 .. y + r and their vertical sums.
+// Block matching: a ring of cost rows y - r - 1 .. y + r and their vertical sums, over the
+// sparse census (stereo_census.hpp).
 void StereoMatcher::bm_stripe(Worker& w, int y0, int y1) {
   const int H = config_.height;
   const int D = config_.max_disparity;
@@ -522,10 +526,11 @@ void StereoMatcher::bm_stripe(Worker& w, int y0, int y1) {
   const int r = config_.block_size / 2;
   const int ring = config_.block_size + 1;
   const auto ring_row = [&](int y) { return w.cost.data() + (y % ring) * wd; };
+  constexpr int kBits = kernels::kSparseCensusBits;
   std::fill(w.columns.begin(), w.columns.end(), std::uint16_t{0});
   const int first = std::max(0, y0 - r);
   for (int y = first; y < std::min(H, y0 + r); ++y) {
-    w.cost_row(left_, right_, y, D, ring_row(y));
+    w.cost_row(left_, right_, y, D, kBits, ring_row(y));
     w.kernels.box_columns(w.columns.data(), ring_row(y), nullptr, static_cast<int>(wd));
   }
   for (int y = y0; y < y1; ++y) {
@@ -535,10 +540,11 @@ void StereoMatcher::bm_stripe(Worker& w, int y0, int y1) {
                        config_.width,
                        D,
                        r,
+                       kBits,
                        w.sums.data(),
                        wta_row(config_, w, disparity_.row(y), confidence_row(y))};
     if (y + r < H) {
-      w.cost_row(left_, right_, y + r, D, ring_row(y + r));
+      w.cost_row(left_, right_, y + r, D, kBits, ring_row(y + r));
       row.entering = ring_row(y + r);
     }
     if (y - r - 1 >= first) row.leaving = ring_row(y - r - 1);

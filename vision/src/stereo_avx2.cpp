@@ -8,9 +8,12 @@ namespace epipole::vision::kernels {
 
 namespace {
 
-void cost_row_avx2(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
-                   std::uint8_t* cost) {
+// kBits: the census bits compared (kCensusBits, or kSparseCensusBits: planes 0 and 1 alone).
+template <int kBits>
+void cost_row_bits_avx2(const std::uint8_t* left, const std::uint8_t* right, int width,
+                        int disparities, std::uint8_t* cost) {
   using V = simd::Avx2x16;
+  constexpr bool kFour = kBits > 16;
   const __m256i table = _mm256_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4, 0, 1, 1, 2,
                                          1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
   const __m256i low = _mm256_set1_epi8(0x0F);
@@ -34,18 +37,21 @@ void cost_row_avx2(const std::uint8_t* left, const std::uint8_t* right, int widt
   const std::uint8_t* const r2 = right + 2 * padded;
   const std::uint8_t* const r3 = right + 3 * padded;
   for (int x = 0; x < width; ++x) {
-    const __m256i l[kCensusBytes] = {
-        _mm256_set1_epi8(static_cast<char>(l0[x])), _mm256_set1_epi8(static_cast<char>(l1[x])),
-        _mm256_set1_epi8(static_cast<char>(l2[x])), _mm256_set1_epi8(static_cast<char>(l3[x]))};
+    const auto splat = [](std::uint8_t v) { return _mm256_set1_epi8(static_cast<char>(v)); };
+    const __m256i l[kCensusBytes] = {splat(l0[x]), splat(l1[x]),
+                                     kFour ? splat(l2[x]) : _mm256_setzero_si256(),
+                                     kFour ? splat(l3[x]) : _mm256_setzero_si256()};
     const std::ptrdiff_t k = width - 1 - x;
     std::uint8_t* out = cost + static_cast<std::ptrdiff_t>(x) * disparities;
     // Disparities past x (beyond the left border) cost the most: filled below, not computed.
     const int computed = std::min(disparities, x + 1);
     int d = 0;
     for (; d + 32 <= disparities && d < computed; d += 32) {
-      const __m256i sum =
-          _mm256_add_epi8(_mm256_add_epi8(count(l[0], r0 + k + d), count(l[1], r1 + k + d)),
-                          _mm256_add_epi8(count(l[2], r2 + k + d), count(l[3], r3 + k + d)));
+      __m256i sum = _mm256_add_epi8(count(l[0], r0 + k + d), count(l[1], r1 + k + d));
+      if constexpr (kFour) {
+        sum =
+            _mm256_add_epi8(sum, _mm256_add_epi8(count(l[2], r2 + k + d), count(l[3], r3 + k + d)));
+      }
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + d), sum);
     }
     if (d < computed && disparities - d == 16) {  // 16 left
@@ -53,12 +59,20 @@ void cost_row_avx2(const std::uint8_t* left, const std::uint8_t* right, int widt
         return V::xorb(_mm256_castsi256_si128(l_p), V::loadb(r_p + k + d));
       };
       V::storeb(out + d,
-                V::popcount4(half(l[0], r0), half(l[1], r1), half(l[2], r2), half(l[3], r3)));
+                kFour ? V::popcount4(half(l[0], r0), half(l[1], r1), half(l[2], r2), half(l[3], r3))
+                      : V::popcount2(half(l[0], r0), half(l[1], r1)));
     }
     if (x < disparities - 1) {  // beyond the left border
-      std::fill(out + x + 1, out + disparities, static_cast<std::uint8_t>(kMaxCensusCost));
+      std::fill(out + x + 1, out + disparities, static_cast<std::uint8_t>(kBits));
     }
   }
+}
+
+void cost_row_avx2(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
+                   int bits, std::uint8_t* cost) {
+  bits == kSparseCensusBits
+      ? cost_row_bits_avx2<kSparseCensusBits>(left, right, width, disparities, cost)
+      : cost_row_bits_avx2<kCensusBits>(left, right, width, disparities, cost);
 }
 
 __m256i load32(const std::uint8_t* p) {

@@ -46,15 +46,18 @@ inline void set_census(CensusLayout layout, std::uint8_t* census, int n, int x,
 void reverse_census(CensusLayout layout, const std::uint8_t* census, int n, int padded,
                     std::uint8_t* reversed);
 
-// The census of a row into `census` (width pixels). rows[0..6] are rows y-3..y+3 (clamped at
-// the image border by the caller); columns are clamped too.
-using CensusRowKernel = void(const std::uint8_t* const* rows, int width, std::uint8_t* census);
-// Matching cost of one row: cost[x * D + d] = Hamming distance (0..31) between the left census
-// at x and the right census at x - d, and 31 (kMaxCensusCost) where d > x (beyond the left
-// border). left holds width pixels; right holds width + D, reversed: its pixel k is right
-// pixel width - 1 - k, for k < width (the caller pads k >= width).
+// The census of a row into `census` (width pixels): its first `bits` bits, kCensusBits or
+// kSparseCensusBits (stereo_census.hpp), the others 0. rows[0..6] are rows y-3..y+3 (clamped
+// at the image border by the caller); columns are clamped too.
+using CensusRowKernel = void(const std::uint8_t* const* rows, int width, int bits,
+                             std::uint8_t* census);
+// Matching cost of one row over the census's first `bits` bits (kCensusBits or
+// kSparseCensusBits): cost[x * D + d] = Hamming distance (0..bits) between the left census at x
+// and the right census at x - d, and `bits` (the most) where d > x (beyond the left border).
+// left holds width pixels; right holds width + D, reversed: its pixel k is right pixel
+// width - 1 - k, for k < width (the caller pads k >= width).
 using CostRowKernel = void(const std::uint8_t* left, const std::uint8_t* right, int width,
-                           int disparities, std::uint8_t* cost);
+                           int disparities, int bits, std::uint8_t* cost);
 
 // Winner take all of one row of aggregated costs S(x, d) (each below kNoCost), as the last step
 // of the SGM and BM row kernels. disparity[x]: d * 16 with parabolic sub-pixel, or
@@ -139,7 +142,7 @@ using BoxColumnsKernel = void(std::uint16_t* sums, const std::uint8_t* add, cons
 // it (either may be null), and the box and its winner are taken. With both rows, as between the
 // image's first and last rows, the caller promises what cost_row gives and the matcher keeps:
 // every column sums 2 * radius + 1 rows, and the costs of column c at d > c (beyond the left
-// border), entering and leaving, are kMaxCensusCost (with radius >= 1: blocks of 3 and more). The
+// border), entering and leaving, are max_cost (with radius >= 1: blocks of 3 and more). The
 // SIMD kernels then leave out what that decides (bm_row_sweep).
 struct BmRow {
   const std::uint8_t* entering;
@@ -148,6 +151,7 @@ struct BmRow {
   int width;
   int disparities;
   int radius;
+  int max_cost;         // the cost row's most: its census's bits
   std::uint16_t* sums;  // width * D values of scratch (width >= 16, as WtaRow)
   WtaRow wta;
 };
@@ -165,9 +169,9 @@ struct StereoKernels {
 StereoKernels stereo_kernels(SimdPath path);
 
 // The reference's census and cost: the planes layout.
-void census_row_ref(const std::uint8_t* const* rows, int width, std::uint8_t* census);
+void census_row_ref(const std::uint8_t* const* rows, int width, int bits, std::uint8_t* census);
 void cost_row_ref(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
-                  std::uint8_t* cost);
+                  int bits, std::uint8_t* cost);
 void sgm_row_ref(const SgmRow& row);
 void box_columns_ref(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub, int n);
 void bm_row_ref(const BmRow& row);
@@ -178,7 +182,8 @@ void box_wta_ref(const std::uint16_t* columns, int width, int disparities, int r
 // The definition of the winner take all over a whole row of sums [x * D + d].
 void wta_row_ref(const std::uint16_t* sums, int width, int disparities, const WtaRow& wta);
 
-// The census bits of pixel x (clamped columns), shared by every path for the border columns.
-std::uint32_t census_bits(const std::uint8_t* const* rows, int width, int x);
+// The first `bits` census bits of pixel x (clamped columns), shared by every path for the
+// border columns.
+std::uint32_t census_bits(const std::uint8_t* const* rows, int width, int x, int bits);
 
 }  // namespace epipole::vision::kernels

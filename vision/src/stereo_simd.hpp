@@ -5,6 +5,7 @@
 // Disparities go 16 at a time (the range is a multiple of 16): costs and SGM path values in
 // bytes, sums in 16-bit lanes.
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <tuple>
@@ -44,15 +45,30 @@ void with_common_range(int disparities, Run&& run) {
   }
 }
 
-// The census of the 16 pixels from x, whose columns x - 4 .. x + 19 are readable, into a row of
-// n pixels from pixel `at`.
-template <typename V, CensusLayout kLayout>
+// The census's bits in the order of their offsets in the window, row by row. The kernels
+// compare in this order: in the table's (the sparse checkerboard first), armhf's census took
+// 9 % more instructions.
+inline constexpr auto kCensusBitsByRow = [] {
+  std::array<int, kCensusBits> order{};
+  for (int b = 0; b < kCensusBits; ++b) order[b] = b;
+  std::sort(order.begin(), order.end(), [](int a, int b) {
+    const CensusOffset p = kCensusOffsets[a], q = kCensusOffsets[b];
+    return p.dy != q.dy ? p.dy < q.dy : p.dx < q.dx;
+  });
+  return order;
+}();
+
+// The census's first kBits bits of the 16 pixels from x, whose columns x - 4 .. x + 19 are
+// readable, into a row of n pixels from pixel `at`.
+template <typename V, CensusLayout kLayout, int kBits>
 inline void census_vector(const std::uint8_t* const* rows, int x, std::uint8_t* census, int n,
                           int at) {
   using B = typename V::B;
   B acc[kCensusBytes] = {V::zerob(), V::zerob(), V::zerob(), V::zerob()};
 #pragma GCC unroll 31
-  for (int b = 0; b < kCensusBits; ++b) {
+  for (int i = 0; i < kCensusBits; ++i) {
+    const int b = kCensusBitsByRow[i];
+    if (b >= kBits) continue;
     const CensusOffset o = kCensusOffsets[b];
     const B a = V::loadb(rows[kCensusRadiusY + o.dy] + x + o.dx);
     const B c = V::loadb(rows[kCensusRadiusY - o.dy] + x - o.dx);
@@ -68,20 +84,20 @@ inline void census_vector(const std::uint8_t* const* rows, int x, std::uint8_t* 
   }
 }
 
-template <typename V, CensusLayout kLayout>
-void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* census) {
+template <typename V, CensusLayout kLayout, int kBits>
+void census_row_bits(const std::uint8_t* const* rows, int width, std::uint8_t* census) {
   constexpr int kLanes = 16;
   constexpr int kR = kCensusRadiusX;
   if (width < kLanes + 2 * kR) {
     for (int x = 0; x < width; ++x)
-      set_census(kLayout, census, width, x, census_bits(rows, width, x));
+      set_census(kLayout, census, width, x, census_bits(rows, width, x, kBits));
     return;
   }
   // Interior columns [kR, width - kR); the last vector may overlap the previous one.
   const int end = width - kR;
   for (int x = kR; x < end; x += kLanes) {
     const int at = std::min(x, end - kLanes);
-    census_vector<V, kLayout>(rows, at, census, width, at);
+    census_vector<V, kLayout, kBits>(rows, at, census, width, at);
   }
   // The kR border columns on each side: one vector over a copy of the rows with the columns
   // clamped, the same values census_bits reads.
@@ -103,7 +119,7 @@ void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* c
       }
       copy_rows[r] = copy[r];
     }
-    census_vector<V, kLayout>(copy_rows, kR, lanes, kLanes, 0);
+    census_vector<V, kLayout, kBits>(copy_rows, kR, lanes, kLanes, 0);
     const int begin = first == 0 ? 0 : width - kR;
     for (int x = begin; x < begin + kR; ++x) {
       set_census(kLayout, census, width, x, census_at(kLayout, lanes, kLanes, x - first));
@@ -111,77 +127,105 @@ void census_row_simd(const std::uint8_t* const* rows, int width, std::uint8_t* c
   }
 }
 
-// The costs of one pixel for 16 disparities: the Hamming distances between its census bytes
-// (left, splat) and those of 16 pixels of the reversed right planes from `at`.
-template <typename V>
-inline typename V::B census_distance(const typename V::B* left, const std::uint8_t* const* right,
-                                     std::ptrdiff_t at) {
-  return V::popcount4(
-      V::xorb(left[0], V::loadb(right[0] + at)), V::xorb(left[1], V::loadb(right[1] + at)),
-      V::xorb(left[2], V::loadb(right[2] + at)), V::xorb(left[3], V::loadb(right[3] + at)));
+template <typename V, CensusLayout kLayout>
+void census_row_simd(const std::uint8_t* const* rows, int width, int bits, std::uint8_t* census) {
+  bits == kSparseCensusBits ? census_row_bits<V, kLayout, kSparseCensusBits>(rows, width, census)
+                            : census_row_bits<V, kLayout, kCensusBits>(rows, width, census);
 }
 
-// One pixel's census against 16 of the reversed right row's, in either layout: what the cost
-// row needs of it.
-template <typename V, CensusLayout kLayout>
+// The costs of one pixel for 16 disparities: the Hamming distances between its first kBytes
+// census bytes (left, splat) and those of 16 pixels of the reversed right planes from `at`.
+template <typename V, int kBytes>
+inline typename V::B census_distance(const typename V::B* left, const std::uint8_t* const* right,
+                                     std::ptrdiff_t at) {
+  if constexpr (kBytes == 2) {
+    return V::popcount2(V::xorb(left[0], V::loadb(right[0] + at)),
+                        V::xorb(left[1], V::loadb(right[1] + at)));
+  } else {
+    return V::popcount4(
+        V::xorb(left[0], V::loadb(right[0] + at)), V::xorb(left[1], V::loadb(right[1] + at)),
+        V::xorb(left[2], V::loadb(right[2] + at)), V::xorb(left[3], V::loadb(right[3] + at)));
+  }
+}
+
+// The bytes of a census of kBits bits.
+template <int kBits>
+constexpr int kBytesOf = (kBits + 7) / 8;
+
+// One pixel's census (its first kBits bits) against 16 of the reversed right row's, in either
+// layout: what the cost row needs of it.
+template <typename V, CensusLayout kLayout, int kBits>
 class CensusPixel;
 
-template <typename V>
-class CensusPixel<V, CensusLayout::planes> {
+template <typename V, int kBits>
+class CensusPixel<V, CensusLayout::planes, kBits> {
+  static constexpr int kBytes = kBytesOf<kBits>;
+
  public:
   CensusPixel(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities) {
     // The plane pointers in this object's members, not read through the caller's arrays: the
     // byte stores into the cost row may alias those, and the compiler would load them again
     // after each one.
 #pragma GCC unroll 4
-    for (int p = 0; p < kCensusBytes; ++p) {
+    for (int p = 0; p < kBytes; ++p) {
       left_[p] = left + static_cast<std::ptrdiff_t>(p) * width;
       right_[p] = right + static_cast<std::ptrdiff_t>(p) * (width + disparities);
     }
   }
   void load(int x) {
 #pragma GCC unroll 4
-    for (int p = 0; p < kCensusBytes; ++p) l_[p] = V::load_splatb(left_[p] + x);
+    for (int p = 0; p < kBytes; ++p) l_[p] = V::load_splatb(left_[p] + x);
   }
   // The distances to right pixels k .. k + 15.
   typename V::B distance(std::ptrdiff_t k) const {
-    return census_distance<V>(l_, right_, k);
+    return census_distance<V, kBytes>(l_, right_, k);
   }
 
  private:
-  const std::uint8_t* left_[kCensusBytes];
-  const std::uint8_t* right_[kCensusBytes];
-  typename V::B l_[kCensusBytes];
+  const std::uint8_t* left_[kBytes];
+  const std::uint8_t* right_[kBytes];
+  typename V::B l_[kBytes];
 };
 
-template <typename V>
-class CensusPixel<V, CensusLayout::words> {
+template <typename V, int kBits>
+class CensusPixel<V, CensusLayout::words, kBits> {
  public:
   CensusPixel(const std::uint8_t* left, const std::uint8_t* right, int, int)
       : left_(left), right_(right) {}
   void load(int x) {
-    l_ = V::load_splat_word(left_ + static_cast<std::ptrdiff_t>(x) * kCensusBytes);
+    const std::uint8_t* word = left_ + static_cast<std::ptrdiff_t>(x) * kCensusBytes;
+    if constexpr (kBytesOf<kBits> == 2) {
+      l_[0] = V::load_splatb(word);
+      l_[1] = V::load_splatb(word + 1);
+    } else {
+      l_[0] = V::load_splat_word(word);
+    }
   }
   typename V::B distance(std::ptrdiff_t k) const {
-    return V::popcount_words16(l_, right_ + k * kCensusBytes);
+    const std::uint8_t* words = right_ + k * kCensusBytes;
+    if constexpr (kBytesOf<kBits> == 2) {
+      return V::popcount_low2_words16(l_[0], l_[1], words);
+    } else {
+      return V::popcount_words16(l_[0], words);
+    }
   }
 
  private:
   const std::uint8_t* left_;
   const std::uint8_t* right_;
-  typename V::B l_;
+  typename V::B l_[2];
 };
 
 // Row costs, pixel by pixel: the blocks of 16 disparities inside the image first, then the one
 // that reaches beyond its left border (d > x), where the cost is the most, then those wholly
 // beyond it, which are that maximum alone. kD: the range when fixed at compile time (0:
-// disparities).
-template <typename V, CensusLayout kLayout, int kD = 0>
+// disparities). kBits: the census bits compared.
+template <typename V, CensusLayout kLayout, int kBits, int kD = 0>
 void cost_row_range(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
                     std::uint8_t* cost) {
   using B = typename V::B;
-  CensusPixel<V, kLayout> pixel(left, right, width, disparities);
-  const B max_cost = V::splatb(kMaxCensusCost);
+  CensusPixel<V, kLayout, kBits> pixel(left, right, width, disparities);
+  const B max_cost = V::splatb(kBits);
   for (int x = 0; x < width; ++x) {
     pixel.load(x);
     const std::ptrdiff_t k = width - 1 - x;
@@ -207,9 +251,14 @@ void cost_row_range(const std::uint8_t* left, const std::uint8_t* right, int wid
 
 template <typename V, CensusLayout kLayout>
 void cost_row_simd(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
-                   std::uint8_t* cost) {
+                   int bits, std::uint8_t* cost) {
   with_common_range(disparities, [&](auto range) {
-    cost_row_range<V, kLayout, range.value>(left, right, width, disparities, cost);
+    if (bits == kSparseCensusBits) {
+      cost_row_range<V, kLayout, kSparseCensusBits, range.value>(left, right, width, disparities,
+                                                                 cost);
+    } else {
+      cost_row_range<V, kLayout, kCensusBits, range.value>(left, right, width, disparities, cost);
+    }
   });
 }
 
@@ -251,7 +300,7 @@ struct DisparityLanes<V, false> {
 // pixels x - d .. x - d - 15 at the consecutive entries width - 1 - x + d ..: one load and store
 // a block, no shift. Entries past width - 1 (right pixels left of the image) are written and
 // never read. The disparities need no first value: every sum is below kNoCost (SGM's at most
-// 5 * 255, BM's 21 * 21 * 31), so a right pixel's first candidate, at d = 0, replaces its
+// 5 * 255, BM's at most 21 * 21 * 31), so a right pixel's first candidate, at d = 0, replaces its
 // kNoCost. kD: the range when fixed at compile time (0: the constructor's). kSmallSums: every
 // sum is below 2048 (SGM's), so a vocabulary's min_first_small may find the winner.
 //
@@ -578,9 +627,9 @@ void bm_row_sweep(const BmRow& r) {
   };
   // Between the first and last rows (BmRow's promise) a pixel x of the left band takes only the
   // blocks of 16 disparities that reach x + R: in the others every cost of its box is the
-  // census's maximum, so their columns hold 2R + 1 of it and never change, their box sums the
-  // most any box can (no winner, no second smallest: WtaPixels::pixel) and their right pixels
-  // lie left of the image. At 640 x 480 with 128 disparities and block 7: 8 % of the blocks.
+  // cost row's maximum (max_cost), so their columns hold 2R + 1 of it and never change, their box
+  // sums the most any box can (no winner, no second smallest: WtaPixels::pixel) and their right
+  // pixels lie left of the image. At 640 x 480 with 128 disparities and block 7: 8 % of the blocks.
   constexpr bool kSkip = kEnters && kLeaves && kD != 0;
   int current = D;  // the blocks below this one have the sums of the pixel before
   // The blocks current .. end - 1 counted again from pixel x: their sums at x - 1, the columns of
@@ -589,7 +638,7 @@ void bm_row_sweep(const BmRow& r) {
     if (current >= end) return;
     const int box_columns = std::min(x - 1 + R, W - 1) - std::max(x - 1 - R, 0) + 1;
     std::fill(sums + current, sums + end,
-              static_cast<std::uint16_t>(box_columns * (2 * R + 1) * kMaxCensusCost));
+              static_cast<std::uint16_t>(box_columns * (2 * R + 1) * r.max_cost));
     current = end;
   };
   int x = 1;

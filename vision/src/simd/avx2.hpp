@@ -233,6 +233,17 @@ struct Avx2x16 {
         _mm256_add_epi8(count(_mm256_set_m128i(b, a)), count(_mm256_set_m128i(d, c)));
     return _mm_add_epi8(_mm256_castsi256_si128(sum), _mm256_extracti128_si256(sum, 1));
   }
+  // Per lane: popcount(a) + popcount(b).
+  static B popcount2(B a, B b) {
+    const __m128i table = _mm_setr_epi8(0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4);
+    const __m256i low = _mm256_set1_epi8(0x0F);
+    const __m256i v = _mm256_set_m128i(b, a);
+    const __m256i table2 = _mm256_broadcastsi128_si256(table);
+    const __m256i sum = _mm256_add_epi8(
+        _mm256_shuffle_epi8(table2, _mm256_and_si256(v, low)),
+        _mm256_shuffle_epi8(table2, _mm256_and_si256(_mm256_srli_epi16(v, 4), low)));
+    return _mm_add_epi8(_mm256_castsi256_si128(sum), _mm256_extracti128_si256(sum, 1));
+  }
   static std::uint8_t hminb(B v) {
     const __m128i pairs = _mm_min_epu8(v, _mm_srli_epi16(v, 8));
     const __m128i words = _mm_and_si128(pairs, _mm_set1_epi16(0xFF));

@@ -127,6 +127,10 @@ struct Neon {
   static B popcount4(B a, B b, B c, B d) {
     return vaddq_u8(vaddq_u8(vcntq_u8(a), vcntq_u8(b)), vaddq_u8(vcntq_u8(c), vcntq_u8(d)));
   }
+  // Per lane: popcount(a) + popcount(b).
+  static B popcount2(B a, B b) {
+    return vaddq_u8(vcntq_u8(a), vcntq_u8(b));
+  }
   // The 16 lanes in reverse order.
   static B reverseb(B v) {
     const B halves = vrev64q_u8(v);
@@ -158,6 +162,12 @@ struct Neon {
     const B c2 = vcntq_u8(veorq_u8(word, vld1q_u8(p + 32)));
     const B c3 = vcntq_u8(veorq_u8(word, vld1q_u8(p + 48)));
     return vpaddq_u8(vpaddq_u8(c0, c1), vpaddq_u8(c2, c3));
+  }
+  // The same over the words' bytes 0 and 1 alone (byte0, byte1: splat), one LD4 that takes the
+  // 16 words apart into their bytes.
+  static B popcount_low2_words16(B byte0, B byte1, const std::uint8_t* p) {
+    const uint8x16x4_t bytes = vld4q_u8(p);
+    return popcount2(veorq_u8(byte0, bytes.val[0]), veorq_u8(byte1, bytes.val[1]));
   }
 #endif
 

@@ -20,7 +20,7 @@ constexpr int kDisparityScale = 16;  // output = disparity * 16 (4 fractional bi
 
 enum class StereoMethod {
   sgm,  // quality: census cost, semi-global aggregation over 5 paths
-  bm,   // fast: census cost, box aggregation
+  bm,   // fast: sparse census cost (16 of the 31 comparisons), box aggregation
 };
 
 struct StereoConfig {
@@ -49,7 +49,8 @@ struct StereoConfig {
 };
 
 // Dense disparity of a rectified pair (left image is the reference; a left pixel x matches the
-// right pixel x - d). Cost: 9x7 centre-symmetric census (31 bits) with Hamming distance.
+// right pixel x - d). Cost: 9x7 centre-symmetric census (31 bits; block matching a checkerboard
+// of 16 of them) with Hamming distance.
 // Quality mode: semi-global aggregation along 5 paths (left, right, top, top-left, top-right),
 // all in one top-down pass, so no cost volume is stored. Fast mode: box aggregation. Both: winner
 // take all, parabolic sub-pixel, uniqueness ratio, left-right check, speckle removal; on request
