@@ -52,7 +52,8 @@ void cost_row_ref(const std::uint8_t* left, const std::uint8_t* right, int width
   }
 }
 
-void wta_row_ref(const std::uint16_t* sums, int width, int D, const WtaRow& wta) {
+void wta_row_ref(const std::uint16_t* sums, int width, int D, const WtaRow& wta,
+                 RightWinners right) {
   const std::uint32_t ratio = uniqueness_ratio(wta.uniqueness);
   for (int x = 0; x < width; ++x) {
     const std::uint16_t* s = sums + static_cast<std::ptrdiff_t>(x) * D;
@@ -70,6 +71,21 @@ void wta_row_ref(const std::uint16_t* sums, int width, int D, const WtaRow& wta)
       other = std::min<int>(other, s[d]);
     }
     store_winner(wta, x, unique ? best : -1, s, D, other);
+  }
+  if (right == RightWinners::left_winners) {
+    std::uint16_t* const lowest = wta.window;  // of the winners landing on each xr
+    std::fill_n(lowest, width, kNoCost);
+    std::fill_n(wta.right_best, width, std::int16_t{-1});
+    for (int x = 0; x < width; ++x) {
+      const int d = wta.best[x];
+      if (d < 0) continue;
+      const std::uint16_t cost = sums[static_cast<std::ptrdiff_t>(x) * D + d];
+      if (cost < lowest[x - d]) {
+        lowest[x - d] = cost;
+        wta.right_best[x - d] = static_cast<std::int16_t>(d);
+      }
+    }
+    return;
   }
   for (int xr = 0; xr < width; ++xr) {
     int best = 0;
@@ -136,7 +152,7 @@ void sgm_row_ref(const SgmRow& r) {
   }
   sgm_horizontal_ref(r, 1);
   sgm_horizontal_ref(r, -1);
-  wta_row_ref(r.sums, r.width, D, r.wta);
+  wta_row_ref(r.sums, r.width, D, r.wta, RightWinners::exact);
 }
 
 void box_columns_ref(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub, int n) {
@@ -159,7 +175,7 @@ void box_wta_ref(const std::uint16_t* columns, int width, int D, int radius, std
       sums[static_cast<std::ptrdiff_t>(x) * D + d] = static_cast<std::uint16_t>(v);
     }
   }
-  wta_row_ref(sums, width, D, wta);
+  wta_row_ref(sums, width, D, wta, RightWinners::left_winners);
 }
 
 void bm_row_ref(const BmRow& r) {

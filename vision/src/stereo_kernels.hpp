@@ -59,14 +59,22 @@ using CensusRowKernel = void(const std::uint8_t* const* rows, int width, int bit
 using CostRowKernel = void(const std::uint8_t* left, const std::uint8_t* right, int width,
                            int disparities, int bits, std::uint8_t* cost);
 
+// How the winner take all finds the right image's best disparity at xr (WtaRow::right_best),
+// for the left-right check:
+//   exact:        the smallest S(xr + d, d) over 0 <= d < min(D, width - xr), the smallest d
+//                 among equal costs (SGM);
+//   left_winners: from the left pixels' winners alone: of the winners best[x] = d that land on
+//                 xr = x - d, the one of the smallest S(x, d), the smallest d among equal; -1
+//                 where none lands (block matching; StereoBM's rule, validateDisparity).
+enum class RightWinners : std::uint8_t { exact, left_winners };
+
 // Winner take all of one row of aggregated costs S(x, d) (each below kNoCost), as the last step
 // of the SGM and BM row kernels. disparity[x]: d * 16 with parabolic sub-pixel, or
 // kInvalidDisparity when not unique or when d > x; best[x]: that integer d or -1.
-// right_best[xr]: the right image's best disparity at xr, the smallest S(xr + d, d) over
-// 0 <= d < min(D, width - xr), the smallest d among equal costs. window: 2 * (width + D)
-// values of scratch. confidence[x] (when not null): confidence_of() the winner's cost and the
-// lowest cost outside best +-1, 0 where there is no winner. The SIMD kernels need width >= 16
-// (the matcher's: D < width).
+// right_best[xr]: the right image's best disparity at xr (RightWinners: SGM's exact, BM's
+// left_winners). window: 2 * (width + D) values of scratch. confidence[x] (when not null):
+// confidence_of() the winner's cost and the lowest cost outside best +-1, 0 where there is no
+// winner. The SIMD kernels need width >= 16 (the matcher's: D < width).
 constexpr std::uint16_t kNoCost = 0x7FFF;
 struct WtaRow {
   int uniqueness;
@@ -176,11 +184,12 @@ void sgm_row_ref(const SgmRow& row);
 void box_columns_ref(std::uint16_t* sums, const std::uint8_t* add, const std::uint8_t* sub, int n);
 void bm_row_ref(const BmRow& row);
 // The horizontal box of radius r over a row of per-x columns of D values into sums
-// [x * D + d], and its winner take all.
+// [x * D + d], and its winner take all (block matching's: right winners from the left's).
 void box_wta_ref(const std::uint16_t* columns, int width, int disparities, int radius,
                  std::uint16_t* sums, const WtaRow& wta);
 // The definition of the winner take all over a whole row of sums [x * D + d].
-void wta_row_ref(const std::uint16_t* sums, int width, int disparities, const WtaRow& wta);
+void wta_row_ref(const std::uint16_t* sums, int width, int disparities, const WtaRow& wta,
+                 RightWinners right);
 
 // The first `bits` census bits of pixel x (clamped columns), shared by every path for the
 // border columns.

@@ -308,11 +308,17 @@ struct DisparityLanes<V, false> {
 // (DisparityLanes): the right image's, and each lane's best of the pixel. A block then costs one
 // load, select and store of them rather than two each, and one add for the next block's
 // disparities.
-template <typename V, int kD = 0, bool kSmallSums = false>
+//
+// kRight: how the right image's winners are found (RightWinners). That window is exact's; with
+// left_winners each pixel's winner, once known, goes to its right pixel alone, and the window
+// holds each right pixel's lowest winning cost so far (entry xr).
+template <typename V, int kD = 0, bool kSmallSums = false,
+          RightWinners kRight = RightWinners::exact>
 class WtaPixels {
   using H = typename V::H;
   using Lanes = DisparityLanes<V>;
   using Disparity = typename Lanes::Value;
+  static constexpr bool kExact = kRight == RightWinners::exact;
 
  public:
   WtaPixels(const WtaRow& row, int width, int disparities)
@@ -322,9 +328,17 @@ class WtaPixels {
         ratio_(uniqueness_ratio(row.uniqueness)),
         cost_(row.window),
         disp_(reinterpret_cast<Disparity*>(row.window + width + disparities)) {
-    // kNoCost everywhere, 16 at a time (the last 16 may overlap the ones before).
-    const int n = width + disparities;
-    for (int i = 0; i < n; i += 16) V::storeh(cost_ + std::min(i, n - 16), V::splath(kNoCost));
+    // 16 at a time (the last 16 may overlap the ones before): kNoCost in every entry, and for
+    // left_winners no right winner yet.
+    const auto fill = [](std::uint16_t* p, int n, std::uint16_t v) {
+      for (int i = 0; i < n; i += 16) V::storeh(p + std::min(i, n - 16), V::splath(v));
+    };
+    if constexpr (kExact) {
+      fill(cost_, width + disparities, kNoCost);
+    } else {
+      fill(cost_, width, kNoCost);
+      fill(reinterpret_cast<std::uint16_t*>(row.right_best), width, 0xFFFF);  // -1
+    }
   }
 
   // The winner of pixel x. sums(d) gives the sums of disparities d .. d + 15 and must have
@@ -360,9 +374,11 @@ class WtaPixels {
       best_index = Lanes::select(V::gth(m, v), index, best_index);
       second = V::minh(second, V::maxh(m, v));
       m = V::minh(m, v);
-      const H old_cost = V::loadh(cost + d);
-      V::storeh(cost + d, V::minh(old_cost, v));
-      Lanes::store(disp + d, Lanes::select(V::gth(old_cost, v), index, Lanes::load(disp + d)));
+      if constexpr (kExact) {
+        const H old_cost = V::loadh(cost + d);
+        V::storeh(cost + d, V::minh(old_cost, v));
+        Lanes::store(disp + d, Lanes::select(V::gth(old_cost, v), index, Lanes::load(disp + d)));
+      }
       index = Lanes::add(index, sixteen);
     }
     const H m_index = Lanes::widen(best_index);
@@ -381,13 +397,22 @@ class WtaPixels {
     const H near = V::eqh(V::minh(offset, V::splath(2)), offset);
     const int others = V::hminh(V::selecth(near, second, m));
     const int limit = std::min(uniqueness_limit(min_cost, ratio_), static_cast<int>(kNoCost));
-    store_winner(row_, x, others >= limit ? best : -1, s, D,
-                 row_.confidence != nullptr ? others : kNoCost);
+    const int winner = others >= limit ? best : -1;
+    store_winner(row_, x, winner, s, D, row_.confidence != nullptr ? others : kNoCost);
+    if constexpr (!kExact) {
+      // Pixels x in increasing order: among equal costs at a right pixel, the smallest d stays.
+      if (winner >= 0 && winner <= x && min_cost < cost_[x - winner]) {
+        cost_[x - winner] = static_cast<std::uint16_t>(min_cost);
+        row_.right_best[x - winner] = static_cast<std::int16_t>(winner);
+      }
+    }
   }
 
   // After the last pixel: every right pixel's winner (width >= 16).
   void finish() {
-    if constexpr (requires(typename Lanes::T v) { Lanes::reverse(v); }) {
+    if constexpr (!kExact) {
+      return;  // each pixel gave its own
+    } else if constexpr (requires(typename Lanes::T v) { Lanes::reverse(v); }) {
       // 16 at a time; the last 16 may overlap the ones before.
       for (int xr0 = 0; xr0 < width_; xr0 += 16) {
         const int xr = std::min(xr0, width_ - 16);
@@ -593,7 +618,7 @@ void bm_row_sweep(const BmRow& r) {
   const auto update = [&](int c, int d) {
     return bm_column<V, kEnters, kLeaves>(r.columns + offset(c), entering_at(c), leaving_at(c), d);
   };
-  WtaPixels<V, kD> wta(r.wta, W, D);
+  WtaPixels<V, kD, false, RightWinners::left_winners> wta(r.wta, W, D);
   // x = 0: columns 0..R.
   for (int c = 0; c < R; ++c) {
     for (int d = 0; d < D; d += 16) update(c, d);

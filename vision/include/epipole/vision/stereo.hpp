@@ -53,8 +53,9 @@ struct StereoConfig {
 // of 16 of them) with Hamming distance.
 // Quality mode: semi-global aggregation along 5 paths (left, right, top, top-left, top-right),
 // all in one top-down pass, so no cost volume is stored. Fast mode: box aggregation. Both: winner
-// take all, parabolic sub-pixel, uniqueness ratio, left-right check, speckle removal; on request
-// a confidence per pixel from its cost curve.
+// take all, parabolic sub-pixel, uniqueness ratio, left-right check (the fast mode's right
+// winners from the left winners alone, as StereoBM's), speckle removal; on request a confidence
+// per pixel from its cost curve.
 //
 // Fixed memory: everything is allocated by the constructor; compute() never allocates. See
 // working_set_bytes() and docs/vision.md for the formula.
