@@ -20,15 +20,15 @@ namespace kernels {
 StereoKernels stereo_kernels_neon();
 StereoKernels stereo_kernels_avx2();
 
-std::uint32_t census_bits(const std::uint8_t* const* rows, int width, int x, int count) {
-  std::uint32_t bits = 0;
-  for (int b = 0; b < count; ++b) {
+std::uint32_t census_bits(const std::uint8_t* const* rows, int width, int x, int bits) {
+  std::uint32_t census = 0;
+  for (int b = 0; b < bits; ++b) {
     const CensusOffset o = kCensusOffsets[b];
     const int xa = std::clamp(x + o.dx, 0, width - 1);
     const int xc = std::clamp(x - o.dx, 0, width - 1);
-    if (rows[kCensusRadiusY + o.dy][xa] > rows[kCensusRadiusY - o.dy][xc]) bits |= 1u << b;
+    if (rows[kCensusRadiusY + o.dy][xa] > rows[kCensusRadiusY - o.dy][xc]) census |= 1u << b;
   }
-  return bits;
+  return census;
 }
 
 void census_row_ref(const std::uint8_t* const* rows, int width, int bits, std::uint8_t* census) {

@@ -70,9 +70,9 @@ void cost_row_bits_avx2(const std::uint8_t* left, const std::uint8_t* right, int
 
 void cost_row_avx2(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
                    int bits, std::uint8_t* cost) {
-  bits == kSparseCensusBits
-      ? cost_row_bits_avx2<kSparseCensusBits>(left, right, width, disparities, cost)
-      : cost_row_bits_avx2<kCensusBits>(left, right, width, disparities, cost);
+  with_census_bits(bits, [&](auto compared) {
+    cost_row_bits_avx2<compared.value>(left, right, width, disparities, cost);
+  });
 }
 
 __m256i load32(const std::uint8_t* p) {

@@ -11,9 +11,6 @@ constexpr int kCensusBits = 31;
 constexpr int kSparseCensusBits = 16;
 constexpr int kCensusRadiusX = 4;
 constexpr int kCensusRadiusY = 3;
-// The largest cost, with every bit of the census compared (and what the cost row gives
-// beyond the left border): a census of `bits` bits costs at most `bits`.
-constexpr int kMaxCensusCost = kCensusBits;
 
 struct CensusOffset {
   int dx;
@@ -27,5 +24,22 @@ constexpr CensusOffset kCensusOffsets[kCensusBits] = {
     {3, -2},  {-4, -1}, {-2, -1}, {0, -1}, {2, -1},  {4, -1},  {-3, 0},  {-1, 0},
     {-3, -3}, {-1, -3}, {1, -3},  {3, -3}, {-4, -2}, {-2, -2}, {0, -2},  {2, -2},
     {4, -2},  {-3, -1}, {-1, -1}, {1, -1}, {3, -1},  {-4, 0},  {-2, 0}};
+
+// The table is the upper half window once, offset by offset, the checkerboard first.
+constexpr bool census_table_is_whole() {
+  bool seen[2 * kCensusRadiusY + 1][2 * kCensusRadiusX + 1] = {};
+  for (int b = 0; b < kCensusBits; ++b) {
+    const CensusOffset o = kCensusOffsets[b];
+    const bool upper = o.dy < 0 || (o.dy == 0 && o.dx < 0);
+    const bool checkerboard = (o.dx + o.dy) % 2 != 0;
+    if (!upper || seen[o.dy + kCensusRadiusY][o.dx + kCensusRadiusX] ||
+        checkerboard != (b < kSparseCensusBits)) {
+      return false;
+    }
+    seen[o.dy + kCensusRadiusY][o.dx + kCensusRadiusX] = true;
+  }
+  return true;
+}
+static_assert(census_table_is_whole());
 
 }  // namespace epipole::vision::kernels

@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "epipole/vision/stereo.hpp"
+#include "stereo_census.hpp"
 
 namespace epipole::vision::kernels {
 
@@ -91,7 +92,7 @@ struct WtaRow {
 // disparities at offset 16; entries -1 and width are zero, and the values at d = -1 and d = D
 // are kSgmPad. mins hold each x's minimum (index x + 1).
 constexpr std::uint8_t kSgmPad = 0xFF;
-constexpr int kMaxSgmP2 = 255 - 31;
+constexpr int kMaxSgmP2 = 255 - kCensusBits;
 struct SgmRow {
   const std::uint8_t* cost;  // [x * D + d], each 0..31
   int width;

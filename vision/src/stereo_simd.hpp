@@ -45,6 +45,14 @@ void with_common_range(int disparities, Run&& run) {
   }
 }
 
+// Calls run(std::integral_constant<int, kBits>) with the census's bits, kCensusBits or
+// kSparseCensusBits (the kernels' contract: they take no other), each with kernels of its own.
+template <typename Run>
+void with_census_bits(int bits, Run&& run) {
+  if (bits == kSparseCensusBits) return run(std::integral_constant<int, kSparseCensusBits>{});
+  return run(std::integral_constant<int, kCensusBits>{});
+}
+
 // The census's bits in the order of their offsets in the window, row by row. The kernels
 // compare in this order: in the table's (the sparse checkerboard first), armhf's census took
 // 9 % more instructions.
@@ -129,8 +137,9 @@ void census_row_bits(const std::uint8_t* const* rows, int width, std::uint8_t* c
 
 template <typename V, CensusLayout kLayout>
 void census_row_simd(const std::uint8_t* const* rows, int width, int bits, std::uint8_t* census) {
-  bits == kSparseCensusBits ? census_row_bits<V, kLayout, kSparseCensusBits>(rows, width, census)
-                            : census_row_bits<V, kLayout, kCensusBits>(rows, width, census);
+  with_census_bits(bits, [&](auto compared) {
+    census_row_bits<V, kLayout, compared.value>(rows, width, census);
+  });
 }
 
 // The costs of one pixel for 16 disparities: the Hamming distances between its first kBytes
@@ -252,13 +261,11 @@ void cost_row_range(const std::uint8_t* left, const std::uint8_t* right, int wid
 template <typename V, CensusLayout kLayout>
 void cost_row_simd(const std::uint8_t* left, const std::uint8_t* right, int width, int disparities,
                    int bits, std::uint8_t* cost) {
-  with_common_range(disparities, [&](auto range) {
-    if (bits == kSparseCensusBits) {
-      cost_row_range<V, kLayout, kSparseCensusBits, range.value>(left, right, width, disparities,
-                                                                 cost);
-    } else {
-      cost_row_range<V, kLayout, kCensusBits, range.value>(left, right, width, disparities, cost);
-    }
+  with_census_bits(bits, [&](auto compared) {
+    with_common_range(disparities, [&](auto range) {
+      cost_row_range<V, kLayout, compared.value, range.value>(left, right, width, disparities,
+                                                              cost);
+    });
   });
 }
 
@@ -298,11 +305,12 @@ struct DisparityLanes<V, false> {
 // The right image's candidates, a (cost, disparity) pair for each right pixel xr, are kept in
 // reverse order (entry width - 1 - xr), so that pixel x's disparities d .. d + 15 meet right
 // pixels x - d .. x - d - 15 at the consecutive entries width - 1 - x + d ..: one load and store
-// a block, no shift. Entries past width - 1 (right pixels left of the image) are written and
-// never read. The disparities need no first value: every sum is below kNoCost (SGM's at most
-// 5 * 255, BM's at most 21 * 21 * 31), so a right pixel's first candidate, at d = 0, replaces its
-// kNoCost. kD: the range when fixed at compile time (0: the constructor's). kSmallSums: every
-// sum is below 2048 (SGM's), so a vocabulary's min_first_small may find the winner.
+// a block, no shift (RightWinners::exact, SGM's). Entries past width - 1 (right pixels left of
+// the image) are written and never read. The disparities need no first value: every sum is below
+// kNoCost (SGM's at most 5 * 255), so a right pixel's first candidate,
+// at d = 0, replaces its kNoCost. kD: the range when fixed at compile time (0: the constructor's).
+// kSmallSums: every sum is below 2048 (SGM's), so a vocabulary's min_first_small may find the
+// winner.
 //
 // The disparities, at most 255, are kept as bytes where the vocabulary allows
 // (DisparityLanes): the right image's, and each lane's best of the pixel. A block then costs one
@@ -618,7 +626,8 @@ void bm_row_sweep(const BmRow& r) {
   const auto update = [&](int c, int d) {
     return bm_column<V, kEnters, kLeaves>(r.columns + offset(c), entering_at(c), leaving_at(c), d);
   };
-  WtaPixels<V, kD, false, RightWinners::left_winners> wta(r.wta, W, D);
+  constexpr bool kSmallSums = false;  // up to 21 * 21 * 16
+  WtaPixels<V, kD, kSmallSums, RightWinners::left_winners> wta(r.wta, W, D);
   // x = 0: columns 0..R.
   for (int c = 0; c < R; ++c) {
     for (int d = 0; d < D; d += 16) update(c, d);
