@@ -28,12 +28,6 @@ std::unique_ptr<TriggerWatch> make_trigger_watch(const BoardConfig& config, Boar
   return std::make_unique<TriggerWatch>(*board.trigger(), period);
 }
 
-// Pairs are checked against the trigger's own edges when the delay from edge to frame
-// timestamp is known: the board file gives it, or the cameras know their own.
-bool edge_delay_known(const BoardConfig& config, Board& board) {
-  return config.pairing_edge_delay.has_value() || board.left().edge_delay().has_value();
-}
-
 }  // namespace
 
 hal::PairingConfig pairing_config(const BoardConfig& config,
@@ -42,7 +36,6 @@ hal::PairingConfig pairing_config(const BoardConfig& config,
   if (!config.has_trigger()) {
     // Free-running cameras count their frames each on its own: pairs are matched by time, and
     // the tolerance must be below half the frame period of the faster camera.
-    p.match_sequences = false;
     p.trigger_period = hal::period_of(std::max(config.cameras.left.fps, config.cameras.right.fps));
   }
   if (config.pairing_edge_delay) {
@@ -74,7 +67,7 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
       trigger_(make_trigger_watch(config, board)),
       grabber_(board.left(), board.right(), board.clock(),
                pairing_config(config, board.left().edge_delay()),
-               trigger_ && edge_delay_known(config, board) ? &trigger_->record() : nullptr),
+               trigger_ ? &trigger_->record() : nullptr),
       health_(board.clock().now()),
       snapshots_(config.snapshot_directory, config.width(), config.height(),
                  {config.snapshot_limit,
@@ -339,6 +332,15 @@ void FrameLoop::say_device_changes() {
       journal(Priority::info, "trigger %s found", line.c_str());
     }
   }
+  // The delay from edge to frame, once learned (and again, when it changed).
+  const hal::StereoPairer& pairer = grabber_.pairer();
+  if (pairer.counters().delay_learned != delays_learned_ && pairer.edge_delay()) {
+    delays_learned_ = pairer.counters().delay_learned;
+    journal(Priority::info,
+            "trigger %s: frames come %.3f ms after their edge (learned from %zu pairs)",
+            config_.trigger.line.line.c_str(), static_cast<double>(*pairer.edge_delay()) / 1e6,
+            hal::StereoPairer::kLearnPairs);
+  }
   const hal::RecoveringSerialPort* serial = board_.serial_recovery();
   if (serial != nullptr && serial->connected() != serial_connected_) {
     serial_connected_ = !serial_connected_;
@@ -446,14 +448,10 @@ bool FrameLoop::take_freshest(hal::PairResult& got) {
   }
 }
 
-// The pair's trigger edge while the pairs' numbers are the trigger's (after both cameras were
-// reopened without a trigger record to number them by, they go on from the last pair instead:
-// hal/stereo_pairing.hpp); the left frame's time otherwise.
+// The pair's trigger edge (hal/stereo_pairing.hpp: every pair has one when the board has a
+// trigger); the left frame's time otherwise.
 FrameLoop::TriggerTime FrameLoop::trigger_time(const hal::StereoPair& pair) const {
-  if (trigger_ && grabber_.pairer().numbers_are_the_triggers()) {
-    const auto edge = trigger_->record().find(pair.left.sequence);
-    if (edge && edge->clock == board_.clock().id()) return {edge->timestamp, false};
-  }
+  if (pair.edge && pair.edge->clock == board_.clock().id()) return {pair.edge->timestamp, false};
   return {pair.left.timestamp, true};
 }
 

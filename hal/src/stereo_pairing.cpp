@@ -8,14 +8,15 @@ namespace epipole::hal {
 
 StereoPairer::StereoPairer(CameraSource& left, CameraSource& right, PairingConfig config,
                            const TriggerRecord* trigger)
-    : left_(left), right_(right), config_(config), trigger_(trigger) {
+    : left_(left), right_(right), config_(config), trigger_(trigger), delay_(config.edge_delay) {
   require(config_.tolerance >= 0, "stereo pairing (", left_.name(), ", ", right_.name(),
           "): timestamp tolerance ", config_.tolerance, " ns is negative");
-  require(config_.match_sequences || trigger_ == nullptr, "stereo pairing (", left_.name(), ", ",
-          right_.name(), "): pairing by time alone cannot check the trigger record (sequences)");
   if (trigger_ != nullptr) {
     require(config_.edge_tolerance >= 0, "stereo pairing (", left_.name(), ", ", right_.name(),
             "): edge tolerance ", config_.edge_tolerance, " ns is negative");
+    require(delay_.has_value() || config_.trigger_period > 0, "stereo pairing (", left_.name(),
+            ", ", right_.name(),
+            "): the edge delay is learned within one trigger period, which is not known");
   }
   check_period(config_.trigger_period);
 }
@@ -38,40 +39,50 @@ void StereoPairer::set_trigger_period(Nanoseconds period) {
   config_.trigger_period = period;
 }
 
-bool StereoPairer::on_trigger(const Frame& left, const Frame& right) const {
-  if (trigger_ == nullptr) return true;
-  const std::optional<TriggerEdge> edge = trigger_->find(left.sequence);
-  if (!edge) return false;
-  // Times on different clocks say nothing of each other: the sequence numbers pair them.
-  if (edge->clock != left.clock || edge->clock != right.clock) return true;
-  const Nanoseconds expected = edge->timestamp + config_.edge_delay;
-  auto fits = [&](Nanoseconds t) {
-    return (t > expected ? t - expected : expected - t) <= config_.edge_tolerance;
-  };
-  return fits(left.timestamp) && fits(right.timestamp);
+StereoPairer::EdgeAt StereoPairer::edge_at(const Frame& frame) const {
+  const std::optional<Nanoseconds> newest = trigger_->newest(frame.clock);
+  if (delay_) {
+    const Nanoseconds at = frame.timestamp - *delay_;
+    if (const auto edge = trigger_->find_near(at, config_.edge_tolerance, frame.clock)) {
+      return {EdgeAt::found, *edge};
+    }
+    // The edge's window is not over in the record yet: the edge may still be added.
+    return {newest && *newest > at + config_.edge_tolerance ? EdgeAt::none : EdgeAt::not_yet, {}};
+  }
+  // Learning: frames are stamped within [-1/4, 3/4) of a period after their edge.
+  const Nanoseconds period = config_.trigger_period;
+  const auto edge = trigger_->latest_at(frame.timestamp + period / 4, frame.clock);
+  if (edge && frame.timestamp - edge->timestamp < period - period / 4) {
+    return {EdgeAt::found, *edge};
+  }
+  return {newest && *newest > frame.timestamp ? EdgeAt::none : EdgeAt::not_yet, {}};
 }
 
-void StereoPairer::note_seen(Side side, std::uint32_t number) {
-  if (config_.match_sequences || side == Side::left) ledger_.seen(side, number);
+void StereoPairer::note_seen(Side side, const Frame& frame) {
+  if (trigger_ == nullptr) {
+    if (side == Side::left) ledger_.seen(side, frame.sequence);
+  } else if (const EdgeAt e = edge_at(frame); e.kind == EdgeAt::found) {
+    ledger_.seen(side, e.edge.sequence);
+  }
 }
 
 void StereoPairer::drop_front(Side side, std::uint64_t& counter) {
   Queue& q = queue(side);
+  note_seen(side, q.front());
   camera(side).release(q.front());
   q.head = (q.head + 1) % kCapacity;
   --q.size;
   ++counter;
 }
 
-bool StereoPairer::push(Side side, const Frame& camera_frame) {
+bool StereoPairer::push(Side side, const Frame& frame) {
   Queue& q = queue(side);
-  Frame frame = camera_frame;
-  if (config_.match_sequences && q.numbered) frame.sequence += q.offset;
   ++counters_.of(side).pushed;
-  // A sequence that does not increase is a duplicate or garbled: refuse it. Pairing by time,
-  // so is a timestamp that does not increase.
-  if (q.has_last && (static_cast<std::int32_t>(frame.sequence - q.last) <= 0 ||
-                     (!config_.match_sequences && frame.timestamp <= q.last_time))) {
+  // A timestamp that does not increase is a duplicate or garbled: refuse it. Free running, so
+  // is a sequence (it numbers the pairs).
+  if (q.has_last &&
+      (frame.timestamp <= q.last_time ||
+       (trigger_ == nullptr && static_cast<std::int32_t>(frame.sequence - q.last) <= 0))) {
     camera(side).release(frame);
     ++counters_.of(side).out_of_order;
     return ready_;
@@ -79,7 +90,6 @@ bool StereoPairer::push(Side side, const Frame& camera_frame) {
   q.has_last = true;
   q.last = frame.sequence;
   q.last_time = frame.timestamp;
-  if (!config_.match_sequences || q.numbered) note_seen(side, frame.sequence);
   if (q.size == kCapacity) drop_front(side, counters_.of(side).unpaired);
   q.frames[(q.head + q.size) % kCapacity] = frame;
   ++q.size;
@@ -87,14 +97,19 @@ bool StereoPairer::push(Side side, const Frame& camera_frame) {
   return ready_;
 }
 
-void StereoPairer::take_fronts() {
-  pair_ = {left_q_.front(), right_q_.front()};
+void StereoPairer::take_fronts(const std::optional<TriggerEdge>& edge) {
+  pair_ = {left_q_.front(), right_q_.front(), edge};
+  if (edge) pair_.left.sequence = pair_.right.sequence = edge->sequence;
   left_q_.head = (left_q_.head + 1) % kCapacity;
   --left_q_.size;
   right_q_.head = (right_q_.head + 1) % kCapacity;
   --right_q_.size;
   ready_ = true;
   ++counters_.pairs;
+  if (edge || trigger_ == nullptr) {
+    ledger_.seen(Side::left, pair_.left.sequence);
+    ledger_.seen(Side::right, pair_.left.sequence);
+  }
 }
 
 // Each side's frames come in time order. Of the two oldest frames, the earlier one (`early`)
@@ -108,8 +123,11 @@ bool StereoPairer::fronts_match_by_time() {
     const Frame& l = left_q_.front();
     const Frame& r = right_q_.front();
     if (l.clock != r.clock) {
-      // Renumbering a reopened side, the left number may still be its camera's own.
-      if (!config_.match_sequences || left_q_.numbered) ledger_.damaged(l.sequence);
+      if (trigger_ == nullptr) {
+        ledger_.damaged(l.sequence);
+      } else if (const EdgeAt e = edge_at(l); e.kind == EdgeAt::found) {
+        ledger_.damaged(e.edge.sequence);
+      }
       drop_front(Side::left, counters_.left().mismatched);
       drop_front(Side::right, counters_.right().mismatched);
       continue;
@@ -131,94 +149,55 @@ bool StereoPairer::fronts_match_by_time() {
   return false;
 }
 
-void StereoPairer::match_by_time() {
-  while (!ready_ && fronts_match_by_time()) take_fronts();
-}
-
-void StereoPairer::number(Side side, std::uint32_t offset) {
-  Queue& q = queue(side);
-  q.numbered = true;
-  q.offset = offset;
-  for (std::size_t i = 0; i < q.size; ++i) {
-    Frame& f = q.frames[(q.head + i) % kCapacity];
-    f.sequence += offset;
-    note_seen(side, f.sequence);
-  }
-  q.last += offset;
-  ++counters_.of(side).renumbered;
-}
-
-// Numbers the frames of a reopened side (or both) again; false while they must wait for a
-// match, by time as free-running cameras pair.
-bool StereoPairer::renumber() {
-  if (left_q_.numbered && right_q_.numbered) return true;
-  // Both reopened, with the trigger's record: each side on its own, by the edge of its time.
-  if (trigger_ != nullptr && !left_q_.numbered && !right_q_.numbered) {
-    for (const Side side : {Side::left, Side::right}) {
-      Queue& q = queue(side);
-      while (!q.numbered && q.size > 0) {
-        const Frame& f = q.front();
-        const auto edge =
-            trigger_->find_near(f.timestamp - config_.edge_delay, config_.edge_tolerance, f.clock);
-        if (edge) {
-          number(side, edge->sequence - f.sequence);
-          numbers_are_the_triggers_ = true;
-        } else {
-          drop_front(side, counters_.of(side).off_trigger);
-        }
-      }
-    }
-    return left_q_.numbered && right_q_.numbered;
-  }
-  if (!fronts_match_by_time()) return false;
-  const std::uint32_t l = left_q_.front().sequence;
-  const std::uint32_t r = right_q_.front().sequence;
-  if (!left_q_.numbered && !right_q_.numbered) {
-    // Both reopened, no record: the pairs' numbers go on after the last the ledger counted.
-    const std::uint32_t next = ledger_.restart();
-    numbers_are_the_triggers_ = false;
-    number(Side::left, next - l);
-    number(Side::right, next - r);
-  } else if (!left_q_.numbered) {
-    number(Side::left, r - l);
-  } else {
-    number(Side::right, l - r);
-  }
-  return true;
+void StereoPairer::learn(Nanoseconds delay) {
+  samples_[sample_count_++] = delay;
+  if (sample_count_ < kLearnPairs) return;
+  const auto middle = samples_.begin() + kLearnPairs / 2;
+  std::nth_element(samples_.begin(), middle, samples_.end());
+  delay_ = *middle;
+  sample_count_ = 0;
+  ++counters_.delay_learned;
 }
 
 void StereoPairer::match() {
-  if (!config_.match_sequences) {
-    match_by_time();
-    return;
-  }
-  if (!renumber()) return;
-  while (!ready_ && left_q_.size > 0 && right_q_.size > 0) {
-    const Frame& l = left_q_.front();
-    const Frame& r = right_q_.front();
-    const auto d = static_cast<std::int32_t>(l.sequence - r.sequence);
-    if (d < 0) {
-      drop_front(Side::left, counters_.left().unpaired);  // right is past it: it cannot pair
-    } else if (d > 0) {
-      drop_front(Side::right, counters_.right().unpaired);
-    } else {
-      const Nanoseconds dt =
-          l.timestamp > r.timestamp ? l.timestamp - r.timestamp : r.timestamp - l.timestamp;
-      if (dt > config_.tolerance || l.clock != r.clock) {
-        ledger_.damaged(l.sequence);
-        drop_front(Side::left, counters_.left().mismatched);
-        drop_front(Side::right, counters_.right().mismatched);
-        continue;
-      }
-      if (!on_trigger(l, r)) {
-        ledger_.damaged(l.sequence);
-        drop_front(Side::left, counters_.left().off_trigger);
-        drop_front(Side::right, counters_.right().off_trigger);
-        continue;
-      }
-      take_fronts();
+  while (!ready_ && fronts_match_by_time()) {
+    if (trigger_ == nullptr) {
+      take_fronts(std::nullopt);
+      return;
     }
+    const Frame& l = left_q_.front();
+    EdgeAt e = edge_at(l);
+    if (e.kind == EdgeAt::not_yet) {
+      // The trigger thread may record the edge a little after the frames came: the newest pair
+      // waits for it until a later frame comes.
+      if (left_q_.size == 1 && right_q_.size == 1) return;
+      e.kind = EdgeAt::none;
+    }
+    const bool learning = !delay_.has_value();
+    if (e.kind == EdgeAt::none) {
+      if (!learning && !config_.edge_delay && ++edgeless_in_a_row_ >= kRelearnAfter) {
+        delay_.reset();  // the frames' delay changed (another exposure, a slower readout)
+        edgeless_in_a_row_ = 0;
+      }
+      drop_front(Side::left, counters_.left().off_trigger);
+      drop_front(Side::right, counters_.right().off_trigger);
+      continue;
+    }
+    edgeless_in_a_row_ = 0;
+    if (has_last_edge_ && static_cast<std::int32_t>(e.edge.sequence - last_edge_) <= 0) {
+      drop_front(Side::left, counters_.left().out_of_order);  // that edge has its pair
+      drop_front(Side::right, counters_.right().out_of_order);
+      continue;
+    }
+    if (learning) learn(l.timestamp - e.edge.timestamp);
+    has_last_edge_ = true;
+    last_edge_ = e.edge.sequence;
+    take_fronts(e.edge);
   }
+}
+
+void StereoPairer::retry() {
+  if (!ready_) match();
 }
 
 StereoPair StereoPairer::take() {
@@ -240,16 +219,14 @@ void StereoPairer::reset(Side side) {
     drop_front(side, counters_.of(side).unpaired);
   }
   q.has_last = false;
-  if (config_.match_sequences) q.numbered = false;
 }
 
-void StereoPairer::count_corrupt(Side side, std::uint32_t camera_sequence) {
+void StereoPairer::count_corrupt(Side side, const Frame& frame) {
   ++counters_.of(side).corrupt;
-  const Queue& q = queue(side);
-  if (!config_.match_sequences) {
-    if (side == Side::left) ledger_.damaged(camera_sequence);
-  } else if (q.numbered) {
-    ledger_.damaged(camera_sequence + q.offset);
+  if (trigger_ == nullptr) {
+    if (side == Side::left) ledger_.damaged(frame.sequence);
+  } else if (const EdgeAt e = edge_at(frame); e.kind == EdgeAt::found) {
+    ledger_.damaged(e.edge.sequence);
   }
 }
 
@@ -269,7 +246,7 @@ AcquireStatus StereoGrabber::acquire(Side side, Nanoseconds timeout) {
   } else if (r.status == AcquireStatus::device_lost) {
     pairer_.reset(side);
   } else if (r.status == AcquireStatus::corrupt) {
-    pairer_.count_corrupt(side, r.frame.sequence);
+    pairer_.count_corrupt(side, r.frame);
   }
   return r.status;
 }
@@ -277,6 +254,7 @@ AcquireStatus StereoGrabber::acquire(Side side, Nanoseconds timeout) {
 PairResult StereoGrabber::next(Nanoseconds timeout) {
   const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
   while (true) {
+    pairer_.retry();
     if (pairer_.has_pair()) return {PairStatus::ok, pairer_.take(), Side::left};
     // Past the deadline the cameras are still asked once more, without waiting: with a
     // timeout of 0, next() takes whatever pair is already there.

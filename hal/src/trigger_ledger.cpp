@@ -30,15 +30,6 @@ void TriggerLedger::published(std::uint32_t number) {
   at_published_ = account_;
 }
 
-std::uint32_t TriggerLedger::restart() {
-  std::int64_t newest = -1;  // how far the newest marked number is past next_
-  for (const Slot& slot : slots_) {
-    if (slot.marks != 0) newest = std::max(newest, ahead(slot.number, next_));
-  }
-  settle_before(next_ + static_cast<std::uint32_t>(newest + 1));
-  return next_;
-}
-
 void TriggerLedger::mark(std::uint32_t number, std::uint8_t marks) {
   const std::int64_t distance = ahead(number, next_);
   if (distance < 0) return;  // settled already: a frame that came after its trigger was given up

@@ -2,10 +2,23 @@
 
 namespace epipole::hal {
 
-void TriggerRecord::add(const TriggerEdge& edge) {
+void TriggerRecord::set_min_gap(Nanoseconds min_gap) {
   const std::lock_guard<std::mutex> lock(mutex_);
-  slots_[edge.sequence % kCapacity] = {edge, true};
+  min_gap_ = min_gap;
+}
+
+bool TriggerRecord::add(const TriggerEdge& edge) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (last_ && last_->clock == edge.clock && edge.timestamp - last_->timestamp < min_gap_) {
+    ++bounces_;
+    return false;
+  }
+  TriggerEdge numbered = edge;
+  numbered.sequence = static_cast<std::uint32_t>(added_);
+  slots_[numbered.sequence % kCapacity] = {numbered, true};
+  last_ = numbered;
   ++added_;
+  return true;
 }
 
 std::optional<TriggerEdge> TriggerRecord::find(std::uint32_t sequence) const {
@@ -32,15 +45,30 @@ std::optional<TriggerEdge> TriggerRecord::find_near(Nanoseconds time, Nanosecond
   return nearest;
 }
 
+std::optional<TriggerEdge> TriggerRecord::latest_at(Nanoseconds time, ClockId clock) const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  std::optional<TriggerEdge> latest;
+  for (const Slot& slot : slots_) {
+    if (!slot.valid || slot.edge.clock != clock || slot.edge.timestamp > time) continue;
+    if (!latest || slot.edge.timestamp > latest->timestamp) latest = slot.edge;
+  }
+  return latest;
+}
+
+std::optional<Nanoseconds> TriggerRecord::newest(ClockId clock) const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  if (!last_ || last_->clock != clock) return std::nullopt;
+  return last_->timestamp;
+}
+
 std::uint64_t TriggerRecord::added() const {
   const std::lock_guard<std::mutex> lock(mutex_);
   return added_;
 }
 
-void TriggerRecord::clear() {
+std::uint64_t TriggerRecord::bounces() const {
   const std::lock_guard<std::mutex> lock(mutex_);
-  slots_.fill({});
-  added_ = 0;
+  return bounces_;
 }
 
 // ----------------------------------------------------------------------------------------------

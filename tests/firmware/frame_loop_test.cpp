@@ -885,7 +885,6 @@ TEST(FrameLoop, FreeRunningCamerasWithoutATriggerPairByTime) {
         return c;
       },
       1);
-  EXPECT_FALSE(pairing_config(linked.config).match_sequences);
   EXPECT_EQ(linked.fw->board().trigger(), nullptr);
   Recorder recorder;
   send_at(recorder, linked, 5, {protocol::SetTriggerRate{15'000}, protocol::SetExposure{3000, 0}},
@@ -942,12 +941,13 @@ TEST(FrameLoop, PairingFollowsTheBoardsTrigger) {
   const BoardConfig usb =
       load_board_config(std::filesystem::path(test::source_dir()) / "board" / "usb-stereo");
   const hal::PairingConfig p = pairing_config(usb);
-  EXPECT_FALSE(p.match_sequences) << "two free-running UVC cameras: by time";
+  EXPECT_FALSE(usb.has_trigger()) << "two free-running UVC cameras: by time alone";
   EXPECT_EQ(p.tolerance, 16'000'000);
   EXPECT_EQ(p.trigger_period, hal::period_of(30)) << "the cameras' frame period";
   const BoardConfig pi = load_board_config(std::filesystem::path(test::source_dir()) / "board" /
                                            "raspberrypi5-ov9281");
-  EXPECT_TRUE(pairing_config(pi).match_sequences) << "one trigger for both: by sequence";
+  EXPECT_TRUE(pi.has_trigger()) << "one trigger for both: each pair takes its edge";
+  EXPECT_FALSE(pairing_config(pi).edge_delay.has_value()) << "the Pi's delay is learned";
   EXPECT_EQ(pairing_config(pi).trigger_period, hal::period_of(30));
   // Without a trigger the tolerance must stay below half the cameras' frame period.
   const test::SimRig rig;

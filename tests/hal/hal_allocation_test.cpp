@@ -57,7 +57,10 @@ TEST(HalAllocations, AcquireReleaseAndPairingNeverAllocate) {
   for (SimCamera* camera : {&l, &r}) {
     camera->inject({.kind = SimFaultKind::wrong_sequence, .sequence = 50, .value = 51});
   }
+  board.trigger.inject({SimTriggerGlitchKind::unrecorded, 60, 0});
+  board.trigger.inject({SimTriggerGlitchKind::extra_edge, 70, 10'000});
   TriggerRecord record;
+  record.set_min_gap(1'000'000);
   board.trigger.record_edges_to(&record);
   RecoveringCamera rl(l, board.clock);
   StereoGrabber grabber(rl, r, board.clock,
@@ -75,7 +78,8 @@ TEST(HalAllocations, AcquireReleaseAndPairingNeverAllocate) {
   EXPECT_GT(pairs, 100);
   EXPECT_EQ(rl.counters().reopens, 1u);
   EXPECT_EQ(grabber.pairer().counters().right().corrupt, 1u);
-  EXPECT_EQ(grabber.pairer().counters().left().off_trigger, 1u);
+  EXPECT_EQ(grabber.pairer().counters().left().off_trigger, 1u) << "edge 60 was not recorded";
+  EXPECT_EQ(record.bounces(), 1u);
 }
 
 TEST(HalAllocations, RunTimeControlsAndPairingByTimeNeverAllocate) {
@@ -93,9 +97,8 @@ TEST(HalAllocations, RunTimeControlsAndPairingByTimeNeverAllocate) {
   SimCamera r(config, board.right, board.clock, board.timing);
   l.set_fault_rates({.drop = 0.05, .seed = 3});
   RecoveringCamera rl(l, board.clock);
-  StereoGrabber grabber(
-      rl, r, board.clock,
-      {.tolerance = 10'000'000, .trigger_period = 33'222'591, .match_sequences = false});
+  StereoGrabber grabber(rl, r, board.clock,
+                        {.tolerance = 10'000'000, .trigger_period = 33'222'591});
   board.trigger.start();
   triggered.start();
   l.start();

@@ -90,38 +90,5 @@ TEST(TriggerLedger, NumbersWrapAround) {
   EXPECT_EQ(ledger.next(), 2u);
 }
 
-// Both cameras renumbered without a trigger record: the numbers go on after the newest frame
-// seen, so that none is counted twice, and every number up to the newest pair is counted once.
-TEST(TriggerLedger, ARestartSettlesWhatIsOpenAndNumbersOnAfterIt) {
-  TriggerLedger ledger;
-  ledger.published(0);
-  ledger.seen(Side::left, 1);
-  ledger.seen(Side::right, 3);
-  EXPECT_EQ(ledger.restart(), 4u);
-  EXPECT_EQ(ledger.account(), account(1, 0, 2, 1, 0));
-  ledger.seen(Side::left, 4);
-  ledger.seen(Side::right, 4);
-  ledger.published(4);
-  const TriggerAccount& a = ledger.at_newest_published();
-  EXPECT_EQ(a, account(2, 0, 2, 1, 0));
-  EXPECT_EQ(a.published + a.dropped(), 5u) << "the numbers up to the newest pair, once each";
-
-  // Nothing open: the numbers go on from the first one not settled.
-  EXPECT_EQ(ledger.restart(), 5u);
-  EXPECT_EQ(TriggerLedger(7).restart(), 7u);
-}
-
-// A frame of the numbering before a restart that comes after it is not counted again.
-TEST(TriggerLedger, ARestartAfterFramesFarAheadNumbersOnAfterThem) {
-  TriggerLedger ledger;
-  ledger.published(0);
-  for (std::uint32_t n = 1; n < 150; ++n) ledger.seen(Side::left, n);  // the right one gone
-  EXPECT_EQ(ledger.restart(), 150u);
-  EXPECT_EQ(ledger.account(), account(1, 0, 149, 0, 0));
-  ledger.seen(Side::left, 120);  // late, of the old numbering
-  ledger.published(150);
-  EXPECT_EQ(ledger.at_newest_published(), account(2, 0, 149, 0, 0));
-}
-
 }  // namespace
 }  // namespace epipole::hal

@@ -103,7 +103,7 @@ void parse_console(BoardRun& run) {
                            &before) == 2) {
       run.frames_done[number] = before;
     } else if (line.find("vboard-trigger: pause") != std::string::npos) {
-      run.pauses.push_back(static_cast<std::int64_t>(run.edges.size()));
+      run.pauses.push_back(run.edges.empty() ? 0 : run.edges.rbegin()->second.after_ns);
     } else if (const auto exit = line.find("epipole-fw exit ");
                exit != std::string::npos &&
                std::sscanf(line.c_str() + exit, "epipole-fw exit %d", &code) == 1) {

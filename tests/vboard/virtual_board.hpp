@@ -28,7 +28,7 @@ struct BoardRun {
   protocol::DecoderStats decoder;
   std::map<std::int64_t, TriggerEdge> edges;         // the trigger driver's edges by number
   std::map<std::int64_t, std::int64_t> frames_done;  // the left camera's completions by frame
-  std::vector<std::int64_t> pauses;  // the edges made before each of the driver's pauses
+  std::vector<std::int64_t> pauses;  // before each of the driver's pauses: its last edge's time
   int firmware_exit = -1;            // epipole-fw's exit code, as the init reports it
   std::size_t reconnected_at = 0;    // with a reconnection: the link bytes read before it
 

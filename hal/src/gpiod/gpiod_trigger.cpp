@@ -98,9 +98,9 @@ bool GpiodTrigger::acquire() {
                       ? gpiod_line_request_output(line_, kConsumer, 0)
                       : gpiod_line_request_rising_edge_events(line_, kConsumer);
     if (r == 0) {
-      // Edge numbers go on from where they were: a master's schedule puts the next one now.
+      // Edge numbers go on from where they were: a master's schedule puts the next slot now.
       const Nanoseconds period = period_.load(std::memory_order_acquire);
-      schedule_.start(now - static_cast<Nanoseconds>(next_) * period, period);
+      schedule_.start(now - static_cast<Nanoseconds>(slot_) * period, period);
       backoff_.succeeded();
       requested_.store(true, std::memory_order_release);
       return true;
@@ -131,6 +131,7 @@ void GpiodTrigger::start() {
   if (started_) return;
   started_ = true;
   next_ = 0;
+  slot_ = 0;
   backoff_.succeeded();
   acquire();
 }
@@ -161,13 +162,15 @@ EdgeResult GpiodTrigger::wait_edge(Nanoseconds timeout) {
   if (config_.role == TriggerRole::master) {
     const Nanoseconds period = period_.load(std::memory_order_acquire);
     if (period != schedule_.period()) {  // set_rate(): from the last edge fired on
-      schedule_.change_period(next_ == 0 ? 0 : next_ - 1, period);
+      schedule_.change_period(slot_ == 0 ? 0 : slot_ - 1, period);
     }
     const Nanoseconds now = clock_.now();
-    Nanoseconds edge = schedule_.time(next_);
-    if (edge < now) {  // late: skip the missed periods instead of firing a burst
-      next_ += static_cast<std::uint32_t>((now - edge + period - 1) / period);
-      edge = schedule_.time(next_);
+    Nanoseconds edge = schedule_.time(slot_);
+    if (edge < now) {
+      // Late: the missed slots are skipped instead of fired in a burst; the edges' numbers have
+      // no gap (an edge never fired is no trigger that was lost).
+      slot_ += static_cast<std::uint32_t>((now - edge + period - 1) / period);
+      edge = schedule_.time(slot_);
     }
     if (edge > now + timeout) {
       clock_.sleep_until(now + timeout);
@@ -178,6 +181,7 @@ EdgeResult GpiodTrigger::wait_edge(Nanoseconds timeout) {
     const Nanoseconds fired = clock_.now();
     clock_.sleep_until(fired + config_.pulse_width);
     if (gpiod_line_set_value(line_, 0) != 0) return line_went_away();
+    ++slot_;
     return {EdgeStatus::ok, TriggerEdge{next_++, fired, ClockId::monotonic}};
   }
   const timespec ts{static_cast<time_t>(timeout / kPerSecond),

@@ -68,7 +68,8 @@ class GpiodTrigger final : public TriggerLine {
   MonotonicClock clock_;
   std::atomic<Nanoseconds> period_;  // written by set_rate(), read by wait_edge()
   EdgeSchedule schedule_;            // wait_edge()'s thread only
-  std::uint32_t next_ = 0;
+  std::uint32_t next_ = 0;           // the number of the next edge fired or seen
+  std::uint32_t slot_ = 0;  // a master's next slot of the schedule (a late wake-up skips slots)
 };
 
 }  // namespace epipole::hal

@@ -359,7 +359,7 @@ AcquireResult LibcameraStream::acquire(Nanoseconds timeout) {
         std::min(c.bytes_used == 0 ? plane.length : c.bytes_used, plane.length);
     if (c.damaged || bytes < needed_) {
       requeue(c.slot, c.generation);
-      return corrupt_frame(c.sequence, c.timestamp);
+      return corrupt_frame(c.sequence, c.timestamp, ClockId::monotonic);
     }
     MutableGrayView scratch;
     if (!scratch_.empty()) scratch = scratch_[slot].view();

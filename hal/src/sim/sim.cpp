@@ -79,7 +79,7 @@ void SimTrigger::connect(SimCamera& camera) {
 
 void SimTrigger::emit_until(Nanoseconds until) {
   if (!running_) return;
-  while (schedule_.time(next_emit_) <= until) {
+  while (edge(next_emit_).timestamp <= until) {
     const TriggerEdge e = edge(next_emit_);
     for (int i = 0; i < camera_count_; ++i) cameras_[i]->on_trigger(e);
     ++next_emit_;
@@ -89,10 +89,40 @@ void SimTrigger::emit_until(Nanoseconds until) {
   // edges and not the coming ones.
   const Nanoseconds now = clock_.now();
   next_record_ = std::max(next_record_, schedule_.oldest());
-  while (next_record_ < next_emit_ && schedule_.time(next_record_) <= now) {
-    if (record_ != nullptr) record_->add(edge(next_record_));
+  while (true) {
+    const bool edge_due = next_record_ < next_emit_ && edge(next_record_).timestamp <= now;
+    if (extra_ && extra_->timestamp <= now &&
+        (!edge_due || extra_->timestamp <= edge(next_record_).timestamp)) {
+      record(*extra_);
+      extra_.reset();
+      continue;
+    }
+    if (!edge_due) break;
+    const TriggerEdge e = edge(next_record_);
+    if (glitch(SimTriggerGlitchKind::unrecorded, next_record_) == nullptr) record(e);
+    if (const SimTriggerGlitch* g = glitch(SimTriggerGlitchKind::extra_edge, next_record_)) {
+      extra_ = TriggerEdge{e.sequence, e.timestamp + g->duration, e.clock};
+    }
     ++next_record_;
   }
+}
+
+TriggerEdge SimTrigger::edge(std::uint32_t sequence) const {
+  const SimTriggerGlitch* late = glitch(SimTriggerGlitchKind::late, sequence);
+  return {sequence, schedule_.time(sequence) + (late != nullptr ? late->duration : 0),
+          ClockId::virtual_clock};
+}
+
+const SimTriggerGlitch* SimTrigger::glitch(SimTriggerGlitchKind kind,
+                                           std::uint32_t sequence) const {
+  for (const SimTriggerGlitch& g : glitches_) {
+    if (g.kind == kind && g.sequence == sequence) return &g;
+  }
+  return nullptr;
+}
+
+void SimTrigger::record(const TriggerEdge& edge) {
+  if (record_ != nullptr) record_->add(edge);
 }
 
 EdgeResult SimTrigger::wait_edge(Nanoseconds timeout) {
@@ -261,7 +291,9 @@ AcquireResult SimCamera::acquire(Nanoseconds timeout) {
     queue_size_ = 0;
     return {AcquireStatus::device_lost, {}};
   }
-  if (p.damaged) return corrupt_frame(p.reported_sequence, p.timestamp);  // buffer requeued
+  if (p.damaged)
+    return corrupt_frame(p.reported_sequence, p.timestamp,
+                         ClockId::virtual_clock);  // buffer requeued
   const auto free = std::find(held_.begin(), held_.end(), 0);
   if (free == held_.end()) {
     ++overruns_;  // every buffer is lent out: the frame is lost

@@ -3,6 +3,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,21 @@ class SimCamera;
 // edge reaches every connected camera exactly once. set_rate() re-anchors the schedule at the
 // last edge generated (given to a camera, reported or recorded) or passed by the clock: the
 // edges after it come at the new period.
+// A glitch of the simulated trigger line, at edge `sequence` of its schedule.
+enum class SimTriggerGlitchKind {
+  extra_edge,  // the record also gets an edge `duration` after it (a bounce, or a spurious
+               // pulse the cameras ignore, busy exposing or reading out)
+  unrecorded,  // the cameras fire, but the record never gets the edge (a slave missed it)
+  late,        // the edge fires `duration` late, for the cameras and the record (a master that
+               // woke late); later edges keep their schedule
+};
+
+struct SimTriggerGlitch {
+  SimTriggerGlitchKind kind = SimTriggerGlitchKind::extra_edge;
+  std::uint32_t sequence = 0;
+  Nanoseconds duration = 0;
+};
+
 class SimTrigger final : public TriggerLine {
  public:
   SimTrigger(TriggerConfig config, VirtualClock& clock);
@@ -41,14 +57,18 @@ class SimTrigger final : public TriggerLine {
   }
   // Emits every edge with timestamp <= until to the connected cameras.
   void emit_until(Nanoseconds until);
+  // A glitch of the line (set up before the edges it names are emitted).
+  void inject(const SimTriggerGlitch& glitch) { glitches_.push_back(glitch); }
+  // When edge `sequence` of the schedule fired (its glitches included): the truth for tests.
+  Nanoseconds edge_time(std::uint32_t sequence) const { return edge(sequence).timestamp; }
   Nanoseconds period() const { return period_; }
   bool running() const { return running_; }
 
  private:
   // Edge n of the schedule, on the virtual clock.
-  TriggerEdge edge(std::uint32_t sequence) const {
-    return {sequence, schedule_.time(sequence), ClockId::virtual_clock};
-  }
+  TriggerEdge edge(std::uint32_t sequence) const;
+  const SimTriggerGlitch* glitch(SimTriggerGlitchKind kind, std::uint32_t sequence) const;
+  void record(const TriggerEdge& edge);
   TriggerConfig config_;
   VirtualClock& clock_;
   Nanoseconds period_;
@@ -60,6 +80,8 @@ class SimTrigger final : public TriggerLine {
   SimCamera* cameras_[4] = {};
   int camera_count_ = 0;
   TriggerRecord* record_ = nullptr;
+  std::vector<SimTriggerGlitch> glitches_;
+  std::optional<TriggerEdge> extra_;  // an extra edge to record once the clock passes it
 };
 
 // A fault injected into one simulated camera, keyed by trigger sequence.

@@ -444,7 +444,7 @@ AcquireResult V4l2Camera::acquire(Nanoseconds timeout) {
                                 static_cast<Nanoseconds>(buf.timestamp.tv_usec) * 1'000;
   if (buffer_status(buf.flags, used, mapped.length, need) == AcquireStatus::corrupt) {
     (void)xioctl(fd_.get(), VIDIOC_QBUF, &buf);  // a damaged frame: give it back at once
-    return corrupt_frame(buf.sequence, timestamp);
+    return corrupt_frame(buf.sequence, timestamp, timestamp_clock(buf.flags));
   }
   MutableGrayView scratch;
   if (!scratch_.empty()) scratch = scratch_[buf.index].view();

@@ -6,9 +6,11 @@
 // completions is not enough: vivid numbers its frames by the time since it started streaming, so
 // when its thread runs late (an emulated CPU on a loaded host) it skips the numbers of the frames
 // it missed. The driver makes each next frame's edge half a period before it is due, pulling the
-// gpio-sim line up and down through its sysfs `pull` attribute. A slave trigger numbers the edges
-// it sees from 0, so edge N comes before frame N, as on a triggered board; edges the driver is
-// behind on (after a pause) come at once, 1 ms apart. It prints each edge with the CLOCK_MONOTONIC
+// gpio-sim line up and down through its sysfs `pull` attribute, so edge N comes half a period
+// before frame N, as on a board whose cameras expose on the edge (the firmware pairs each frame
+// with the edge at its time). The edges of frames it is behind on (after a pause, or read late)
+// are not made: the next edge is the next frame's, and its number says so. It prints each edge
+// with the CLOCK_MONOTONIC
 // times just before and after it was made, and each completion it read, for the host to check the
 // edge times the firmware reports. It can stop after every N edges for a while and start again (the
 // trigger-loss fault).
@@ -23,6 +25,7 @@
 #include <sys/sysmacros.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdint>
@@ -145,17 +148,22 @@ class Line {
     const std::int64_t after = now_ns();
     std::printf("vboard-trigger: edge %ld %lld %lld\n", edges_++, static_cast<long long>(before),
                 static_cast<long long>(after));
+    ++pulses_;
     std::fflush(stdout);
     sleep_until(after + 1'000'000);
     pull(fd_, "pull-down", path_);
     sleep_until(now_ns() + 1'000'000);
   }
   long edges() const { return edges_; }
+  long pulses() const { return pulses_; }
+  // The frames before `number` are done without an edge: the next edge is `number`'s.
+  void skip_to(long number) { edges_ = std::max(edges_, number); }
 
  private:
   const char* path_;
   int fd_ = -1;
-  long edges_ = 0;
+  long edges_ = 0;   // the number of the next edge
+  long pulses_ = 0;  // the edges made
 };
 
 }  // namespace
@@ -245,16 +253,16 @@ int main(int argc, char** argv) {
     sequence = base + taken;
     std::printf("vboard-trigger: frame %ld %lld\n", sequence, static_cast<long long>(done));
     if (now_ns() < resume) continue;
-    if (pause_every > 0 && line.edges() > 0 && line.edges() % pause_every == 0 &&
-        paused_at != line.edges()) {
-      paused_at = line.edges();
+    if (pause_every > 0 && line.pulses() > 0 && line.pulses() % pause_every == 0 &&
+        paused_at != line.pulses()) {
+      paused_at = line.pulses();
       resume = now_ns() + pause_ms * 1'000'000;
       std::printf("vboard-trigger: pause %ld ms\n", pause_ms);
       std::fflush(stdout);
       continue;
     }
-    while (line.edges() <= sequence) line.pulse();  // behind: the edges of frames already done
-    sleep_until(done + period / 2);                 // the next frame's edge, half a period early
+    line.skip_to(sequence + 1);      // behind: no edge for a frame already done
+    sleep_until(done + period / 2);  // the next frame's edge, half a period early
     line.pulse();
   }
   fail(std::string(trace_path) + ": the trace ended");

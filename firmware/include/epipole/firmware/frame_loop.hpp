@@ -45,11 +45,11 @@ struct RunSummary {
   StageMask stages = 0;  // the stages enabled at the end
 };
 
-// How the frame loop pairs the board's frames: by trigger sequence, checked against the
-// trigger's edges when the delay from edge to frame is known (the board file's
-// pairing.edge_delay_us, or else the cameras' own, hal::CameraSource::edge_delay()); without a
-// trigger (trigger.backend none: free-running cameras) by time alone, the tolerance checked
-// against the cameras' frame period.
+// How the frame loop pairs the board's frames: by time, each pair then taking the trigger edge
+// at its time, the delay from edge to frame being the board file's pairing.edge_delay_us, or
+// else the cameras' own (hal::CameraSource::edge_delay()), or else learned from the first pairs;
+// without a trigger (trigger.backend none: free-running cameras) by time alone, the tolerance
+// checked against the cameras' frame period.
 hal::PairingConfig pairing_config(const BoardConfig& config,
                                   std::optional<hal::Nanoseconds> camera_edge_delay = std::nullopt);
 
@@ -150,6 +150,7 @@ class FrameLoop {
   bool left_lost_ = false;
   bool right_lost_ = false;
   bool trigger_missing_ = false;
+  std::uint64_t delays_learned_ = 0;  // the pairer's, as last said in the journal
   bool serial_connected_ = true;
   std::optional<calib::HealthFigure> last_calibration_health_;  // of the latest matches
 };

@@ -95,11 +95,12 @@ struct AcquireResult {
 const char* to_string(AcquireStatus status);
 
 // A damaged frame's result: its number and time, so that its trigger is accounted for.
-inline AcquireResult corrupt_frame(std::uint32_t sequence, Nanoseconds timestamp) {
+inline AcquireResult corrupt_frame(std::uint32_t sequence, Nanoseconds timestamp, ClockId clock) {
   AcquireResult r;
   r.status = AcquireStatus::corrupt;
   r.frame.sequence = sequence;
   r.frame.timestamp = timestamp;
+  r.frame.clock = clock;
   return r;
 }
 

@@ -107,20 +107,33 @@ class EdgeSchedule {
 
 // The recent edges of a trigger line: written by whoever waits on the line (the master's timer,
 // a slave's edge events, the simulated board's trigger) and read by the stereo pairer, which
-// checks every pair against the trigger's own sequence and time. Holds the last kCapacity
-// edges in fixed memory; add() and find() never allocate and may run on different threads.
+// gives every pair the edge at its frames' time. The record numbers the edges itself, one after
+// the other in the order they come, whatever the line called them: a master that woke late and
+// skipped a slot, or a slave that counted a bounce, leaves no gap and no extra number. An edge
+// less than `min_gap` after the edge before it (on the same clock) is a bounce: ignored and
+// counted. Holds the last kCapacity edges in fixed memory; add() and the look-ups never allocate
+// and may run on different threads.
 class TriggerRecord {
  public:
   static constexpr std::size_t kCapacity = 64;
-  void add(const TriggerEdge& edge);
-  // The edge of that sequence, while it is among the last kCapacity.
+  // The gap below which an edge is a bounce (0: none is). The firmware sets a quarter of the
+  // trigger period (TriggerWatch).
+  void set_min_gap(Nanoseconds min_gap);
+  // Takes an edge (its sequence is replaced by the record's next number); false for a bounce.
+  bool add(const TriggerEdge& edge);
+  // The edge of that number, while it is among the last kCapacity.
   std::optional<TriggerEdge> find(std::uint32_t sequence) const;
   // The edge nearest `time` (a time on `clock`), when one of the last kCapacity taken on that
   // clock lies within `tolerance` of it.
   std::optional<TriggerEdge> find_near(Nanoseconds time, Nanoseconds tolerance,
                                        ClockId clock) const;
+  // The newest edge at or before `time` on `clock`, among the last kCapacity.
+  std::optional<TriggerEdge> latest_at(Nanoseconds time, ClockId clock) const;
+  // The time of the newest edge taken on `clock` (nullopt: none yet).
+  std::optional<Nanoseconds> newest(ClockId clock) const;
+  // Edges taken (not counting bounces), and bounces ignored, since the start.
   std::uint64_t added() const;
-  void clear();
+  std::uint64_t bounces() const;
 
  private:
   struct Slot {
@@ -130,6 +143,9 @@ class TriggerRecord {
   mutable std::mutex mutex_;
   std::array<Slot, kCapacity> slots_{};
   std::uint64_t added_ = 0;
+  std::uint64_t bounces_ = 0;
+  Nanoseconds min_gap_ = 0;
+  std::optional<TriggerEdge> last_;
 };
 
 }  // namespace epipole::hal

@@ -44,11 +44,6 @@ class TriggerLedger {
   // settled too.
   void stale(std::uint32_t number);
   void published(std::uint32_t number);
-  // The numbers stop being the triggers' (both cameras reopened with no trigger record to
-  // number them by): every number up to the newest frame seen is settled, and the first after
-  // them is returned, for the pairs to be numbered on from. A number that a frame of the old
-  // numbering reached is thus never given to a new pair as well (it would be counted twice).
-  std::uint32_t restart();
 
   // Everything settled so far (triggers a window behind the newest frame can be settled before a
   // pair after them is published).
