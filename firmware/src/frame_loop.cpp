@@ -115,7 +115,7 @@ void FrameLoop::finish() {
   answer_snapshots();
   if (snapshot_pending_) {  // asked for, but no pair came before the stop
     snapshot_pending_ = false;
-    answer(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::failed});
+    conclude(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::failed});
   }
   link_.stop();
 }
@@ -142,9 +142,9 @@ FrameLoop::Verdict FrameLoop::request_snapshot(std::uint16_t sequence) {
 
 void FrameLoop::answer_snapshots() {
   while (const std::optional<SnapshotDone> done = snapshots_.finished()) {
-    answer(done->sequence,
-           done->ok ? Verdict{protocol::AckStatus::ok, protocol::AckReason::none}
-                    : Verdict{protocol::AckStatus::rejected, protocol::AckReason::failed});
+    conclude(done->sequence,
+             done->ok ? Verdict{protocol::AckStatus::ok, protocol::AckReason::none}
+                      : Verdict{protocol::AckStatus::rejected, protocol::AckReason::failed});
   }
 }
 
@@ -179,12 +179,18 @@ void FrameLoop::apply_commands() {
   Command c;
   while (link_.next_command(c)) {
     ++summary_.commands;
+    if (c.overflow) {  // not applied, not remembered: sent again, it is applied
+      answer(c.sequence, {AckStatus::rejected, AckReason::busy});
+      continue;
+    }
+    const hal::Nanoseconds now = board_.clock().now();
+    if (const CommandMemory::Entry* first = commands_.resent(c.sequence, c.message, now)) {
+      ++summary_.resent_commands;
+      if (!first->pending) answer(c.sequence, first->verdict);  // else: answered once written
+      continue;
+    }
     Verdict v{AckStatus::rejected, AckReason::not_a_command};
-    if (c.overflow) {
-      v = {AckStatus::rejected, AckReason::busy};
-    } else if (c.replay) {
-      v = {AckStatus::duplicate, AckReason::none};  // answered again, not applied again
-    } else if (const auto* s = std::get_if<protocol::SetStages>(&c.message)) {
+    if (const auto* s = std::get_if<protocol::SetStages>(&c.message)) {
       v = {AckStatus::rejected, AckReason::out_of_range};
       if ((s->enabled_mask & ~protocol::kAllStages) == 0) {
         stages_ = static_cast<StageMask>(s->enabled_mask | protocol::kAlwaysOnStages);
@@ -192,13 +198,15 @@ void FrameLoop::apply_commands() {
       }
     } else if (std::holds_alternative<protocol::Snapshot>(c.message)) {
       v = request_snapshot(c.sequence);
-      if (v.status == AckStatus::ok) continue;  // answered once it is written
     } else if (const auto* t = std::get_if<protocol::SetTriggerRate>(&c.message)) {
       v = set_trigger_rate(*t);
     } else if (const auto* e = std::get_if<protocol::SetExposure>(&c.message)) {
       v = set_exposure(*e);
     }
-    answer(c.sequence, v);
+    const bool pending = std::holds_alternative<protocol::Snapshot>(c.message) &&
+                         v.status == AckStatus::ok;  // answered once it is written
+    if (v.reason != AckReason::busy) commands_.remember(c.sequence, c.message, now, v, pending);
+    if (!pending) answer(c.sequence, v);
   }
 }
 
@@ -209,6 +217,12 @@ void FrameLoop::answer(std::uint16_t sequence, Verdict verdict) {
   ack.reason = verdict.reason;
   if (verdict.status != protocol::AckStatus::ok) ++rejected_commands_;  // health's bad_commands
   send(ack);
+}
+
+// A pending command's result (a snapshot's): remembered for its resends, and answered.
+void FrameLoop::conclude(std::uint16_t sequence, Verdict verdict) {
+  commands_.settle(sequence, verdict);
+  answer(sequence, verdict);
 }
 
 // The period frames come at: the trigger's, or free running the cameras'.
@@ -486,7 +500,7 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   if (snapshot_pending_) {
     snapshot_pending_ = false;
     if (!snapshots_.take(r, snapshot_sequence_)) {  // the disk filled meanwhile
-      answer(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::storage});
+      conclude(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::storage});
     }
   }
   if (observer_ != nullptr) observer_->on_frame(r);

@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <set>
+#include <string>
 #include <thread>
 #include <utility>
 #include <variant>
@@ -706,28 +708,73 @@ TEST(FrameLoop, SetTriggerRateChangesThePeriodOfTheTriggers) {
   EXPECT_EQ(health.back().latency_p50_us, 7000u) << "the cameras' own delay, as before";
 }
 
-TEST(FrameLoop, ARobotThatRestartsItsSequenceIsAnsweredAndARepeatIsNotAppliedTwice) {
+// A resend (same number, same content, its ack lost) is answered with the first result and not
+// applied again; a robot that rebooted starts again at 0 and is answered; one whose first frame
+// after the reboot was lost reuses a number with other content: applied.
+TEST(FrameLoop, ARobotThatRestartsItsSequenceIsAnsweredAndAResendIsNotAppliedTwice) {
   using protocol::AckStatus;
   LinkedRig linked;
   Recorder recorder;
   const auto stages = [](StageMask mask) { return protocol::SetStages{mask}; };
   const StageMask some = stage_bit(Stage::rectify) | stage_bit(Stage::corners);
+  const StageMask other = stage_bit(Stage::rectify);
   send_at(recorder, linked, 5, {stages(some), stages(some)}, 300);
   send_at(recorder, linked, 15, {stages(some)}, 301);  // 301 again: its ack was lost, say
   // The robot rebooted: its numbers start again at 0 (before, 0..299 were taken for replays).
   send_at(recorder, linked, 25, {stages(some), stages(0x8000)}, 0);
+  // It rebooted again, and its frame 0 was lost: 1 comes with other content than the 1 before.
+  send_at(recorder, linked, 35, {stages(other)}, 1);
   linked.fw->frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
-  const RunSummary s = linked.fw->run(45, stop);
+  const RunSummary s = linked.fw->run(50, stop);
   const std::vector<protocol::CommandAck> acks = linked.acks(false);
   std::vector<std::uint16_t> sequences;
   for (const auto& a : acks) sequences.push_back(a.command_sequence);
-  EXPECT_EQ(sequences, (std::vector<std::uint16_t>{300, 301, 301, 0, 1}));
+  EXPECT_EQ(sequences, (std::vector<std::uint16_t>{300, 301, 301, 0, 1, 1}));
   EXPECT_EQ(statuses(acks),
-            (std::vector<AckStatus>{AckStatus::ok, AckStatus::ok, AckStatus::duplicate,
-                                    AckStatus::ok, AckStatus::rejected}));
-  EXPECT_EQ(s.commands, 5u);
-  EXPECT_EQ(s.faults.bad_commands, 2u) << "the repeat and the unknown stage";
+            (std::vector<AckStatus>{AckStatus::ok, AckStatus::ok, AckStatus::ok, AckStatus::ok,
+                                    AckStatus::rejected, AckStatus::ok}));
+  EXPECT_EQ(s.commands, 6u);
+  EXPECT_EQ(s.resent_commands, 1u);
+  EXPECT_EQ(s.faults.bad_commands, 1u) << "the unknown stage";
+  EXPECT_EQ(s.stages, other | protocol::kAlwaysOnStages) << "the last 1 was applied";
+}
+
+// Snapshots: a resend is never a second snapshot; one answered busy and sent again is taken.
+TEST(FrameLoop, AResentSnapshotIsTakenOnceAndOneAnsweredBusyIsTakenWhenSentAgain) {
+  using protocol::AckStatus;
+  LinkedRig linked("snapshot_directory: snapshots\n");
+  Recorder recorder;
+  recorder.also = [](const FrameResult&) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  };
+  // 20 is taken; 21, with it, finds 20 pending: busy.
+  send_at(recorder, linked, 5, {protocol::Snapshot{}, protocol::Snapshot{}}, 20);
+  send_at(recorder, linked, 30, {protocol::Snapshot{}}, 20);  // a resend: not a second snapshot
+  send_at(recorder, linked, 40, {protocol::Snapshot{}}, 21);  // sent again after busy: taken
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = linked.fw->run(80, stop);
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  std::vector<std::uint16_t> ok;
+  for (const auto& a : acks) {
+    if (a.status == AckStatus::ok) ok.push_back(a.command_sequence);
+    if (a.status != AckStatus::ok) {
+      EXPECT_EQ(a.command_sequence, 21);
+      EXPECT_EQ(a.reason, protocol::AckReason::busy);
+    }
+  }
+  // 20's resend is answered again (or, still being written, once with the first).
+  EXPECT_TRUE(ok == (std::vector<std::uint16_t>{20, 20, 21}) ||
+              ok == (std::vector<std::uint16_t>{20, 21}))
+      << ::testing::PrintToString(ok);
+  EXPECT_EQ(s.resent_commands, 1u);
+  std::set<std::string> snapshots;  // snapshot-FRAME-what.pgm: one FRAME a snapshot
+  for (const auto& entry :
+       std::filesystem::directory_iterator(linked.rig.dir.path() / "snapshots")) {
+    snapshots.insert(entry.path().filename().string().substr(0, 15));
+  }
+  EXPECT_EQ(snapshots.size(), 2u) << "20 once, and 21";
 }
 
 TEST(FrameLoop, SnapshotsAreAnsweredOnceWrittenAndStopAtTheirLimit) {

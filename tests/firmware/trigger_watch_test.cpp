@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <stdexcept>
 #include <thread>
 
 namespace epipole::firmware {
@@ -61,6 +62,64 @@ TEST(TriggerWatch, RecordsEdgesOnItsThreadWhileTheLoopReadsThem) {
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
   EXPECT_EQ(watch.losses(), 1u);
   watch.stop();
+}
+
+// A line whose recovery throws (a look-up that ran out of memory, say) the first `throws` times.
+class ThrowingLine final : public hal::TriggerLine {
+ public:
+  explicit ThrowingLine(int throws) : throws_(throws) {}
+  const hal::TriggerConfig& config() const override { return config_; }
+  void start() override {}
+  void stop() override {}
+  hal::EdgeResult wait_edge(hal::Nanoseconds) override {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    if (throws_.load() > 0) {
+      --throws_;
+      throw std::runtime_error("no memory for the chip list");
+    }
+    const auto now = std::chrono::steady_clock::now().time_since_epoch();
+    return {hal::EdgeStatus::ok,
+            {0, std::chrono::duration_cast<std::chrono::nanoseconds>(now).count()}};
+  }
+  void set_rate(double) override {}
+
+ private:
+  hal::TriggerConfig config_;
+  std::atomic<int> throws_;
+};
+
+// Nothing the line throws leaves the watch's thread (it would end the firmware): the thread
+// counts one loss for the spell of failures and goes on recording edges once the line works.
+TEST(TriggerWatch, ALineThatThrowsNeverEndsTheThread) {
+  ThrowingLine line(5);
+  TriggerWatch watch(line, 1'000'000);
+  watch.start();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (watch.record().added() < 20 && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  watch.stop();
+  EXPECT_GE(watch.record().added(), 20u);
+  EXPECT_EQ(watch.losses(), 1u);
+}
+
+// Edges closer than a quarter period to the one before are bounces: the watch's record ignores
+// them, and takes the new gap when the rate changes.
+TEST(TriggerWatch, TheRecordIgnoresBouncesByTheCurrentPeriod) {
+  TickingLine line;
+  TriggerWatch watch(line, 100'000'000);  // 10 Hz: an edge 1 ms after another is a bounce
+  watch.start();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (watch.bounces() < 20 && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_GE(watch.bounces(), 20u);
+  EXPECT_LE(watch.record().added(), 1u + watch.bounces() / 50);
+  watch.set_period(1'000'000);  // 1 kHz: 1 ms apart is the rate
+  const std::uint64_t added = watch.record().added();
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  watch.stop();
+  EXPECT_GT(watch.record().added(), added + 20);
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 
 #include "epipole/firmware/board.hpp"
 #include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/command_memory.hpp"
 #include "epipole/firmware/health_monitor.hpp"
 #include "epipole/firmware/link.hpp"
 #include "epipole/firmware/memory_report.hpp"
@@ -39,6 +40,7 @@ struct RunSummary {
   std::uint64_t used_ahead = 0;
   std::uint64_t health_messages = 0;
   std::uint64_t commands = 0;
+  std::uint64_t resent_commands = 0;  // resends of commands applied before: answered, not applied
   hal::PairingCounters pairing;
   FaultCounts faults;
   LinkCounters link;
@@ -78,13 +80,10 @@ class FrameLoop {
  private:
   void start();
   void finish();
-  // What a command's ack says.
-  struct Verdict {
-    protocol::AckStatus status;
-    protocol::AckReason reason;
-  };
+  using Verdict = CommandVerdict;
   void apply_commands();
   void answer(std::uint16_t sequence, Verdict verdict);
+  void conclude(std::uint16_t sequence, Verdict verdict);
   Verdict set_trigger_rate(const protocol::SetTriggerRate& command);
   Verdict set_exposure(const protocol::SetExposure& command);
   Verdict request_snapshot(std::uint16_t sequence);
@@ -143,6 +142,7 @@ class FrameLoop {
   std::function<void()> heartbeat_;
   RunSummary summary_;
   bool started_ = false;
+  CommandMemory commands_;  // each command applied once (retries, reboots: protocol.md)
   bool snapshot_pending_ = false;
   std::uint16_t snapshot_sequence_ = 0;
   std::uint64_t rejected_commands_ = 0;
