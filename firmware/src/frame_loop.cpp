@@ -80,10 +80,17 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
 
 FrameLoop::~FrameLoop() {
   finish();
+  board_.left_recovery().follow_trigger(nullptr);  // the record goes with the loop
+  board_.right_recovery().follow_trigger(nullptr);
 }
 
 void FrameLoop::start() {
   if (started_) return;
+  started_at_ = board_.clock().now();
+  if (trigger_) {  // triggered cameras wait for the trigger's edges, never reopened for them
+    board_.left_recovery().follow_trigger(&trigger_->record());
+    board_.right_recovery().follow_trigger(&trigger_->record());
+  }
   board_.left().start();
   board_.right().start();
   if (trigger_) trigger_->start();
@@ -219,6 +226,13 @@ void FrameLoop::answer(std::uint16_t sequence, Verdict verdict) {
   send(ack);
 }
 
+// No edge for three trigger periods (none at all yet: from three periods after the start).
+bool FrameLoop::trigger_quiet() const {
+  const hal::Nanoseconds now = board_.clock().now();
+  const std::optional<hal::Nanoseconds> newest = trigger_->record().newest(board_.clock().id());
+  return now - newest.value_or(started_at_) > 3 * frame_period();
+}
+
 // A pending command's result (a snapshot's): remembered for its resends, and answered.
 void FrameLoop::conclude(std::uint16_t sequence, Verdict verdict) {
   commands_.settle(sequence, verdict);
@@ -346,6 +360,17 @@ void FrameLoop::say_device_changes() {
       journal(Priority::info, "trigger %s found", line.c_str());
     }
   }
+  // A trigger that stopped firing (an autopilot that disarmed): said once, and once it is back.
+  if (trigger_ && trigger_quiet() != trigger_quiet_) {
+    trigger_quiet_ = !trigger_quiet_;
+    const std::string& line = config_.trigger.line.line;
+    if (trigger_quiet_) {
+      journal(Priority::warning, "trigger %s: no edge for %lld ms, waiting for it", line.c_str(),
+              std::llround(3e-6 * static_cast<double>(frame_period())));
+    } else {
+      journal(Priority::info, "trigger %s: edges again", line.c_str());
+    }
+  }
   // The delay from edge to frame, once learned (and again, when it changed).
   const hal::StereoPairer& pairer = grabber_.pairer();
   if (pairer.counters().delay_learned != delays_learned_ && pairer.edge_delay()) {
@@ -376,6 +401,7 @@ void FrameLoop::publish_health() {
   }
   if (not_calibrated_) h->flags |= protocol::kHealthNotCalibrated;
   if (no_cascade_) h->flags |= protocol::kHealthNoCascade;
+  if (trigger_quiet_) h->flags |= protocol::kHealthWaitingForTrigger;
   send(*h);
   if (last_calibration_health_ && last_calibration_health_->matches > 0) {
     send(calibration_health_message(*last_calibration_health_));

@@ -46,10 +46,18 @@ bool RecoveringCamera::try_reopen() {
     return false;
   }
   ++counters_.reopens;
-  backoff_.succeeded();
+  // The back-off is reset by the first frame, not by the reopen: a device that opens but
+  // delivers nothing is reopened less and less often.
+  backoff_.failed(clock_.now());
   lost_ = false;
   timeouts_in_a_row_ = 0;
   return true;
+}
+
+bool RecoveringCamera::trigger_was_quiet(Nanoseconds waited_from) const {
+  if (trigger_ == nullptr || camera_.config().trigger != TriggerMode::external) return false;
+  const std::optional<Nanoseconds> newest = trigger_->newest(clock_.id());
+  return !newest || *newest < waited_from;
 }
 
 void RecoveringCamera::start() {
@@ -59,12 +67,14 @@ void RecoveringCamera::start() {
     ++counters_.losses;
     last_error_ = e.what();
     lost_ = true;
+    delivered_since_reopen_ = false;
     backoff_.failed(clock_.now());  // the first look again after the initial delay
   }
 }
 
 void RecoveringCamera::reopen() {
   lost_ = true;
+  delivered_since_reopen_ = false;
   if (!try_reopen()) throw Error(last_error_);
 }
 
@@ -85,18 +95,26 @@ AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {
     }
     if (!try_reopen()) return {AcquireStatus::device_lost, {}};
   }
-  const AcquireResult r = camera_.acquire(std::max<Nanoseconds>(deadline - clock_.now(), 0));
+  const Nanoseconds waited_from = clock_.now();
+  const AcquireResult r = camera_.acquire(std::max<Nanoseconds>(deadline - waited_from, 0));
   switch (r.status) {
     case AcquireStatus::ok:
-      timeouts_in_a_row_ = 0;
-      return r;
     case AcquireStatus::corrupt:
-      ++counters_.corrupt;
+      if (r.status == AcquireStatus::corrupt) ++counters_.corrupt;
       timeouts_in_a_row_ = 0;
+      if (!delivered_since_reopen_) {
+        delivered_since_reopen_ = true;
+        backoff_.succeeded();
+      }
       return r;
     case AcquireStatus::timeout:
       if (timeout <= 0) return r;  // a poll that found nothing waiting is no fault
       ++counters_.timeouts;
+      if (trigger_was_quiet(waited_from)) {  // no edge, no frame: the trigger stopped
+        ++counters_.trigger_waits;
+        timeouts_in_a_row_ = 0;
+        return r;
+      }
       if (config_.timeouts_before_reopen == 0 ||
           ++timeouts_in_a_row_ < config_.timeouts_before_reopen) {
         return r;
@@ -108,8 +126,11 @@ AcquireResult RecoveringCamera::acquire(Nanoseconds timeout) {
   ++counters_.losses;
   lost_ = true;
   timeouts_in_a_row_ = 0;
-  backoff_.succeeded();  // the first attempt is immediate, then the delays grow
-  if (!defer_reopen_) try_reopen();
+  // A device that delivered since it was last opened is tried again at once; one that did not
+  // waits for its back-off, which grows with every reopen that brought no frame.
+  if (delivered_since_reopen_) backoff_.succeeded();
+  delivered_since_reopen_ = false;
+  if (!defer_reopen_ && backoff_.due(clock_.now())) try_reopen();
   return {AcquireStatus::device_lost, {}};
 }
 

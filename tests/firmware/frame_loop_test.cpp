@@ -451,6 +451,54 @@ TEST(FrameLoop, EachLostTriggerIsCountedOnceUnderItsCause) {
   EXPECT_GT(expect_every_trigger_accounted(recorder), 0);
 }
 
+// The trigger stops for 10 s (an autopilot that disarmed) and comes back. The triggered cameras
+// wait for it: no camera is reopened, health says it is waiting for the trigger (and nothing
+// else changes), and every pair after it carries its own edge, its number following on.
+TEST(FrameLoop, AStoppedTriggerIsWaitedForNotReopenedFor) {
+  test::SimRig rig;
+  Firmware fw(rig.config, rig.images());
+  hal::SimBoard& board = *fw.board().hardware().sim();
+  const hal::Nanoseconds period = hal::period_of(30);
+  board.trigger.inject({hal::SimTriggerGlitchKind::pause, 30, 300 * period});  // 10 s
+  Recorder recorder;
+  fw.frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  ::testing::internal::CaptureStderr();
+  const RunSummary s = fw.run(90, stop);
+  const std::string journal = ::testing::internal::GetCapturedStderr();
+  const auto lines = [&](const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t at = 0; (at = journal.find(what, at)) != std::string::npos; ++at) ++n;
+    return n;
+  };
+  EXPECT_EQ(lines("trigger sim: no edge for 100 ms, waiting for it"), 1u) << journal;
+  EXPECT_EQ(lines("trigger sim: edges again"), 1u) << journal;
+  EXPECT_EQ(lines("camera"), 0u) << journal;
+  ASSERT_EQ(s.frames, 90u);
+  EXPECT_EQ(s.faults.camera_reopens, 0u);
+  EXPECT_GE(s.timeouts, 90u) << "10 s of 100 ms waits";
+  EXPECT_EQ(fw.board().left_recovery().counters().losses, 0u);
+  EXPECT_GE(fw.board().left_recovery().counters().trigger_waits, 90u);
+  const auto health = recorder.all<protocol::Health>();
+  std::size_t waiting = 0;
+  for (const auto& h : health) {
+    if ((h.flags & protocol::kHealthWaitingForTrigger) != 0) ++waiting;
+    EXPECT_EQ(h.camera_reopens, 0);
+  }
+  EXPECT_GE(waiting, 8u) << "about one health a second of the 10 s";
+  EXPECT_EQ(health.back().flags & protocol::kHealthWaitingForTrigger, 0) << "edges again";
+  // The pairs: 30 before the pause, then the edges after it, numbered on without a gap.
+  for (std::size_t i = 1; i < recorder.frames.size(); ++i) {
+    const auto& f = recorder.frames[i];
+    EXPECT_EQ(f.frame, recorder.frames[i - 1].frame + 1) << i;
+    const hal::Nanoseconds step = f.trigger_ns - recorder.frames[i - 1].trigger_ns;
+    EXPECT_EQ(step,
+              i == 30 ? board.trigger.edge_time(30 + 300) - board.trigger.edge_time(29) : period)
+        << i;
+  }
+  EXPECT_GT(expect_every_trigger_accounted(recorder), 0);
+}
+
 TEST(FrameLoop, EveryTriggerIsAccountedForWithRandomDropsOnBothSides) {
   test::SimRig rig;
   BoardConfig config = rig.config;

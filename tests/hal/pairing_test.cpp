@@ -25,6 +25,7 @@ constexpr int kW = 32;
 constexpr int kH = 16;
 constexpr Nanoseconds kMs = 1'000'000;
 constexpr Nanoseconds kPeriod = 20 * kMs;  // 50 Hz
+constexpr Nanoseconds kSecond = 1000 * kMs;
 
 std::vector<GrayImage> images() {
   std::vector<GrayImage> v;
@@ -409,11 +410,12 @@ TEST(Recovery, ADeferredLossIsReopenedOnlyOnceAllowed) {
   AcquireResult back = left.acquire(2 * kPeriod);
   EXPECT_EQ(left.counters().reopen_attempts, 1u);
   EXPECT_EQ(left.counters().reopens, 1u);
-  EXPECT_FALSE(left.recovering());
+  EXPECT_TRUE(left.recovering()) << "reopened, but no frame yet";
   for (int i = 0; i < 3 && back.status == AcquireStatus::timeout; ++i) {
     back = left.acquire(2 * kPeriod);  // the stream starts again at the next trigger
   }
   ASSERT_EQ(back.status, AcquireStatus::ok);
+  EXPECT_FALSE(left.recovering()) << "frames flow again";
   left.release(back.frame);
 }
 
@@ -554,9 +556,88 @@ TEST(Recovery, TimeoutsInARowReopenTheCamera) {
       left.release(r.frame);
     }
   }
-  EXPECT_GE(left.counters().timeouts, 3u);
-  EXPECT_GE(left.counters().reopens, 1u);
+  EXPECT_EQ(left.counters().timeouts, 3u);
+  EXPECT_EQ(left.counters().losses, 1u);
+  EXPECT_EQ(left.counters().reopens, 1u) << "the reopen ended the stall: frames flow again";
+  EXPECT_EQ(left.counters().trigger_waits, 0u) << "no trigger record followed";
+  EXPECT_FALSE(left.recovering());
   EXPECT_GT(frames, 80);
+}
+
+// The camera stalls while the trigger fires on: its fault, whatever record it follows.
+TEST(Recovery, AStalledCameraIsReopenedWhileItsTriggerFires) {
+  Rig rig;
+  rig.left.inject({.kind = SimFaultKind::stall, .sequence = 5, .duration = 40 * kPeriod});
+  RecoveryConfig config;
+  config.timeouts_before_reopen = 3;
+  RecoveringCamera left(rig.left, rig.board.clock, config);
+  left.follow_trigger(&rig.record);
+  while (rig.board.clock.now() < 100 * kPeriod) {
+    const AcquireResult r = left.acquire(2 * kPeriod);
+    if (r.status == AcquireStatus::ok) left.release(r.frame);
+  }
+  EXPECT_EQ(left.counters().reopens, 1u);
+  EXPECT_EQ(left.counters().trigger_waits, 0u);
+}
+
+// A trigger that stops for 10 s (an autopilot that disarmed): an externally triggered camera
+// that follows the trigger's record waits for it, and reopens nothing; one that does not
+// follow it takes the silence for a fault and reopens again and again.
+TEST(Recovery, AStoppedTriggerReopensNothing) {
+  for (const bool follows : {true, false}) {
+    Rig rig;
+    rig.board.trigger.inject({SimTriggerGlitchKind::pause, 50, 10 * kSecond});
+    RecoveryConfig config;
+    config.timeouts_before_reopen = 3;
+    RecoveringCamera left(rig.left, rig.board.clock, config);
+    if (follows) left.follow_trigger(&rig.record);
+    int frames_after = 0;
+    const Nanoseconds pause_end = 50 * kPeriod + 10 * kSecond;
+    while (rig.board.clock.now() < pause_end + 2 * kSecond) {
+      const AcquireResult r = left.acquire(200 * kMs);
+      if (r.status != AcquireStatus::ok) continue;
+      if (r.frame.timestamp > pause_end) ++frames_after;
+      left.release(r.frame);
+    }
+    if (follows) {
+      EXPECT_EQ(left.counters().reopens, 0u);
+      EXPECT_EQ(left.counters().losses, 0u);
+      EXPECT_EQ(left.counters().trigger_waits, 50u) << "10 s of 200 ms waits";
+      EXPECT_GT(frames_after, 90) << "frames come again with the edges";
+    } else {
+      EXPECT_EQ(left.counters().trigger_waits, 0u);
+      // Lost after 3 timeouts (0.6 s), reopened at once; then each reopen that brought no frame
+      // waits the longer of its back-off (0.1, 0.2, 0.4, ... s) and 3 more timeouts: 7 reopens,
+      // and the next is due 3 s after the trigger came back, so no frame in the 2 s after it.
+      EXPECT_EQ(left.counters().reopens, 7u);
+      EXPECT_EQ(frames_after, 0);
+    }
+  }
+}
+
+// A device that opens but fails every dequeue (EIO) for 10 s: lost once, recovering until frames
+// flow again, reopened after 0, 0.1, 0.2, 0.4, 0.8, 1.6, 3.2 and 5 s (the maximum): 8 reopens,
+// the last of which brings frames and resets the back-off.
+TEST(Recovery, ADeviceThatFailsEveryDequeueIsReopenedLessAndLessOften) {
+  Rig rig;
+  rig.left.inject({.kind = SimFaultKind::broken, .sequence = 10, .duration = 10 * kSecond});
+  RecoveringCamera left(rig.left, rig.board.clock, {});
+  int episodes = 0;  // how often recovering() went from false to true: one journal line each
+  bool was_recovering = false;
+  int frames_after = 0;
+  while (rig.board.clock.now() < 15 * kSecond) {
+    const AcquireResult r = left.acquire(2 * kPeriod);
+    if (left.recovering() && !was_recovering) ++episodes;
+    was_recovering = left.recovering();
+    if (r.status != AcquireStatus::ok) continue;
+    if (r.frame.timestamp > 10 * kSecond) ++frames_after;
+    left.release(r.frame);
+  }
+  EXPECT_EQ(episodes, 1);
+  EXPECT_EQ(left.counters().reopens, 8u);
+  EXPECT_EQ(left.counters().losses, 8u);
+  EXPECT_FALSE(left.recovering());
+  EXPECT_GT(frames_after, 100);
 }
 
 TEST(Backoff, DoublesUpToTheMaximum) {

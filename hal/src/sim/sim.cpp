@@ -81,7 +81,7 @@ void SimTrigger::emit_until(Nanoseconds until) {
   if (!running_) return;
   while (edge(next_emit_).timestamp <= until) {
     const TriggerEdge e = edge(next_emit_);
-    for (int i = 0; i < camera_count_; ++i) cameras_[i]->on_trigger(e);
+    for (int i = 0; i < camera_count_ && fires(next_emit_); ++i) cameras_[i]->on_trigger(e);
     ++next_emit_;
   }
   // The cameras are told of edges ahead of time (they schedule their frames); the record, like
@@ -99,7 +99,9 @@ void SimTrigger::emit_until(Nanoseconds until) {
     }
     if (!edge_due) break;
     const TriggerEdge e = edge(next_record_);
-    if (glitch(SimTriggerGlitchKind::unrecorded, next_record_) == nullptr) record(e);
+    if (fires(next_record_) && glitch(SimTriggerGlitchKind::unrecorded, next_record_) == nullptr) {
+      record(e);
+    }
     if (const SimTriggerGlitch* g = glitch(SimTriggerGlitchKind::extra_edge, next_record_)) {
       extra_ = TriggerEdge{e.sequence, e.timestamp + g->duration, e.clock};
     }
@@ -121,6 +123,15 @@ const SimTriggerGlitch* SimTrigger::glitch(SimTriggerGlitchKind kind,
   return nullptr;
 }
 
+bool SimTrigger::fires(std::uint32_t sequence) const {
+  const Nanoseconds t = schedule_.time(sequence);
+  for (const SimTriggerGlitch& g : glitches_) {
+    const Nanoseconds from = schedule_.time(g.sequence);
+    if (g.kind == SimTriggerGlitchKind::pause && t >= from && t < from + g.duration) return false;
+  }
+  return true;
+}
+
 void SimTrigger::record(const TriggerEdge& edge) {
   if (record_ != nullptr) record_->add(edge);
 }
@@ -129,6 +140,7 @@ EdgeResult SimTrigger::wait_edge(Nanoseconds timeout) {
   if (!running_) return {EdgeStatus::lost, {}};
   const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
   next_report_ = std::max(next_report_, schedule_.oldest());
+  while (!fires(next_report_)) ++next_report_;
   const TriggerEdge next = edge(next_report_);
   if (next.timestamp <= deadline) {
     clock_.sleep_until(next.timestamp);
@@ -253,6 +265,7 @@ void SimCamera::on_trigger(const TriggerEdge& edge) {
   p.damaged = find_fault(SimFaultKind::damaged, s) != nullptr ||
               (rates_.damaged > 0.0 && chance(rates_.seed, s, 8) < rates_.damaged);
   p.disconnect = find_fault(SimFaultKind::disconnect, s) != nullptr;
+  p.broken = find_fault(SimFaultKind::broken, s) != nullptr;
 
   if (queue_size_ == queue_.size()) {
     ++overruns_;  // like a driver without a free buffer: the newest frame is lost
@@ -271,12 +284,13 @@ void SimCamera::pull_edges(Nanoseconds until) {
 }
 
 AcquireResult SimCamera::acquire(Nanoseconds timeout) {
-  if (disconnected_) return {AcquireStatus::device_lost, {}};
+  if (disconnected_ || clock_.now() < broken_until_) return {AcquireStatus::device_lost, {}};
   if (!streaming_) return {AcquireStatus::timeout, {}};
   const Nanoseconds deadline = clock_.now() + std::max<Nanoseconds>(timeout, 0);
   pull_edges(deadline);
   if (queue_size_ == 0 || queue_[queue_head_].ready > deadline) {
     clock_.sleep_until(deadline);
+    pull_edges(clock_.now());  // the trigger's record catches up with the clock
     return {AcquireStatus::timeout, {}};
   }
   const Pending p = queue_[queue_head_];
@@ -291,9 +305,14 @@ AcquireResult SimCamera::acquire(Nanoseconds timeout) {
     queue_size_ = 0;
     return {AcquireStatus::device_lost, {}};
   }
-  if (p.damaged)
-    return corrupt_frame(p.reported_sequence, p.timestamp,
-                         ClockId::virtual_clock);  // buffer requeued
+  if (p.broken) {
+    broken_until_ = p.ready + find_fault(SimFaultKind::broken, p.true_sequence)->duration;
+    queue_size_ = 0;
+    return {AcquireStatus::device_lost, {}};
+  }
+  if (p.damaged) {  // its buffer requeued
+    return corrupt_frame(p.reported_sequence, p.timestamp, ClockId::virtual_clock);
+  }
   const auto free = std::find(held_.begin(), held_.end(), 0);
   if (free == held_.end()) {
     ++overruns_;  // every buffer is lent out: the frame is lost

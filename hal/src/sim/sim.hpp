@@ -30,6 +30,8 @@ enum class SimTriggerGlitchKind {
   unrecorded,  // the cameras fire, but the record never gets the edge (a slave missed it)
   late,        // the edge fires `duration` late, for the cameras and the record (a master that
                // woke late); later edges keep their schedule
+  pause,       // no edge fires from it for `duration` (an autopilot that disarmed): neither the
+               // cameras nor the record get one; then the schedule goes on
 };
 
 struct SimTriggerGlitch {
@@ -68,6 +70,7 @@ class SimTrigger final : public TriggerLine {
   // Edge n of the schedule, on the virtual clock.
   TriggerEdge edge(std::uint32_t sequence) const;
   const SimTriggerGlitch* glitch(SimTriggerGlitchKind kind, std::uint32_t sequence) const;
+  bool fires(std::uint32_t sequence) const;  // not in a pause
   void record(const TriggerEdge& edge);
   TriggerConfig config_;
   VirtualClock& clock_;
@@ -94,6 +97,8 @@ enum class SimFaultKind {
   damaged,         // the driver flags the frame damaged: acquire() reports corrupt, no frame
   wrong_sequence,  // the frame reports sequence `value` instead of its own
   skew,            // the frame's timestamp is off by `duration` (may be negative)
+  broken,          // from trigger `sequence`, for `duration`: the device opens, but every
+                   // acquire() reports device_lost (a driver failing every dequeue with EIO)
 };
 
 struct SimFault {
@@ -168,6 +173,7 @@ class SimCamera final : public CameraSource {
     bool corrupt = false;
     bool damaged = false;
     bool disconnect = false;
+    bool broken = false;
   };
   const SimFault* find_fault(SimFaultKind kind, std::uint32_t sequence) const;
   void pull_edges(Nanoseconds until);
@@ -196,6 +202,7 @@ class SimCamera final : public CameraSource {
   bool disconnected_ = false;
   std::uint32_t failing_reopens_ = 0;
   Nanoseconds stalled_until_ = 0;
+  Nanoseconds broken_until_ = 0;
   std::uint32_t generation_ = 0;
   std::uint64_t overruns_ = 0;
   std::uint64_t delivered_ = 0;

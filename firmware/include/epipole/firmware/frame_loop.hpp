@@ -96,6 +96,7 @@ class FrameLoop {
   void tick();
   void publish_health();
   void say_device_changes();
+  bool trigger_quiet() const;
   hal::PairResult next_pair();
   bool take_freshest(hal::PairResult& got);
   struct TriggerTime {
@@ -150,7 +151,9 @@ class FrameLoop {
   bool left_lost_ = false;
   bool right_lost_ = false;
   bool trigger_missing_ = false;
-  std::uint64_t delays_learned_ = 0;  // the pairer's, as last said in the journal
+  std::uint64_t delays_learned_ = 0;
+  bool trigger_quiet_ = false;       // said in the journal, and in health's flags
+  hal::Nanoseconds started_at_ = 0;  // the pairer's, as last said in the journal
   bool serial_connected_ = true;
   std::optional<calib::HealthFigure> last_calibration_health_;  // of the latest matches
 };

@@ -7,6 +7,7 @@
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/clock.hpp"
 #include "epipole/hal/serial_port.hpp"
+#include "epipole/hal/trigger.hpp"
 
 namespace epipole::hal {
 
@@ -35,8 +36,11 @@ class Backoff {
 // Counters for the health message.
 struct RecoveryCounters {
   std::uint64_t timeouts = 0;  // acquire (or read) timed out
-  std::uint64_t corrupt = 0;   // a camera delivered a damaged frame (not a timeout, not a loss)
-  std::uint64_t losses = 0;    // the device went away (or too many timeouts in a row)
+  // Of the timeouts, those with no trigger edge during the wait (an externally triggered camera
+  // that follows a trigger record): the trigger stopped, not the camera. Never a reason to reopen.
+  std::uint64_t trigger_waits = 0;
+  std::uint64_t corrupt = 0;  // a camera delivered a damaged frame (not a timeout, not a loss)
+  std::uint64_t losses = 0;   // the device went away (or too many timeouts in a row)
   std::uint64_t reopen_attempts = 0;
   std::uint64_t reopen_failures = 0;
   std::uint64_t reopens = 0;  // successful
@@ -50,10 +54,16 @@ struct RecoveryConfig {
 
 // A camera that reopens its device with exponential back-off when it is lost, keeps timing out
 // or is not there when it starts, without restarting anything else. While it is recovering,
-// acquire() waits for the next attempt (at most the timeout) and reports device_lost; once
-// reopened, frames flow again. A corrupt frame is counted apart and passed on: the device still
-// streams, so it ends a run of timeouts and never makes it reopen. set_exposure() goes to the
-// camera, and the last values set are applied again after every reopen.
+// acquire() waits for the next attempt (at most the timeout) and reports device_lost. It is
+// recovering from the loss until a frame comes again (recovering()): a device that opens but
+// delivers nothing (it fails every dequeue, or never gets a frame) is lost again at once, and
+// each such reopen waits twice as long as the one before, up to the back-off's maximum; the
+// first frame resets the back-off. A corrupt frame is counted apart and passed on: the device
+// still streams, so it ends a run of timeouts and never makes it reopen. An externally
+// triggered camera given the trigger's record (follow_trigger) counts a timeout with no edge
+// during the wait as a wait for the trigger, never as a fault: a trigger that stops (an
+// autopilot disarmed) reopens nothing. set_exposure() goes to the camera, and the last values
+// set are applied again after every reopen.
 class RecoveringCamera final : public CameraSource {
  public:
   RecoveringCamera(CameraSource& camera, Clock& clock, RecoveryConfig config = {});
@@ -75,13 +85,16 @@ class RecoveringCamera final : public CameraSource {
   // holder may still be reading (the frame loop, looking for the next pair while the current one
   // is processed). The first acquire() after defer_reopen(false) reopens it.
   void defer_reopen(bool defer) { defer_reopen_ = defer; }
+  // The edges of the trigger that fires this camera (null: none); it must outlive the camera.
+  void follow_trigger(const TriggerRecord* record) { trigger_ = record; }
 
   const RecoveryCounters& counters() const { return counters_; }
-  bool recovering() const { return lost_; }
+  bool recovering() const { return lost_ || !delivered_since_reopen_; }
   const std::string& last_error() const { return last_error_; }
 
  private:
   bool try_reopen();
+  bool trigger_was_quiet(Nanoseconds waited_from) const;
 
   CameraSource& camera_;
   Clock& clock_;
@@ -90,7 +103,9 @@ class RecoveringCamera final : public CameraSource {
   RecoveryCounters counters_;
   int timeouts_in_a_row_ = 0;
   bool lost_ = false;
+  bool delivered_since_reopen_ = true;  // false from a loss until the next frame
   bool defer_reopen_ = false;
+  const TriggerRecord* trigger_ = nullptr;
   bool exposure_set_ = false;  // set_exposure() was called: its values outlive a reopen
   Nanoseconds exposure_ = 0;
   double gain_ = 0.0;

@@ -35,6 +35,9 @@ enum class MessageType : std::uint8_t {
 inline constexpr std::uint16_t kHealthNotCalibrated = 1u << 0;
 // Detection is on but its compiled cascade does not exist yet: nothing is detected.
 inline constexpr std::uint16_t kHealthNoCascade = 1u << 1;
+// The trigger has fired no edge for three periods: externally triggered cameras wait for it (and
+// are not reopened for it); nothing is published until it fires again.
+inline constexpr std::uint16_t kHealthWaitingForTrigger = 1u << 2;
 
 // Once a second: rates, latencies, faults.
 // Counts are totals since start, modulo 2^32 (they wrap, never stop): a reader takes
