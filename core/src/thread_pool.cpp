@@ -15,10 +15,24 @@ int usable_cpus() {
   return sched_getaffinity(0, sizeof set, &set) == 0 ? std::max(1, CPU_COUNT(&set)) : 1;
 }
 
-ThreadPool::ThreadPool(int threads) {
+ThreadPool::ThreadPool(int threads, const std::function<void()>& on_start) {
   require(threads >= 1 && threads <= 64, "thread count ", threads, " is outside 1..64");
   workers_.reserve(static_cast<std::size_t>(threads - 1));
-  for (int w = 1; w < threads; ++w) workers_.emplace_back([this, w] { work(w); });
+  for (int w = 1; w < threads; ++w) {
+    workers_.emplace_back([this, w, on_start] {
+      if (on_start) on_start();
+      {
+        const std::lock_guard lock(mutex_);
+        ++started_;
+      }
+      done_.notify_all();
+      work(w);
+    });
+  }
+  // Every worker has run on_start() before the pool is used (or its creator turns real-time
+  // and keeps a core a worker would need to start on).
+  std::unique_lock lock(mutex_);
+  done_.wait(lock, [&] { return started_ == threads - 1; });
 }
 
 ThreadPool::~ThreadPool() {

@@ -50,7 +50,7 @@ struct Reader {
       value = static_cast<AckStatus>(raw);
     } else if constexpr (std::is_same_v<T, AckReason>) {
       const std::uint8_t raw = in.u8();
-      valid = valid && raw <= static_cast<std::uint8_t>(AckReason::not_a_command);
+      valid = valid && raw <= static_cast<std::uint8_t>(AckReason::no_pairs);
       value = static_cast<AckReason>(raw);
     } else if constexpr (std::is_same_v<T, std::int32_t>) {
       value = in.i32();

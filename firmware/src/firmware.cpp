@@ -14,6 +14,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/temporary_folder.hpp"
+#include "epipole/firmware/thread_roles.hpp"
 #include "epipole/hal/registry.hpp"
 
 namespace epipole::firmware {
@@ -57,15 +58,9 @@ std::vector<std::string> apply_scheduling(const BoardConfig::Threads& threads) {
       problems.push_back(cat("threads.affinity: cannot pin the threads: ", std::strerror(rc)));
     }
   }
-  if (threads.realtime_priority > 0) {
-    sched_param param{};
-    param.sched_priority = threads.realtime_priority;
-    if (const int rc = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param); rc != 0) {
-      problems.push_back(cat("threads.realtime_priority: cannot use SCHED_FIFO priority ",
-                             threads.realtime_priority, ": ", std::strerror(rc),
-                             " (the service needs CAP_SYS_NICE or an rtprio limit)"));
-    }
-  }
+  // Each thread takes its own priority when it starts (thread_roles.hpp): none is real-time
+  // before the firmware's threads and libcamera's exist.
+  set_realtime_base(threads.realtime_priority);
   return problems;
 }
 

@@ -8,6 +8,7 @@
 #include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/pair_messages.hpp"
 #include "epipole/firmware/protocol/mavlink.hpp"
+#include "epipole/firmware/thread_roles.hpp"
 #include "steady_time.hpp"
 
 namespace epipole::firmware {
@@ -117,7 +118,12 @@ void FrameLoop::finish() {
   if (trigger_) trigger_->stop();
   board_.left().stop();
   board_.right().stop();
-  snapshots_.flush();
+  if (!snapshots_.flush(SnapshotWriter::kStopWait)) {
+    journal(Priority::warning,
+            "snapshot: still being written after %lld ms (a stalled file "
+            "system?): stopping without it",
+            static_cast<long long>(SnapshotWriter::kStopWait.count()));
+  }
   // Before the link goes: the robot hears of every snapshot it asked for.
   answer_snapshots();
   if (snapshot_pending_) {  // asked for, but no pair came before the stop
@@ -131,10 +137,15 @@ FrameLoop::Verdict FrameLoop::request_snapshot(std::uint16_t sequence) {
   using protocol::AckReason;
   using protocol::AckStatus;
   if (snapshot_pending_) return {AckStatus::rejected, AckReason::busy};
+  // With a camera gone or the trigger stopped no pair may come for long: refused at once.
+  const bool no_pairs =
+      board_.left_recovery().recovering() || board_.right_recovery().recovering() || trigger_quiet_;
+  if (no_pairs && snapshots_.enabled()) return {AckStatus::rejected, AckReason::no_pairs};
   switch (snapshots_.can_take()) {
     case SnapshotRefusal::none:
       snapshot_pending_ = true;  // taken from the next pair, answered once written
       snapshot_sequence_ = sequence;
+      snapshot_asked_at_ = board_.clock().now();
       return {AckStatus::ok, AckReason::none};
     case SnapshotRefusal::disabled:
       return {AckStatus::unsupported, AckReason::none};
@@ -184,7 +195,8 @@ void FrameLoop::apply_commands() {
   using protocol::AckReason;
   using protocol::AckStatus;
   Command c;
-  while (link_.next_command(c)) {
+  // At most a queue's worth a turn: a robot that floods the link cannot hold up the pairs.
+  for (std::size_t n = 0; n < Link::kMaxCommands && link_.next_command(c); ++n) {
     ++summary_.commands;
     if (c.overflow) {  // not applied, not remembered: sent again, it is applied
       answer(c.sequence, {AckStatus::rejected, AckReason::busy});
@@ -233,6 +245,12 @@ bool FrameLoop::trigger_quiet() const {
   return now - newest.value_or(started_at_) > 3 * frame_period();
 }
 
+// What the refusals' journal line adds when lines were left out before it.
+std::string FrameLoop::left_out() const {
+  const std::uint64_t n = refusals_said_.left_out();
+  return n == 0 ? std::string() : cat(" (", n, " refusals not said since the last)");
+}
+
 // A pending command's result (a snapshot's): remembered for its resends, and answered.
 void FrameLoop::conclude(std::uint16_t sequence, Verdict verdict) {
   commands_.settle(sequence, verdict);
@@ -252,8 +270,10 @@ FrameLoop::Verdict FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& c
   if (line == nullptr || !trigger_) return {AckStatus::unsupported, AckReason::none};
   const double rate_hz = command.rate_millihz / 1000.0;
   const auto rejected = [&](AckReason reason, const std::string& why) {
-    journal(Priority::warning, "set_trigger_rate %u mHz rejected: %s",
-            static_cast<unsigned>(command.rate_millihz), why.c_str());
+    if (refusals_said_.allow(steady_now())) {
+      journal(Priority::warning, "set_trigger_rate %u mHz rejected: %s%s",
+              static_cast<unsigned>(command.rate_millihz), why.c_str(), left_out().c_str());
+    }
     return Verdict{AckStatus::rejected, reason};
   };
   hal::StereoPairer& pairer = grabber_.pairer();
@@ -264,6 +284,13 @@ FrameLoop::Verdict FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& c
     return rejected(AckReason::out_of_range, e.what());
   }
   const hal::Nanoseconds period = hal::period_of(rate_hz);
+  for (const hal::CameraSource* camera : {&board_.left(), &board_.right()}) {
+    if (const auto shortest = camera->shortest_frame_period(); shortest && period < *shortest) {
+      return rejected(AckReason::out_of_range,
+                      cat("camera ", camera->name(), " can follow at most ",
+                          std::llround(1e9 / static_cast<double>(*shortest)), " Hz"));
+    }
+  }
   const hal::Nanoseconds exposure =
       std::max(board_.left().config().exposure, board_.right().config().exposure);
   if (const std::string problem = frame_timing_problem(period, exposure, config_.cameras.timeout);
@@ -291,9 +318,11 @@ FrameLoop::Verdict FrameLoop::set_exposure(const protocol::SetExposure& command)
   const hal::Nanoseconds exposure = exposure_of(command);
   const double gain = gain_of(command);
   const auto rejected = [&](AckReason reason, const std::string& why) {
-    journal(Priority::warning, "set_exposure %u us, %u cdB rejected: %s",
-            static_cast<unsigned>(command.exposure_us), static_cast<unsigned>(command.gain_centidb),
-            why.c_str());
+    if (refusals_said_.allow(steady_now())) {
+      journal(Priority::warning, "set_exposure %u us, %u cdB rejected: %s%s",
+              static_cast<unsigned>(command.exposure_us),
+              static_cast<unsigned>(command.gain_centidb), why.c_str(), left_out().c_str());
+    }
     return Verdict{AckStatus::rejected, reason};
   };
   if (const std::string problem =
@@ -413,6 +442,12 @@ void FrameLoop::publish_health() {
 void FrameLoop::tick() {
   publish_health();
   say_device_changes();
+  // A snapshot no pair came for (the cameras went, or the trigger stopped, after it was asked
+  // for) is answered within a bound.
+  if (snapshot_pending_ && board_.clock().now() - snapshot_asked_at_ > kSnapshotWait) {
+    snapshot_pending_ = false;
+    conclude(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::no_pairs});
+  }
   if (heartbeat_ && link_.alive(kLinkAlive)) heartbeat_();
 }
 
@@ -540,7 +575,8 @@ void FrameLoop::add_memory(MemoryReport& report) const {
 }
 
 RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& stop) {
-  start();
+  start();  // the cameras (libcamera's threads), the trigger's and the link's threads first
+  const ScopedThreadRole compute(ThreadRole::compute);
   while (!stop.load(std::memory_order_relaxed) &&
          (max_frames == 0 || summary_.frames < max_frames)) {
     apply_commands();

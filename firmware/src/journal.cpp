@@ -54,4 +54,16 @@ void journal(Priority priority, const char* format, ...) {
   }
 }
 
+bool JournalLimit::allow(std::int64_t now) {
+  if (any_ && now - last_ < interval_) {
+    ++left_out_;
+    return false;
+  }
+  any_ = true;
+  last_ = now;
+  reported_ = left_out_;
+  left_out_ = 0;
+  return true;
+}
+
 }  // namespace epipole::firmware

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "epipole/core/error.hpp"
+#include "epipole/firmware/thread_roles.hpp"
 #include "steady_time.hpp"
 
 namespace epipole::firmware {
@@ -226,6 +227,7 @@ void Link::take_bytes(std::span<const std::byte> bytes) {
 }
 
 void Link::run() {
+  enter_thread_role_or_say(ThreadRole::link);
   for (;;) {
     last_round_ = steady_now();
     const bool wrote = write_front();

@@ -8,6 +8,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/cascade_file.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"
+#include "epipole/firmware/thread_roles.hpp"
 #include "epipole/vision/fast.hpp"
 #include "epipole/vision/harris.hpp"
 #include "epipole/vision/remap.hpp"
@@ -141,7 +142,8 @@ Pipeline::Pipeline(const BoardConfig& board,
                    const std::optional<calib::StereoCalibration>& calibration, SimdPath path,
                    const vision::CascadeModel* cascade)
     : stages_(std::make_unique<Stages>(board, path)),
-      pool_(std::make_unique<ThreadPool>(board.threads.count)),
+      pool_(std::make_unique<ThreadPool>(board.threads.count,
+                                         [] { enter_thread_role_or_say(ThreadRole::compute); })),
       calibration_health_(board.sparse.max_matches) {
   available_ = stage_bit(Stage::capture) | stage_bit(Stage::publish) | stage_bit(Stage::corners) |
                stage_bit(Stage::disparity) | stage_bit(Stage::sparse);

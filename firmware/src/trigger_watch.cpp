@@ -5,6 +5,7 @@
 #include <exception>
 
 #include "epipole/firmware/journal.hpp"
+#include "epipole/firmware/thread_roles.hpp"
 #include "steady_time.hpp"
 
 namespace epipole::firmware {
@@ -42,6 +43,7 @@ void TriggerWatch::stop() {
 }
 
 void TriggerWatch::run() {
+  enter_thread_role_or_say(ThreadRole::trigger);
   hal::Nanoseconds last_edge = steady_now();
   bool quiet = false;   // one loss per quiet spell, however long it lasts
   bool failed = false;  // one journal line per spell of failures

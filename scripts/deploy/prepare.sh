@@ -70,6 +70,13 @@ done
 echo "prepare: $(echo "$wanted" | wc -w) dependencies in the local repository"
 
 install -m 0755 "$guest/run.sh" "$payload/run.sh"
+# The virtual board's trigger driver (tests/vboard/guest), built beside the package: it makes the
+# gpio-sim line's edges follow the left camera's frames, as on the virtual board.
+[[ -x $build/tests/vboard/vboard-trigger ]] || {
+  echo "prepare: no tests/vboard/vboard-trigger in $build" >&2
+  exit 1
+}
+install -m 0755 "$build/tests/vboard/vboard-trigger" "$payload/"
 install -m 0644 "$guest/board.yaml" "$guest/udev.rules" "$payload/"
 size=$(du -sm "$payload" | cut -f1)
 mke2fs -q -t ext4 -L epipole-test -d "$payload" "$output/payload.img" "$((size + 32))M"

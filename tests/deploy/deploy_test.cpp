@@ -79,12 +79,13 @@ TEST(Deployment, InstallRunFaultsUpgradesRemoveAndPurge) {
 
   // The package's own board file (the Raspberry Pi 5's) on a board without its cameras and
   // trigger line: the firmware ran on its UART (the PL011), sending health that says why
-  // nothing is processed.
+  // nothing is processed (no calibration, no cascade, no trigger edge).
   const auto pi_health = all_of<protocol::Health>(decode_file(uart0));
   ASSERT_GE(pi_health.size(), 3u) << "health on /dev/ttyAMA0 from the package's board file";
   for (const protocol::Health& h : pi_health) {
     EXPECT_EQ(h.frames, 0u);
-    EXPECT_EQ(h.flags, protocol::kHealthNotCalibrated | protocol::kHealthNoCascade);
+    EXPECT_EQ(h.flags, protocol::kHealthNotCalibrated | protocol::kHealthNoCascade |
+                           protocol::kHealthWaitingForTrigger);
   }
   EXPECT_GE(pi_health.back().trigger_losses, 1u) << "the trigger line is not there";
 
@@ -94,7 +95,11 @@ TEST(Deployment, InstallRunFaultsUpgradesRemoveAndPurge) {
   const auto health = run.all<protocol::Health>();
   EXPECT_GE(frames.size(), 40u);
   ASSERT_GE(health.size(), 10u);
-  for (const protocol::Health& h : health) EXPECT_EQ(h.flags, protocol::kHealthNotCalibrated);
+  // The trigger's edges follow the cameras' frames here: while the cameras are gone (step 4),
+  // or before their first frame, health also says it waits for the trigger.
+  for (const protocol::Health& h : health) {
+    EXPECT_EQ(h.flags & ~protocol::kHealthWaitingForTrigger, protocol::kHealthNotCalibrated);
+  }
   int runs = 1;
   for (std::size_t i = 1; i < health.size(); ++i) {
     if (health[i].uptime_ms < health[i - 1].uptime_ms) ++runs;

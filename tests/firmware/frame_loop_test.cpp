@@ -759,6 +759,26 @@ TEST(FrameLoop, SetTriggerRateChangesThePeriodOfTheTriggers) {
 // A resend (same number, same content, its ack lost) is answered with the first result and not
 // applied again; a robot that rebooted starts again at 0 and is answered; one whose first frame
 // after the reboot was lost reuses a number with other content: applied.
+// A rate the sensors cannot follow is refused before anything changes: the simulated sensor
+// reads a frame out in 2 ms, so 500 Hz at most.
+TEST(FrameLoop, ATriggerRateTheSensorsCannotFollowIsRefused) {
+  using protocol::AckStatus;
+  LinkedRig linked;
+  Recorder recorder;
+  send_at(recorder, linked, 5, {protocol::SetTriggerRate{600'000}}, 40);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  ::testing::internal::CaptureStderr();
+  linked.fw->run(20, stop);
+  const std::string journal = ::testing::internal::GetCapturedStderr();
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  ASSERT_EQ(acks.size(), 1u);
+  EXPECT_EQ(acks[0].status, AckStatus::rejected);
+  EXPECT_EQ(acks[0].reason, protocol::AckReason::out_of_range);
+  EXPECT_NE(journal.find("can follow at most 500 Hz"), std::string::npos) << journal;
+  EXPECT_EQ(linked.fw->board().trigger()->config().rate_hz, 30.0);
+}
+
 TEST(FrameLoop, ARobotThatRestartsItsSequenceIsAnsweredAndAResendIsNotAppliedTwice) {
   using protocol::AckStatus;
   LinkedRig linked;
@@ -875,6 +895,38 @@ TEST(FrameLoop, ASnapshotThatCannotBeWrittenIsRejectedAndCountedInHealth) {
   const auto health = recorder.all<protocol::Health>();
   ASSERT_FALSE(health.empty());
   EXPECT_EQ(health.back().snapshot_failures, 1u);
+}
+
+// A snapshot asked for just before a camera goes for good gets its answer all the same: refused
+// (no_pairs) once no pair came for 2 s, never left unanswered until the camera returns.
+TEST(FrameLoop, ASnapshotNoPairCameForIsAnsweredWithinABound) {
+  using protocol::AckStatus;
+  LinkedRig linked("snapshot_directory: snapshots\n");
+  hal::SimFault gone;
+  gone.kind = hal::SimFaultKind::disconnect;
+  gone.sequence = 11;
+  gone.value = 1'000'000;  // every reopen fails
+  linked.fw->board().hardware().sim()->camera(hal::Side::right)->inject(gone);
+  Recorder recorder;
+  recorder.also = [](const FrameResult&) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  };
+  send_at(recorder, linked, 10, {protocol::Snapshot{}}, 5);
+  linked.fw->frame_loop().set_observer(&recorder);
+  std::atomic<bool> stop{false};
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    stop = true;
+  });
+  const RunSummary s = linked.fw->run(0, stop);
+  stopper.join();
+  EXPECT_EQ(s.frames, 11u) << "pairs 0..10, then the right camera is gone";
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  ASSERT_EQ(acks.size(), 1u);
+  EXPECT_EQ(acks[0].command_sequence, 5);
+  EXPECT_EQ(acks[0].status, AckStatus::rejected);
+  EXPECT_EQ(acks[0].reason, protocol::AckReason::no_pairs);
+  EXPECT_TRUE(std::filesystem::is_empty(linked.rig.dir.path() / "snapshots"));
 }
 
 TEST(FrameLoop, ASnapshotThatWouldLeaveTooLittleFreeSpaceIsRefused) {

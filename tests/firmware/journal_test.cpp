@@ -33,5 +33,20 @@ TEST(Journal, TheStreamIsTheFileOfThatDeviceAndInode) {
   for (int fd : {first[0], first[1], second[0], second[1]}) ::close(fd);
 }
 
+// A robot sending refused commands in a loop gets one journal line a second, each saying how
+// many were left out before it.
+TEST(JournalLimit, OneLineAnIntervalAndHowManyWereLeftOut) {
+  constexpr std::int64_t kSecond = 1'000'000'000;
+  JournalLimit limit(kSecond);
+  EXPECT_TRUE(limit.allow(5 * kSecond));
+  EXPECT_EQ(limit.left_out(), 0u);
+  for (int i = 1; i <= 99; ++i) EXPECT_FALSE(limit.allow(5 * kSecond + i * 10'000'000));
+  EXPECT_TRUE(limit.allow(6 * kSecond));
+  EXPECT_EQ(limit.left_out(), 99u);
+  EXPECT_FALSE(limit.allow(6 * kSecond + 1));
+  EXPECT_TRUE(limit.allow(9 * kSecond));
+  EXPECT_EQ(limit.left_out(), 1u);
+}
+
 }  // namespace
 }  // namespace epipole::firmware

@@ -403,10 +403,11 @@ TEST(Protocol, BodiesWithWrongLengthsOrCountsAreRejected) {
   too_many.push_back(kMaxDetections + 1);
   EXPECT_FALSE(decode_body(MessageType::detections, too_many));
   EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 9, 0}));  // unknown status
-  EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 1, 7}));  // unknown reason
+  EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 1, 8}));  // unknown reason
   EXPECT_FALSE(decode_body(MessageType::command_ack, Bytes{1, 0, 2}));     // version 2's ack
   EXPECT_TRUE(decode_body(MessageType::command_ack, Bytes{1, 0, 3, 0}));
   EXPECT_TRUE(decode_body(MessageType::command_ack, Bytes{1, 0, 1, 6}));
+  EXPECT_TRUE(decode_body(MessageType::command_ack, Bytes{1, 0, 1, 7}));  // no_pairs
   // A depth grid's cells fill whole rows: frame, two fields of view, columns, count, cells.
   const auto grid = [](std::uint8_t columns, std::uint8_t count) {
     Bytes body{1, 0, 0, 0, 0x20, 0x1e, 0x10, 0x14, columns, count};

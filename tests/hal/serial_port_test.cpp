@@ -6,10 +6,12 @@
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <pty.h>
+#include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
 
 #include <array>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -108,6 +110,24 @@ TEST_P(SerialBaud, BytesGoBothWaysRawAtTheAskedSpeed) {
 
 INSTANTIATE_TEST_SUITE_P(Rates, SerialBaud,
                          ::testing::Values(9600, 115200, 230400, 460800, 921600));
+
+// The firmware takes its port exclusively (TIOCEXCL): nobody else (a getty, ModemManager, a
+// second firmware) opens it meanwhile. Read back with TIOCGEXCL on the port's own descriptor.
+TEST(SerialPort, TheFirmwareHasItsPortToItself) {
+  if (EPIPOLE_UNDER_QEMU) GTEST_SKIP() << "qemu-user 7.2 does not translate TIOCGEXCL";
+  Pty pty;
+  TermiosSerialPort port({pty.slave_name(), 115200});
+  ASSERT_TRUE(port.is_open());
+  int exclusive_fds = 0;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd")) {
+    std::error_code ec;
+    if (std::filesystem::read_symlink(entry.path(), ec) != pty.slave_name()) continue;
+    int exclusive = 0;
+    const int fd = std::stoi(entry.path().filename().string());
+    if (ioctl(fd, TIOCGEXCL, &exclusive) == 0 && exclusive != 0) ++exclusive_fds;
+  }
+  EXPECT_EQ(exclusive_fds, 1);
+}
 
 TEST(SerialPort, ReadTimesOutWhenNothingComes) {
   Pty pty;

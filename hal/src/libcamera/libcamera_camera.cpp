@@ -488,6 +488,18 @@ void LibcameraCamera::reopen() {
   if (was_running) impl_->start();
 }
 
+std::optional<Nanoseconds> LibcameraCamera::shortest_frame_period() const {
+  if (impl_->camera == nullptr) return std::nullopt;
+  const lc::ControlInfoMap& info = impl_->camera->controls();
+  const auto limits = info.find(&lc::controls::FrameDurationLimits);
+  std::int64_t lo = 0, hi = 0;
+  if (limits == info.end() || !control_range(limits->second, lc::ControlTypeInteger64, lo, hi) ||
+      lo <= 0) {
+    return std::nullopt;
+  }
+  return static_cast<Nanoseconds>(lo) * 1000;  // microseconds
+}
+
 const LibcameraFormat& LibcameraCamera::negotiated_format() const {
   return *impl_->format;
 }

@@ -245,6 +245,8 @@ class LibcameraCamera final : public CameraSource {
   // The controls of plan_libcamera_exposure(); while streaming they go with the next request
   // queued, else with Camera::start().
   void set_exposure(Nanoseconds exposure, double gain) override;
+  // FrameDurationLimits' minimum, when the camera has the control.
+  std::optional<Nanoseconds> shortest_frame_period() const override;
 
   const LibcameraFormat& negotiated_format() const;
   const std::string& camera_id() const;

@@ -150,6 +150,8 @@ class SimCamera final : public CameraSource {
   // values (each where both it and the configured one are not automatic), saturating at 255.
   void set_exposure(Nanoseconds exposure, double gain) override;
   std::optional<Nanoseconds> edge_delay() const override { return timing_.exposure_delay; }
+  // A frame can start once the one before is read out.
+  std::optional<Nanoseconds> shortest_frame_period() const override { return timing_.readout; }
   std::size_t working_set_bytes() const override;
 
   void inject(const SimFault& fault);

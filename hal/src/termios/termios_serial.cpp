@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -86,6 +87,9 @@ void TermiosSerialPort::open_device() {
     throw Error(cat("serial port ", config_.device, ": cannot set ", config_.baud,
                     " baud 8N1 raw: ", std::strerror(error)));
   }
+  // Exclusive: no other program (a getty, ModemManager, a second firmware) opens the port
+  // while the firmware has it. A driver without it is used all the same.
+  ioctl(fd.get(), TIOCEXCL);
   fd_ = std::move(fd);
 }
 

@@ -300,6 +300,21 @@ void V4l2Camera::negotiate() {
       multiplanar_ ? fmt.fmt.pix_mp.plane_fmt[0].bytesperline : fmt.fmt.pix.bytesperline;
   if (bytes_per_line_ == 0) bytes_per_line_ = width * bytes_per_pixel(format_);
 
+  // The driver's frame intervals at this size and format: the shortest is the sensor's limit.
+  shortest_period_.reset();
+  v4l2_frmivalenum interval{};
+  interval.pixel_format = fourcc_of(format_);
+  interval.width = width;
+  interval.height = height;
+  for (; xioctl(fd_.get(), VIDIOC_ENUM_FRAMEINTERVALS, &interval) == 0; ++interval.index) {
+    const v4l2_fract f =
+        interval.type == V4L2_FRMIVAL_TYPE_DISCRETE ? interval.discrete : interval.stepwise.min;
+    if (f.denominator == 0) break;
+    const auto ns = static_cast<Nanoseconds>(1'000'000'000LL * f.numerator / f.denominator);
+    if (!shortest_period_ || ns < *shortest_period_) shortest_period_ = ns;
+    if (interval.type != V4L2_FRMIVAL_TYPE_DISCRETE) break;  // one range
+  }
+
   v4l2_streamparm parm{};
   parm.type = type;
   parm.parm.capture.timeperframe.numerator = 1000;

@@ -86,6 +86,7 @@ class V4l2Camera final : public CameraSource {
   AcquireResult acquire(Nanoseconds timeout) override;
   void release(const Frame& frame) override;
   std::size_t working_set_bytes() const override;
+  std::optional<Nanoseconds> shortest_frame_period() const override { return shortest_period_; }
   void reopen() override;
   // Sets the controls of plan_exposure_controls() (the ones used at start-up) at once.
   void set_exposure(Nanoseconds exposure, double gain) override;
@@ -108,6 +109,7 @@ class V4l2Camera final : public CameraSource {
 
   CameraConfig config_;
   std::string name_;
+  std::optional<Nanoseconds> shortest_period_;  // VIDIOC_ENUM_FRAMEINTERVALS, when it answers
   UniqueFd fd_;
   bool multiplanar_ = false;
   bool streaming_ = false;

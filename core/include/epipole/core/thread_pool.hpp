@@ -3,6 +3,7 @@
 #include <condition_variable>
 #include <cstddef>
 #include <exception>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -41,7 +42,9 @@ class TaskRef {
 // run() never allocates; it is not re-entrant and must be called from one thread at a time.
 class ThreadPool {
  public:
-  explicit ThreadPool(int threads);
+  // `on_start` runs first on each background worker (its name and scheduling, say), before the
+  // constructor returns.
+  explicit ThreadPool(int threads, const std::function<void()>& on_start = {});
   ~ThreadPool();
   ThreadPool(const ThreadPool&) = delete;
   ThreadPool& operator=(const ThreadPool&) = delete;
@@ -73,6 +76,7 @@ class ThreadPool {
   int unfinished_ = 0;
   unsigned generation_ = 0;
   bool stopping_ = false;
+  int started_ = 0;  // workers past on_start()
   std::exception_ptr error_;
 };
 

@@ -25,9 +25,10 @@ namespace epipole::firmware {
 // file that is there but does not read, or a simulated scene's that is missing, is an Error.
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config);
 
-// Scheduling the board asks for (threads: affinity, SCHED_FIFO) for the calling thread, which
-// every thread created after it inherits. Returns what could not be done (e.g. no permission
-// for SCHED_FIFO), one line each; the firmware runs on without it.
+// Scheduling the board asks for (threads: affinity, SCHED_FIFO), before any thread of the
+// firmware starts: the affinity for the calling thread, which every thread created after it
+// inherits; the real-time priority each thread then takes for its role when it starts
+// (thread_roles.hpp). Returns what could not be done, one line each; the firmware runs on.
 std::vector<std::string> apply_scheduling(const BoardConfig::Threads& threads);
 
 // What `epipole-fw --check` prints: the memory report of the firmware made for `config` with its

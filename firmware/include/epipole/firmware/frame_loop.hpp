@@ -10,6 +10,7 @@
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/command_memory.hpp"
 #include "epipole/firmware/health_monitor.hpp"
+#include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/link.hpp"
 #include "epipole/firmware/memory_report.hpp"
 #include "epipole/firmware/pipeline.hpp"
@@ -84,6 +85,7 @@ class FrameLoop {
   void apply_commands();
   void answer(std::uint16_t sequence, Verdict verdict);
   void conclude(std::uint16_t sequence, Verdict verdict);
+  std::string left_out() const;
   Verdict set_trigger_rate(const protocol::SetTriggerRate& command);
   Verdict set_exposure(const protocol::SetExposure& command);
   Verdict request_snapshot(std::uint16_t sequence);
@@ -143,9 +145,15 @@ class FrameLoop {
   std::function<void()> heartbeat_;
   RunSummary summary_;
   bool started_ = false;
-  CommandMemory commands_;  // each command applied once (retries, reboots: protocol.md)
+  CommandMemory commands_;
+  JournalLimit refusals_said_{
+      1'000'000'000};  // refused commands: a journal line a second  // each command applied once
+                       // (retries, reboots: protocol.md)
   bool snapshot_pending_ = false;
   std::uint16_t snapshot_sequence_ = 0;
+  hal::Nanoseconds snapshot_asked_at_ = 0;
+  // How long a snapshot asked for waits for a pair before it is refused (no_pairs).
+  static constexpr hal::Nanoseconds kSnapshotWait = 2'000'000'000;
   std::uint64_t rejected_commands_ = 0;
   // What the journal was last told of the devices.
   bool left_lost_ = false;

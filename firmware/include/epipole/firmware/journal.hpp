@@ -1,5 +1,7 @@
 #pragma once
 
+#include <cstdint>
+
 namespace epipole::firmware {
 
 // The syslog priorities of the firmware's lines (sd-daemon(3)).
@@ -12,6 +14,25 @@ enum class Priority { error = 3, warning = 4, notice = 5, info = 6 };
 // the line is plain. One write(2) per line, so the lines of several threads do not mix; a line
 // longer than 1 KiB is cut. Never allocates: the frame loop's threads call it.
 void journal(Priority priority, const char* format, ...) __attribute__((format(printf, 2, 3)));
+
+// At most one line per interval from one source that a peer can drive (a robot that sends
+// refused commands in a loop): the lines in between are left out and counted, and the next line
+// written says how many. Never allocates.
+class JournalLimit {
+ public:
+  explicit JournalLimit(std::int64_t interval_ns) : interval_(interval_ns) {}
+  // Whether a line may be written at `now` (any steady clock, in ns). When it may,
+  // left_out() is the number of lines not written since the last one.
+  bool allow(std::int64_t now);
+  std::uint64_t left_out() const { return reported_; }
+
+ private:
+  std::int64_t interval_;
+  std::int64_t last_ = 0;
+  bool any_ = false;
+  std::uint64_t left_out_ = 0;
+  std::uint64_t reported_ = 0;
+};
 
 // Whether standard error is the journal's stream (decided at the first line).
 bool stderr_is_journal();

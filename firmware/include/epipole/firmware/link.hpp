@@ -59,6 +59,8 @@ struct Command {
 // afresh (the robot at the other end may have restarted).
 class Link {
  public:
+  // The commands the link queues between two turns of the frame loop (more are answered busy).
+  static constexpr std::size_t kMaxCommands = 16;
   Link(hal::SerialPort* port, hal::Clock& clock, LinkConfig config);
   ~Link();
   Link(const Link&) = delete;
@@ -112,7 +114,6 @@ class Link {
   static constexpr std::size_t kMaxFrames = 256;
   std::array<std::uint16_t, kMaxFrames> lengths_{};
   std::size_t frames_head_ = 0, frames_size_ = 0;
-  static constexpr std::size_t kMaxCommands = 16;
   std::array<Command, kMaxCommands> commands_{};
   std::size_t commands_head_ = 0, commands_size_ = 0;
   // The sequence numbers of commands that came while the queue was full, to be rejected (busy).

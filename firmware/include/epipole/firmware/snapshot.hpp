@@ -1,22 +1,21 @@
 #pragma once
 
-#include <atomic>
-#include <condition_variable>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
-#include <mutex>
+#include <memory>
 #include <optional>
 #include <string>
 #include <thread>
 
-#include "epipole/core/image.hpp"
 #include "epipole/firmware/pipeline.hpp"
 
 namespace epipole::firmware {
 
 // How much the snapshot command may write (the board file's snapshot_limit and
-// snapshot_min_free_mb): at most `max_count` snapshots in the folder (those already there
-// count), and never so much that less than `min_free_bytes` stays free on its file system.
+// snapshot_min_free_mb): at most `max_count` snapshots in the folder (counted in the folder each
+// time, so files removed by hand make room again), and never so much that less than
+// `min_free_bytes` stays free on its file system.
 struct SnapshotLimits {
   int max_count = 200;
   std::uint64_t min_free_bytes = 64ull << 20;
@@ -37,58 +36,51 @@ struct SnapshotDone {
 };
 
 // The snapshot command: the frame pair as captured and rectified, and its disparity, written as
-// PGM files (disparity x16 as 16-bit PGM, 0 = invalid) by a thread of its own, so the frame loop
-// only copies pixels into buffers allocated at start-up. Files:
-//   DIR/snapshot-FRAME-{left,right}-raw.pgm, -{left,right}.pgm, -disparity.pgm
+// PGM files (disparity x16 as 16-bit PGM, 0 = invalid; a comment in each header names the frame)
+// by a thread of its own, so the frame loop only copies pixels into buffers allocated at
+// start-up. Files:
+//   DIR/snapshot-N-{left,right}-raw.pgm, -{left,right}.pgm, -disparity.pgm
+// N counts on from the highest number in the folder: never reused, across restarts too, and a
+// file is never overwritten (created exclusively). The folder is made again when it was removed;
+// each file and then the folder are synced before the snapshot counts as written.
 class SnapshotWriter {
  public:
   // An empty directory disables snapshots (take() refuses).
   SnapshotWriter(std::filesystem::path directory, int width, int height,
                  SnapshotLimits limits = {});
+  // Waits up to kStopWait for a snapshot being written; a file system that stalls longer is left
+  // to the writer thread, which outlives the writer (the process is stopping).
   ~SnapshotWriter();
   SnapshotWriter(const SnapshotWriter&) = delete;
   SnapshotWriter& operator=(const SnapshotWriter&) = delete;
 
-  bool enabled() const { return !directory_.empty(); }
-  // Whether one could be taken now (the limits checked against the folder's file system).
+  static constexpr std::chrono::milliseconds kStopWait{2000};
+
+  bool enabled() const;
+  // Whether one could be taken now (the limits checked against the folder and its file system).
   SnapshotRefusal can_take() const;
   // Copies the pair for the writer thread; false when can_take() would refuse. Its result comes
   // from finished(), with `sequence`.
   bool take(const FrameResult& result, std::uint16_t sequence);
   // The snapshot written since the last call, if any (never blocks).
   std::optional<SnapshotDone> finished();
-  // Waits until the snapshot being written (if any) is on disk.
-  void flush();
-  std::uint64_t written() const { return written_.load(); }
-  std::uint64_t failures() const { return failures_.load(); }
-  // Snapshots in the folder: those there at start-up and those written since.
-  int count() const { return existing_ + static_cast<int>(written_.load()); }
+  // Waits until the snapshot being written (if any) is on disk, at most `timeout`: false when it
+  // is still being written then (a stalled file system).
+  bool flush(std::chrono::milliseconds timeout);
+  std::uint64_t written() const;
+  std::uint64_t failures() const;
+  // Snapshots in the folder now (their left raw files).
+  int count() const;
   // The copies of a pair it keeps for the writer thread (none when disabled).
-  std::size_t working_set_bytes() const {
-    return left_raw_.size_bytes() + right_raw_.size_bytes() + left_.size_bytes() +
-           right_.size_bytes() + disparity_.size_bytes();
-  }
+  std::size_t working_set_bytes() const;
+
+  // What the writer thread uses (snapshot.cpp): owned with it, so it may outlive the writer.
+  struct Shared;
 
  private:
-  void run();
-  bool write_all();
-
-  std::string directory_;
   SnapshotLimits limits_;
   std::uint64_t bytes_each_ = 0;  // what one snapshot writes, at most
-  int existing_ = 0;
-  std::uint16_t sequence_ = 0;
-  std::optional<SnapshotDone> done_;  // guarded by mutex_
-  GrayImage left_raw_, right_raw_, left_, right_;
-  Image<std::uint16_t> disparity_;
-  bool has_disparity_ = false;
-  std::uint32_t frame_ = 0;
-  mutable std::mutex mutex_;
-  std::condition_variable wake_;
-  bool pending_ = false;
-  bool stopping_ = false;
-  std::atomic<std::uint64_t> written_{0};
-  std::atomic<std::uint64_t> failures_{0};
+  std::shared_ptr<Shared> shared_;
   std::thread thread_;
 };
 

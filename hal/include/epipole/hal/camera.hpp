@@ -130,6 +130,10 @@ class CameraSource {
   // How long after its trigger edge a frame is stamped, when the backend knows it (the
   // simulated cameras); on hardware the board file says (pairing.edge_delay_us).
   virtual std::optional<Nanoseconds> edge_delay() const { return std::nullopt; }
+  // The shortest frame period the sensor can follow at the configured size and format (its
+  // highest frame rate), when the backend can tell (V4L2's frame intervals, libcamera's
+  // FrameDurationLimits, the simulated sensor's readout); a trigger faster than it is refused.
+  virtual std::optional<Nanoseconds> shortest_frame_period() const { return std::nullopt; }
   // The frame buffers it keeps on the heap (a driver's mmap'ed buffers are the kernel's).
   virtual std::size_t working_set_bytes() const { return 0; }
 };

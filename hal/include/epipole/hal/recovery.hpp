@@ -76,6 +76,9 @@ class RecoveringCamera final : public CameraSource {
   AcquireResult acquire(Nanoseconds timeout) override;
   void release(const Frame& frame) override { camera_.release(frame); }
   std::optional<Nanoseconds> edge_delay() const override { return camera_.edge_delay(); }
+  std::optional<Nanoseconds> shortest_frame_period() const override {
+    return camera_.shortest_frame_period();
+  }
   std::size_t working_set_bytes() const override { return camera_.working_set_bytes(); }
   void reopen() override;
   void set_exposure(Nanoseconds exposure, double gain) override;

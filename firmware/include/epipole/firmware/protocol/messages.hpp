@@ -164,6 +164,7 @@ enum class AckReason : std::uint8_t {
   storage = 4,        // the snapshot limit or the free-space reserve is reached
   failed = 5,         // tried and failed (a snapshot that could not be written)
   not_a_command = 6,  // a message the firmware sends, not one it takes
+  no_pairs = 7,       // no pair to take it from: a camera is gone or the trigger stopped
 };
 struct CommandAck {
   std::uint16_t command_sequence = 0;

@@ -1,0 +1,96 @@
+#include "epipole/firmware/thread_roles.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+
+#include "epipole/core/error.hpp"
+#include "epipole/firmware/journal.hpp"
+
+namespace epipole::firmware {
+
+namespace {
+std::atomic<int> g_base{0};
+std::atomic<bool> g_said{false};
+}  // namespace
+
+const char* thread_name(ThreadRole role) {
+  switch (role) {
+    case ThreadRole::compute:
+      return "epipole-work";
+    case ThreadRole::link:
+      return "epipole-link";
+    case ThreadRole::trigger:
+      return "epipole-trigger";
+    case ThreadRole::snapshot:
+      return "epipole-snap";
+  }
+  return "epipole";
+}
+
+void set_realtime_base(int priority) {
+  g_base.store(std::clamp(priority, 0, 99));
+}
+
+int realtime_priority(ThreadRole role) {
+  const int base = g_base.load();
+  if (base == 0 || role == ThreadRole::snapshot) return 0;
+  const int above = role == ThreadRole::trigger ? 2 : role == ThreadRole::link ? 1 : 0;
+  return std::min(base + above, 99);
+}
+
+namespace {
+
+// The calling thread's scheduling for its role; what could not be done.
+std::string schedule(ThreadRole role) {
+  // Normal scheduling is what a thread started by a real-time one gets (reset on fork), and
+  // what it inherits otherwise: left as it is (a test run at idle priority stays there).
+  const int priority = realtime_priority(role);
+  if (priority == 0) return {};
+  sched_param param{};
+  param.sched_priority = priority;
+  if (sched_setscheduler(0, SCHED_FIFO | SCHED_RESET_ON_FORK, &param) == 0) return {};
+  return cat("threads.realtime_priority: the ", thread_name(role),
+             " thread cannot use SCHED_FIFO priority ", priority, ": ", std::strerror(errno),
+             " (the service needs CAP_SYS_NICE or an rtprio limit)");
+}
+
+void say_once(const std::string& problem) {
+  if (!problem.empty() && !g_said.exchange(true)) {
+    journal(Priority::warning, "warning: %s", problem.c_str());
+  }
+}
+
+}  // namespace
+
+std::string enter_thread_role(ThreadRole role) {
+  pthread_setname_np(pthread_self(), thread_name(role));
+  return schedule(role);
+}
+
+void enter_thread_role_or_say(ThreadRole role) {
+  say_once(enter_thread_role(role));
+}
+
+ScopedThreadRole::ScopedThreadRole(ThreadRole role) {
+  if (realtime_priority(role) == 0) return;
+  sched_param param{};
+  const int policy = sched_getscheduler(0);
+  if (policy < 0 || sched_getparam(0, &param) != 0) return;
+  policy_ = policy;
+  priority_ = param.sched_priority;
+  say_once(schedule(role));
+}
+
+ScopedThreadRole::~ScopedThreadRole() {
+  if (policy_ < 0) return;
+  sched_param param{};
+  param.sched_priority = priority_;
+  sched_setscheduler(0, policy_, &param);
+}
+
+}  // namespace epipole::firmware

@@ -1,0 +1,103 @@
+// The snapshot writer on its own: names never reused (across restarts too), the limit counted in
+// the folder, a removed folder made again, and what each file says.
+#include "epipole/firmware/snapshot.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+
+#include "sim_rig.hpp"
+
+namespace epipole::firmware {
+namespace {
+
+constexpr int kW = 16, kH = 8;
+constexpr std::chrono::milliseconds kWait{5000};
+
+struct Pair {
+  GrayImage image{kW, kH};
+  FrameResult result(std::uint32_t frame) {
+    FrameResult r;
+    r.frame = frame;
+    r.left_raw = r.right_raw = r.left = r.right = image.view();
+    return r;
+  }
+};
+
+std::set<std::string> files(const std::filesystem::path& folder) {
+  std::set<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(folder)) {
+    names.insert(e.path().filename().string());
+  }
+  return names;
+}
+
+TEST(Snapshots, NamesAreNeverReusedAcrossRestarts) {
+  test::TempDir dir;
+  const std::filesystem::path folder = dir.path() / "snapshots";
+  std::filesystem::create_directories(folder);
+  std::ofstream(folder / "snapshot-000007-left-raw.pgm") << "an older snapshot";
+  Pair pair;
+  {
+    SnapshotWriter writer(folder, kW, kH);
+    EXPECT_EQ(writer.count(), 1);
+    ASSERT_TRUE(writer.take(pair.result(0), 1));
+    ASSERT_TRUE(writer.flush(kWait));
+    EXPECT_EQ(writer.written(), 1u);
+  }
+  {  // the firmware restarted: its frames count from 0 again
+    SnapshotWriter writer(folder, kW, kH);
+    ASSERT_TRUE(writer.take(pair.result(0), 1));
+    ASSERT_TRUE(writer.flush(kWait));
+    EXPECT_EQ(writer.count(), 3);
+  }
+  const std::set<std::string> names = files(folder);
+  EXPECT_EQ(names.count("snapshot-000008-left-raw.pgm"), 1u);
+  EXPECT_EQ(names.count("snapshot-000009-left-raw.pgm"), 1u);
+  EXPECT_EQ(names.count("snapshot-000009-right.pgm"), 1u);
+  std::ifstream older(folder / "snapshot-000007-left-raw.pgm");
+  std::string text;
+  std::getline(older, text);
+  EXPECT_EQ(text, "an older snapshot") << "never overwritten";
+  // Each file names its frame.
+  std::ifstream pgm(folder / "snapshot-000009-left.pgm");
+  std::string magic, comment;
+  std::getline(pgm, magic);
+  std::getline(pgm, comment);
+  EXPECT_EQ(magic, "P5");
+  EXPECT_EQ(comment, "# epipole frame 0");
+}
+
+TEST(Snapshots, TheLimitCountsTheFilesInTheFolderAndARemovedFolderIsMadeAgain) {
+  test::TempDir dir;
+  const std::filesystem::path folder = dir.path() / "snapshots";
+  Pair pair;
+  SnapshotWriter writer(folder, kW, kH, {.max_count = 2, .min_free_bytes = 0});
+  for (std::uint32_t frame = 0; frame < 2; ++frame) {
+    ASSERT_TRUE(writer.take(pair.result(frame), 1));
+    ASSERT_TRUE(writer.flush(kWait));
+  }
+  EXPECT_EQ(writer.can_take(), SnapshotRefusal::limit);
+  // Removed by hand: room again.
+  for (const std::string& name : files(folder)) {
+    if (name.starts_with("snapshot-000000-")) std::filesystem::remove(folder / name);
+  }
+  EXPECT_EQ(writer.can_take(), SnapshotRefusal::none);
+  // The whole folder removed: made again by the next snapshot, numbered on.
+  std::filesystem::remove_all(folder);
+  ASSERT_TRUE(writer.take(pair.result(5), 2));
+  ASSERT_TRUE(writer.flush(kWait));
+  EXPECT_EQ(writer.failures(), 0u);
+  EXPECT_EQ(files(folder).count("snapshot-000002-left-raw.pgm"), 1u);
+  const std::optional<SnapshotDone> done = writer.finished();
+  ASSERT_TRUE(done.has_value());
+  EXPECT_EQ(done->sequence, 2);
+  EXPECT_TRUE(done->ok);
+}
+
+}  // namespace
+}  // namespace epipole::firmware
