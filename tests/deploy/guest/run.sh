@@ -89,8 +89,8 @@ check "frames traced" sh -c "{ mountpoint -q /sys/kernel/tracing ||
   mount -t tracefs tracefs /sys/kernel/tracing; } && mkdir -p $trace &&
   echo mono >$trace/trace_clock && echo 1 >$trace/events/vb2/vb2_buf_done/enable &&
   echo 1 >$trace/events/v4l2/v4l2_dqbuf/enable"
-chip=$(cat $sim/bank0/chip_name)
-pull=/sys/devices/platform/$(cat $sim/dev_name)/$chip/sim_gpio0/pull
+trigger_chip=$(cat $sim/bank0/chip_name)
+trigger_pull=/sys/devices/platform/$(cat $sim/dev_name)/$trigger_chip/sim_gpio0/pull
 
 # The dependencies come from a local repository (the guest has no network).
 echo "deb [trusted=yes] file:$here/repo ./" >/etc/apt/sources.list.d/deploy.list
@@ -120,7 +120,8 @@ cp "$here/udev.rules" /etc/udev/rules.d/60-epipole.rules
 check "the board's rules applied" sh -c 'udevadm control --reload &&
   udevadm trigger --action=change --subsystem-match=gpio && udevadm settle -t 30'
 check "only the trigger's chip for the gpio group" only_the_trigger_chip
-"$here/vboard-trigger" "/dev/$chip" 0 "$pull" "$trace/trace_pipe" 5 /dev/video0 >/tmp/trigger.log 2>&1 &
+"$here/vboard-trigger" "/dev/$trigger_chip" 0 "$trigger_pull" "$trace/trace_pipe" 5 /dev/video0 \
+  >/tmp/trigger.log 2>&1 &
 t=$(date +%s)
 check "restarted with the edited board file" restarted
 say "streaming"
