@@ -58,12 +58,16 @@ StereoPairer::EdgeAt StereoPairer::edge_at(const Frame& frame) const {
   return {newest && *newest > frame.timestamp ? EdgeAt::none : EdgeAt::not_yet, {}};
 }
 
-void StereoPairer::note_seen(Side side, const Frame& frame) {
+std::optional<std::uint32_t> StereoPairer::trigger_number(Side side, const Frame& frame) const {
   if (trigger_ == nullptr) {
-    if (side == Side::left) ledger_.seen(side, frame.sequence);
-  } else if (const EdgeAt e = edge_at(frame); e.kind == EdgeAt::found) {
-    ledger_.seen(side, e.edge.sequence);
+    return side == Side::left ? std::optional<std::uint32_t>(frame.sequence) : std::nullopt;
   }
+  const EdgeAt e = edge_at(frame);
+  return e.kind == EdgeAt::found ? std::optional<std::uint32_t>(e.edge.sequence) : std::nullopt;
+}
+
+void StereoPairer::note_seen(Side side, const Frame& frame) {
+  if (const auto n = trigger_number(side, frame)) ledger_.seen(side, *n);
 }
 
 void StereoPairer::drop_front(Side side, std::uint64_t& counter) {
@@ -123,11 +127,7 @@ bool StereoPairer::fronts_match_by_time() {
     const Frame& l = left_q_.front();
     const Frame& r = right_q_.front();
     if (l.clock != r.clock) {
-      if (trigger_ == nullptr) {
-        ledger_.damaged(l.sequence);
-      } else if (const EdgeAt e = edge_at(l); e.kind == EdgeAt::found) {
-        ledger_.damaged(e.edge.sequence);
-      }
+      if (const auto n = trigger_number(Side::left, l)) ledger_.damaged(*n);
       drop_front(Side::left, counters_.left().mismatched);
       drop_front(Side::right, counters_.right().mismatched);
       continue;
@@ -223,11 +223,7 @@ void StereoPairer::reset(Side side) {
 
 void StereoPairer::count_corrupt(Side side, const Frame& frame) {
   ++counters_.of(side).corrupt;
-  if (trigger_ == nullptr) {
-    if (side == Side::left) ledger_.damaged(frame.sequence);
-  } else if (const EdgeAt e = edge_at(frame); e.kind == EdgeAt::found) {
-    ledger_.damaged(e.edge.sequence);
-  }
+  if (const auto n = trigger_number(side, frame)) ledger_.damaged(*n);
 }
 
 // ----------------------------------------------------------------------------------------------

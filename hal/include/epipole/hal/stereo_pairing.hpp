@@ -140,6 +140,9 @@ class StereoPairer {
   const Queue& queue(Side side) const { return side == Side::left ? left_q_ : right_q_; }
   CameraSource& camera(Side side) { return side == Side::left ? left_ : right_; }
   EdgeAt edge_at(const Frame& frame) const;
+  // The trigger number the ledger knows a frame by: its edge's (none found: none); free
+  // running, the left camera's sequence (the right camera's count for nothing).
+  std::optional<std::uint32_t> trigger_number(Side side, const Frame& frame) const;
   // The ledger hears of every frame that goes, with the number of its edge (free running: the
   // left camera's numbers are the triggers').
   void note_seen(Side side, const Frame& frame);
