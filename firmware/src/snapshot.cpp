@@ -1,6 +1,8 @@
 #include "epipole/firmware/snapshot.hpp"
 
+#include <dirent.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
@@ -41,7 +43,7 @@ constexpr std::string_view kPrefix = "snapshot-";
 constexpr std::string_view kLeftRaw = "-left-raw.pgm";
 
 // The number of a snapshot file's name (snapshot-N-...), if it is one.
-std::optional<std::uint32_t> snapshot_index(const std::string& name) {
+std::optional<std::uint32_t> snapshot_index(std::string_view name) {
   if (!name.starts_with(kPrefix)) return std::nullopt;
   std::uint32_t n = 0;
   const char* begin = name.data() + kPrefix.size();
@@ -55,16 +57,19 @@ struct FolderScan {
   std::uint32_t next = 0;  // after the highest number
 };
 
+// With readdir, not std::filesystem: no operator new once running (the soak counts them).
 FolderScan scan(const std::string& directory) {
   FolderScan s;
-  std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(directory, ec)) {
-    const std::string name = entry.path().filename().string();
+  DIR* dir = ::opendir(directory.c_str());
+  if (dir == nullptr) return s;
+  while (const dirent* entry = ::readdir(dir)) {
+    const std::string_view name(entry->d_name);
     const std::optional<std::uint32_t> n = snapshot_index(name);
     if (!n) continue;
     s.next = std::max(s.next, *n + 1);
     if (name.ends_with(kLeftRaw)) ++s.snapshots;
   }
+  ::closedir(dir);
   return s;
 }
 
@@ -125,9 +130,8 @@ void copy(GrayView from, GrayImage& to) {
 
 // Writes the snapshot's files under the next free number; false when any could not be written.
 bool write_all(SnapshotWriter::Shared& s) {
-  std::error_code ec;
-  std::filesystem::create_directories(s.directory, ec);  // removed while running: made again
-  if (ec) return false;
+  // Removed while running: made again (its parent is there: it was made at start-up).
+  if (::mkdir(s.directory.c_str(), 0755) != 0 && errno != EEXIST) return false;
   s.next_index = std::max(s.next_index, scan(s.directory).next);
   char path[4096];
   // A number someone else took meanwhile (its first file exists) is skipped.
