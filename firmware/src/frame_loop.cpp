@@ -153,6 +153,7 @@ FrameLoop::Verdict FrameLoop::request_snapshot(std::uint16_t sequence) {
       return {AckStatus::rejected, AckReason::busy};
     case SnapshotRefusal::limit:
     case SnapshotRefusal::no_space:
+    case SnapshotRefusal::unreadable:
       break;
   }
   return {AckStatus::rejected, AckReason::storage};

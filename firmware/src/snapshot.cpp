@@ -12,6 +12,7 @@
 #include <charconv>
 #include <condition_variable>
 #include <cstdio>
+#include <cstring>
 #include <mutex>
 
 #include "epipole/core/error.hpp"
@@ -58,19 +59,24 @@ struct FolderScan {
 };
 
 // With readdir, not std::filesystem: no operator new once running (the soak counts them).
-FolderScan scan(const std::string& directory) {
+// Nothing when the folder cannot be read to its end; a missing folder holds none.
+std::optional<FolderScan> scan(const std::string& directory) {
   FolderScan s;
   DIR* dir = ::opendir(directory.c_str());
-  if (dir == nullptr) return s;
-  while (const dirent* entry = ::readdir(dir)) {
+  if (dir == nullptr) return errno == ENOENT ? std::optional(s) : std::nullopt;
+  for (;;) {
+    errno = 0;
+    const dirent* entry = ::readdir(dir);
+    if (entry == nullptr) break;
     const std::string_view name(entry->d_name);
     const std::optional<std::uint32_t> n = snapshot_index(name);
     if (!n) continue;
     s.next = std::max(s.next, *n + 1);
     if (name.ends_with(kLeftRaw)) ++s.snapshots;
   }
+  const bool read_to_end = errno == 0;
   ::closedir(dir);
-  return s;
+  return read_to_end ? std::optional(s) : std::nullopt;
 }
 
 bool write_bytes(int fd, const void* data, std::size_t size) {
@@ -132,7 +138,9 @@ void copy(GrayView from, GrayImage& to) {
 bool write_all(SnapshotWriter::Shared& s) {
   // Removed while running: made again (its parent is there: it was made at start-up).
   if (::mkdir(s.directory.c_str(), 0755) != 0 && errno != EEXIST) return false;
-  s.next_index = std::max(s.next_index, scan(s.directory).next);
+  const std::optional<FolderScan> folder = scan(s.directory);
+  if (!folder) return false;  // a number in it may be unseen
+  s.next_index = std::max(s.next_index, folder->next);
   char path[4096];
   // A number someone else took meanwhile (its first file exists) is skipped.
   for (int attempt = 0; attempt < 8; ++attempt, ++s.next_index) {
@@ -196,7 +204,10 @@ SnapshotWriter::SnapshotWriter(std::filesystem::path directory, int width, int h
   require(!ec, "snapshot directory ", s.directory, ": ", ec.message());
   // Four 8-bit images, one 16-bit, and their headers.
   bytes_each_ = 6 * static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) + 5 * 96;
-  s.next_index = scan(s.directory).next;
+  const std::optional<FolderScan> folder = scan(s.directory);
+  require(folder.has_value(), "snapshot directory ", s.directory,
+          ": cannot be read: ", std::strerror(errno));
+  s.next_index = folder->next;
   for (GrayImage* image : {&s.left_raw, &s.right_raw, &s.left, &s.right}) {
     *image = GrayImage(width, height);
   }
@@ -222,8 +233,11 @@ bool SnapshotWriter::enabled() const {
   return shared_ != nullptr;
 }
 
-int SnapshotWriter::count() const {
-  return enabled() ? scan(shared_->directory).snapshots : 0;
+std::optional<int> SnapshotWriter::count() const {
+  if (!enabled()) return 0;
+  const std::optional<FolderScan> folder = scan(shared_->directory);
+  if (!folder) return std::nullopt;
+  return folder->snapshots;
 }
 
 std::uint64_t SnapshotWriter::written() const {
@@ -247,7 +261,9 @@ SnapshotRefusal SnapshotWriter::can_take() const {
     const std::lock_guard lock(shared_->mutex);
     if (shared_->pending) return SnapshotRefusal::busy;
   }
-  if (count() >= limits_.max_count) return SnapshotRefusal::limit;
+  const std::optional<int> stored = count();
+  if (!stored) return SnapshotRefusal::unreadable;
+  if (*stored >= limits_.max_count) return SnapshotRefusal::limit;
   struct statvfs fs {};
   if (::statvfs(shared_->directory.c_str(), &fs) == 0) {
     const std::uint64_t free = static_cast<std::uint64_t>(fs.f_bavail) * fs.f_frsize;

@@ -3,10 +3,12 @@
 #include "epipole/firmware/frame_loop.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -870,15 +872,33 @@ TEST(FrameLoop, SnapshotsAreAnsweredOnceWrittenAndStopAtTheirLimit) {
   EXPECT_EQ(acks[2].reason, protocol::AckReason::storage) << "snapshot_limit: 1";
 }
 
+// Files may grow to `bytes` while it lives (a full card, as root too); EFBIG, not SIGXFSZ.
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) {
+    ::getrlimit(RLIMIT_FSIZE, &before_);
+    old_handler_ = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit limit = before_;
+    limit.rlim_cur = bytes;
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+  }
+  ~FileSizeLimit() {
+    ::setrlimit(RLIMIT_FSIZE, &before_);
+    std::signal(SIGXFSZ, old_handler_);
+  }
+  FileSizeLimit(const FileSizeLimit&) = delete;
+  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+
+ private:
+  rlimit before_{};
+  void (*old_handler_)(int) = SIG_DFL;
+};
+
 TEST(FrameLoop, ASnapshotThatCannotBeWrittenIsRejectedAndCountedInHealth) {
   using protocol::AckStatus;
   LinkedRig linked("snapshot_directory: snapshots\n");
-  // The folder is replaced by a file once the firmware made it: every write fails, as root too.
-  const std::filesystem::path folder = linked.rig.dir.path() / "snapshots";
-  std::filesystem::remove_all(folder);
-  std::FILE* file = std::fopen(folder.c_str(), "w");
-  ASSERT_NE(file, nullptr);
-  std::fclose(file);
+  // Every file stops growing after its header: the writes fail once the snapshot was accepted.
+  const FileSizeLimit full(64);
   Recorder recorder;
   recorder.also = [](const FrameResult&) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -895,6 +915,28 @@ TEST(FrameLoop, ASnapshotThatCannotBeWrittenIsRejectedAndCountedInHealth) {
   const auto health = recorder.all<protocol::Health>();
   ASSERT_FALSE(health.empty());
   EXPECT_EQ(health.back().snapshot_failures, 1u);
+}
+
+// A folder that cannot be listed (here a file took its place) is refused at once, for storage:
+// neither counted as empty nor numbered from 0.
+TEST(FrameLoop, ASnapshotFolderThatCannotBeListedIsRefusedForStorage) {
+  using protocol::AckStatus;
+  LinkedRig linked("snapshot_directory: snapshots\n");
+  const std::filesystem::path folder = linked.rig.dir.path() / "snapshots";
+  std::filesystem::remove_all(folder);
+  std::FILE* file = std::fopen(folder.c_str(), "w");
+  ASSERT_NE(file, nullptr);
+  std::fclose(file);
+  Recorder recorder;
+  send_at(recorder, linked, 5, {protocol::Snapshot{}}, 7);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = linked.fw->run(30, stop);
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  ASSERT_EQ(acks.size(), 1u);
+  EXPECT_EQ(acks[0].status, AckStatus::rejected);
+  EXPECT_EQ(acks[0].reason, protocol::AckReason::storage);
+  EXPECT_EQ(s.faults.snapshot_failures, 0u) << "nothing was tried";
 }
 
 // A snapshot asked for just before a camera goes for good gets its answer all the same: refused

@@ -99,5 +99,27 @@ TEST(Snapshots, TheLimitCountsTheFilesInTheFolderAndARemovedFolderIsMadeAgain) {
   EXPECT_TRUE(done->ok);
 }
 
+// A folder that cannot be listed is neither counted as empty nor numbered from 0: refused.
+TEST(Snapshots, AFolderThatCannotBeListedIsRefusedNotTakenForEmpty) {
+  test::TempDir dir;
+  const std::filesystem::path folder = dir.path() / "snapshots";
+  Pair pair;
+  SnapshotWriter writer(folder, kW, kH, {.max_count = 1, .min_free_bytes = 0});
+  ASSERT_TRUE(writer.take(pair.result(0), 1));
+  ASSERT_TRUE(writer.flush(kWait));
+  EXPECT_EQ(writer.can_take(), SnapshotRefusal::limit);
+  // Replaced by a file (opendir fails with ENOTDIR, as root too).
+  std::filesystem::remove_all(folder);
+  std::ofstream(folder) << "not a folder";
+  EXPECT_EQ(writer.count(), std::nullopt);
+  EXPECT_EQ(writer.can_take(), SnapshotRefusal::unreadable);
+  EXPECT_FALSE(writer.take(pair.result(1), 2));
+  // A writer started on it says why.
+  EXPECT_THROW(SnapshotWriter(folder, kW, kH), Error);
+  std::filesystem::remove(folder);
+  EXPECT_EQ(writer.count(), 0) << "a missing folder holds none";
+  EXPECT_EQ(writer.can_take(), SnapshotRefusal::none);
+}
+
 }  // namespace
 }  // namespace epipole::firmware

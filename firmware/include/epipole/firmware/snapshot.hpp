@@ -22,11 +22,12 @@ struct SnapshotLimits {
 };
 
 enum class SnapshotRefusal {
-  none,      // one can be taken
-  disabled,  // no snapshot directory
-  busy,      // the one before is still being written
-  limit,     // max_count reached
-  no_space,  // it would leave less than min_free_bytes free
+  none,        // one can be taken
+  disabled,    // no snapshot directory
+  busy,        // the one before is still being written
+  limit,       // max_count reached
+  no_space,    // it would leave less than min_free_bytes free
+  unreadable,  // the folder cannot be listed, so neither counted nor numbered
 };
 
 // A snapshot written (ok) or not, with the sequence number of the command that asked for it.
@@ -69,8 +70,8 @@ class SnapshotWriter {
   bool flush(std::chrono::milliseconds timeout);
   std::uint64_t written() const;
   std::uint64_t failures() const;
-  // Snapshots in the folder now (their left raw files).
-  int count() const;
+  // Snapshots in the folder now (their left raw files); nothing when it cannot be listed.
+  std::optional<int> count() const;
   // The copies of a pair it keeps for the writer thread (none when disabled).
   std::size_t working_set_bytes() const;
 
