@@ -35,6 +35,20 @@ TEST(Journal, TheStreamIsTheFileOfThatDeviceAndInode) {
 
 // A robot sending refused commands in a loop gets one journal line a second, each saying how
 // many were left out before it.
+TEST(JournalEpisodes, AFlappingFaultIsSaidOnceAnIntervalItsEndOnlyWithItsStart) {
+  constexpr std::int64_t kS = 1'000'000'000;
+  JournalEpisodes lines(10 * kS);
+  EXPECT_TRUE(lines.begins(0));
+  EXPECT_TRUE(lines.end_is_said());
+  EXPECT_EQ(lines.left_out(), 0u);
+  EXPECT_FALSE(lines.begins(2 * kS));
+  EXPECT_FALSE(lines.end_is_said()) << "nor its end";
+  EXPECT_FALSE(lines.begins(5 * kS));
+  EXPECT_TRUE(lines.begins(11 * kS));
+  EXPECT_TRUE(lines.end_is_said());
+  EXPECT_EQ(lines.left_out(), 2u);
+}
+
 TEST(JournalLimit, OneLineAnIntervalAndHowManyWereLeftOut) {
   constexpr std::int64_t kSecond = 1'000'000'000;
   JournalLimit limit(kSecond);

@@ -34,6 +34,26 @@ class JournalLimit {
   std::uint64_t reported_ = 0;
 };
 
+// The two lines of a fault that comes and goes (a device lost, then back): a fault that flaps is
+// said at most once an interval, its end only when its start was, and the next start said
+// knows how many were left out. Never allocates.
+class JournalEpisodes {
+ public:
+  explicit JournalEpisodes(std::int64_t interval_ns) : limit_(interval_ns) {}
+  // The fault began at `now`: whether to say so (and, later, that it ended).
+  bool begins(std::int64_t now) {
+    said_ = limit_.allow(now);
+    return said_;
+  }
+  bool end_is_said() const { return said_; }
+  // When begins() said yes: the episodes not said since the last one that was.
+  std::uint64_t left_out() const { return limit_.left_out(); }
+
+ private:
+  JournalLimit limit_;
+  bool said_ = false;
+};
+
 // Whether standard error is the journal's stream (decided at the first line).
 bool stderr_is_journal();
 
