@@ -176,7 +176,11 @@ FaultCounts FrameLoop::faults() {
   f.triggers = grabber_.pairer().ledger().at_newest_published();
   f.camera_timeouts = l.timeouts + r.timeouts;
   f.camera_reopens = l.reopens + r.reopens;
-  if (trigger_) f.trigger_losses = trigger_->losses();
+  if (trigger_) {
+    f.trigger_losses = trigger_->losses();
+    f.trigger_bounces = trigger_->bounces();
+  }
+  f.pairs_off_trigger = p.left().off_trigger;  // a pair's two frames, counted on each side
   if (const hal::RecoveringSerialPort* s = board_.serial_recovery()) {
     f.link_reopens = s->reopens();  // counted on the link's thread
   }

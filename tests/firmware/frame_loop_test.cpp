@@ -453,6 +453,36 @@ TEST(FrameLoop, EachLostTriggerIsCountedOnceUnderItsCause) {
   EXPECT_GT(expect_every_trigger_accounted(recorder), 0);
 }
 
+// Trigger glitches reach health (protocol version 5): a bounce 10 us after edge 20 is ignored
+// and counted; edge 40, which the record missed, costs its own pair only, counted off trigger.
+TEST(FrameLoop, HealthCountsTheTriggersGlitches) {
+  test::SimRig rig;
+  Firmware fw(rig.config, rig.images());
+  hal::SimBoard& board = *fw.board().hardware().sim();
+  board.trigger.inject({hal::SimTriggerGlitchKind::extra_edge, 20, 10'000});
+  board.trigger.inject({hal::SimTriggerGlitchKind::unrecorded, 40, 0});
+  Recorder recorder;
+  fw.frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = fw.run(100, stop);
+  const auto health = recorder.all<protocol::Health>();
+  ASSERT_GE(health.size(), 3u);
+  EXPECT_EQ(health.back().trigger_bounces, 1u);
+  EXPECT_EQ(health.back().pairs_off_trigger, 1u);
+  EXPECT_EQ(s.faults.trigger_bounces, 1u);
+  EXPECT_EQ(s.faults.pairs_off_trigger, 1u);
+  // The firmware numbers the edges it sees: edge 41 of the schedule is its 40th.
+  const auto at = [&](std::uint32_t edge) {
+    return std::find_if(recorder.frames.begin(), recorder.frames.end(), [&](const auto& f) {
+      return f.trigger_ns == board.trigger.edge_time(edge);
+    });
+  };
+  EXPECT_EQ(at(40), recorder.frames.end()) << "the pair of the missed edge is not published";
+  ASSERT_NE(at(39), recorder.frames.end());
+  ASSERT_NE(at(41), recorder.frames.end()) << "the next carries its own edge";
+  EXPECT_EQ(at(41)->frame, at(39)->frame + 1);
+}
+
 // The trigger stops for 10 s (an autopilot that disarmed) and comes back. The triggered cameras
 // wait for it: no camera is reopened, health says it is waiting for the trigger (and nothing
 // else changes), and every pair after it carries its own edge, its number following on.

@@ -93,6 +93,8 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
   health.wait_p50_us = rng();
   health.wait_p99_us = rng();
   health.busy_permille = u16();
+  health.trigger_bounces = rng();
+  health.pairs_off_trigger = rng();
   FrameSummary summary{rng(), (std::uint64_t{rng()} << 32) | rng(), rng(), u16(), u16(), 999, 3,
                        u16()};
   Detections detections;
@@ -345,7 +347,7 @@ TEST(Protocol, OverlongAndUnknownFramesAreCounted) {
 }
 
 // Where docs/protocol.md puts them: health's flags (u16) after its counters, then (version 4)
-// its occupancy; the frame's flags (u8) last.
+// its occupancy, then (version 5) its trigger glitches; the frame's flags (u8) last.
 TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays) {
   const auto payload_of = [](const Message& m) {
     const Bytes frame = frame_of(m, 0);
@@ -360,16 +362,19 @@ TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays)
   health.wait_p50_us = 0x04030201;
   health.wait_p99_us = 0x08070605;
   health.busy_permille = 0x03E8;
+  health.trigger_bounces = 0x0C0B0A09;
+  health.pairs_off_trigger = 0x100F0E0D;
   const Bytes h = payload_of(health);
   // 3 x u32, u16, 2 x u32, 8 x u32 stage times, 4 x u32 dropped by cause, 8 x u32 counters,
-  // u16 flags, 2 x u32 waits, u16 busy.
-  ASSERT_EQ(h.size(), kHeaderSize + 114 + kCrcSize);
-  EXPECT_EQ(h[0], 4) << "version";
+  // u16 flags, 2 x u32 waits, u16 busy, 2 x u32 trigger glitches.
+  ASSERT_EQ(h.size(), kHeaderSize + 122 + kCrcSize);
+  EXPECT_EQ(h[0], 5) << "version";
   EXPECT_EQ(h[kHeaderSize + 102], 0x01);
   EXPECT_EQ(h[kHeaderSize + 103], 0xA5);
   for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 104 + i], i + 1) << i;
   EXPECT_EQ(h[kHeaderSize + 112], 0xE8);
   EXPECT_EQ(h[kHeaderSize + 113], 0x03);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 114 + i], i + 9) << i;
   FrameSummary frame;
   frame.flags = kFrameTriggerFromCapture;
   const Bytes f = payload_of(frame);

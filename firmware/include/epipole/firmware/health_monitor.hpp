@@ -26,6 +26,8 @@ struct FaultCounts {
   std::uint64_t bad_commands = 0;
   std::uint64_t messages_dropped = 0;
   std::uint64_t snapshot_failures = 0;
+  std::uint64_t trigger_bounces = 0;
+  std::uint64_t pairs_off_trigger = 0;
 };
 
 // Collects what the health message says: frames per second, the latency from trigger edge to

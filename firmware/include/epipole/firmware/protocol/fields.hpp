@@ -37,6 +37,8 @@ void fields(Io& io, M& m) {
   io("wait_p50_us", m.wait_p50_us);
   io("wait_p99_us", m.wait_p99_us);
   io("busy_permille", m.busy_permille);
+  io("trigger_bounces", m.trigger_bounces);
+  io("pairs_off_trigger", m.pairs_off_trigger);
 }
 
 template <class Io, class M>

@@ -11,7 +11,7 @@ namespace epipole::protocol {
 // Epipole serial protocol, version 3 (docs/protocol.md). Every number is little-endian on the
 // wire; sizes here are the wire sizes. Version 2 added the flags of health and frame.
 
-inline constexpr std::uint8_t kVersion = 4;
+inline constexpr std::uint8_t kVersion = 5;
 
 enum class MessageType : std::uint8_t {
   // firmware -> robot
@@ -69,6 +69,11 @@ struct Health {
   std::uint32_t wait_p50_us = 0;
   std::uint32_t wait_p99_us = 0;
   std::uint16_t busy_permille = 0;
+  // Trigger glitches (version 5): edges ignored as bounces (closer than a quarter period after
+  // the one before), and pairs dropped because no edge lay at their time (a missed edge; each
+  // is in dropped_* too, under the trigger it was taken for).
+  std::uint32_t trigger_bounces = 0;
+  std::uint32_t pairs_off_trigger = 0;
   friend bool operator==(const Health&, const Health&) = default;
 };
 
