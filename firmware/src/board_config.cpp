@@ -11,6 +11,7 @@
 #include "epipole/core/text_file.hpp"
 #include "epipole/core/thread_pool.hpp"
 #include "epipole/core/yaml_fields.hpp"
+#include "epipole/firmware/link_budget.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/hal/registry.hpp"
 
@@ -611,6 +612,19 @@ void validate(const BoardConfig& c, const std::string& file) {
             frame_timing_problem(period, camera->exposure, c.cameras.timeout);
         !problem.empty()) {
       fail(c.has_trigger() ? "trigger.rate_hz" : "cameras.fps", problem);
+    }
+  }
+  if (c.has_link()) {
+    const hal::Nanoseconds period =
+        c.has_trigger()
+            ? c.pairing.trigger_period
+            : hal::period_of(std::max(std::max(c.cameras.left.fps, c.cameras.right.fps), 1e-3));
+    const LinkProtocol protocol = c.serial.protocol == BoardConfig::LinkProtocol::mavlink
+                                      ? LinkProtocol::mavlink
+                                      : LinkProtocol::epipole;
+    if (const std::string problem = link_capacity_problem(protocol, c.serial.port.baud, period);
+        !problem.empty()) {
+      fail("serial.baud", problem);
     }
   }
   if (protocol::has_stage(c.stages, protocol::Stage::disparity) &&

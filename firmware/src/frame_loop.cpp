@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <tuple>
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/journal.hpp"
+#include "epipole/firmware/link_budget.hpp"
 #include "epipole/firmware/pair_messages.hpp"
 #include "epipole/firmware/protocol/mavlink.hpp"
 #include "epipole/firmware/thread_roles.hpp"
@@ -97,7 +100,7 @@ void FrameLoop::start() {
   if (trigger_) trigger_->start();
   if (const hal::RecoveringSerialPort* serial = board_.serial_recovery()) {
     serial_connected_ = serial->connected();
-    if (!serial_connected_) {
+    if (!serial_connected_ && device_lines_[3].begins(started_at_)) {  // said: so is its return
       journal(Priority::warning, "serial port %s is not there yet: waiting for it",
               config_.serial.port.device.c_str());
     }
@@ -307,6 +310,14 @@ FrameLoop::Verdict FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& c
   } catch (const Error& e) {
     return rejected(AckReason::timing, e.what());
   }
+  if (config_.has_link()) {  // the summaries must fit the link at the new rate
+    if (const std::string problem =
+            link_capacity_problem(link_.protocol(), config_.serial.port.baud, period);
+        !problem.empty()) {
+      pairer.set_trigger_period(old_period);
+      return rejected(AckReason::out_of_range, problem);
+    }
+  }
   try {
     line->set_rate(rate_hz);
   } catch (const Error& e) {
@@ -370,17 +381,39 @@ void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool tri
   if (m.points) send(*m.points);
 }
 
+namespace {
+
+// " (N not said since the last)", or nothing; no allocation.
+struct LeftOut {
+  char text[64] = "";
+  LeftOut(std::uint64_t n, const char* what) {
+    if (n > 0) {
+      std::snprintf(text, sizeof text, " (%llu %s not said since the last)",
+                    static_cast<unsigned long long>(n), what);
+    }
+  }
+};
+
+}  // namespace
+
 // One journal line when a camera, the trigger line or the serial port goes, and one when it is
-// back (health counts them).
+// back (health counts them); a device that comes and goes is said at most once in
+// kDeviceLinesEvery.
 void FrameLoop::say_device_changes() {
-  for (auto [camera, lost] : {std::pair{&board_.left_recovery(), &left_lost_},
-                              std::pair{&board_.right_recovery(), &right_lost_}}) {
-    if (camera->recovering() != *lost) {
-      *lost = camera->recovering();
-      if (*lost) pipeline_.reset_history();
-      journal(*lost ? Priority::warning : Priority::info, "camera %s %s%s%s",
-              camera->name().c_str(), *lost ? "lost, reopening" : "recovered", *lost ? ": " : "",
-              *lost ? camera->last_error().c_str() : "");
+  const hal::Nanoseconds now = board_.clock().now();
+  for (auto [camera, lost, lines] :
+       {std::tuple{&board_.left_recovery(), &left_lost_, &device_lines_[0]},
+        std::tuple{&board_.right_recovery(), &right_lost_, &device_lines_[1]}}) {
+    if (camera->recovering() == *lost) continue;
+    *lost = camera->recovering();
+    if (*lost) {
+      pipeline_.reset_history();
+      if (lines->begins(now)) {
+        journal(Priority::warning, "camera %s lost, reopening: %s%s", camera->name().c_str(),
+                camera->last_error().c_str(), LeftOut(lines->left_out(), "losses").text);
+      }
+    } else if (lines->end_is_said()) {
+      journal(Priority::info, "camera %s recovered", camera->name().c_str());
     }
   }
   // The firmware goes on without the trigger's edges while its line is not there.
@@ -398,10 +431,12 @@ void FrameLoop::say_device_changes() {
   if (trigger_ && trigger_quiet() != trigger_quiet_) {
     trigger_quiet_ = !trigger_quiet_;
     const std::string& line = config_.trigger.line.line;
-    if (trigger_quiet_) {
-      journal(Priority::warning, "trigger %s: no edge for %lld ms, waiting for it", line.c_str(),
-              std::llround(3e-6 * static_cast<double>(frame_period())));
-    } else {
+    JournalEpisodes& lines = device_lines_[2];
+    if (trigger_quiet_ && lines.begins(now)) {
+      journal(Priority::warning, "trigger %s: no edge for %lld ms, waiting for it%s", line.c_str(),
+              std::llround(3e-6 * static_cast<double>(frame_period())),
+              LeftOut(lines.left_out(), "pauses").text);
+    } else if (!trigger_quiet_ && lines.end_is_said()) {
       journal(Priority::info, "trigger %s: edges again", line.c_str());
     }
   }
@@ -418,9 +453,14 @@ void FrameLoop::say_device_changes() {
   if (serial != nullptr && serial->connected() != serial_connected_) {
     serial_connected_ = !serial_connected_;
     const std::string& device = config_.serial.port.device;
-    journal(serial_connected_ ? Priority::info : Priority::warning, "serial port %s %s",
-            device.empty() ? board_.serial_peer().c_str() : device.c_str(),
-            serial_connected_ ? "open" : "gone (hung up), waiting for it");
+    const char* name = device.empty() ? board_.serial_peer().c_str() : device.c_str();
+    JournalEpisodes& lines = device_lines_[3];
+    if (!serial_connected_ && lines.begins(now)) {
+      journal(Priority::warning, "serial port %s gone (hung up), waiting for it%s", name,
+              LeftOut(lines.left_out(), "hang-ups").text);
+    } else if (serial_connected_ && lines.end_is_said()) {
+      journal(Priority::info, "serial port %s open", name);
+    }
   }
 }
 
@@ -442,11 +482,34 @@ void FrameLoop::publish_health() {
   }
 }
 
+// A board whose baud rate carries its summaries (the board file's check) but not every point
+// and depth grid at its rate drops those, counted in health: said once, not every pair.
+void FrameLoop::say_link_capacity() {
+  const std::uint64_t over_budget = link_.counters().over_budget;
+  const hal::Nanoseconds now = board_.clock().now();
+  if (over_budget != over_budget_seen_) {
+    over_budget_seen_ = over_budget;
+    over_budget_at_ = now;
+    if (!link_over_budget_) {
+      link_over_budget_ = true;
+      journal(Priority::warning,
+              "serial link: %d baud cannot carry every message at %.1f pairs/s; those over its "
+              "budget are dropped (health counts them in messages_dropped)",
+              config_.serial.port.baud, 1e9 / static_cast<double>(frame_period()));
+    }
+  } else if (link_over_budget_ && now - over_budget_at_ >= kLinkFitsAgain) {
+    link_over_budget_ = false;
+    journal(Priority::info, "serial link: every message fits again (%llu dropped over budget)",
+            static_cast<unsigned long long>(over_budget));
+  }
+}
+
 // Between pairs: health, the journal's device lines, the service watchdog (pinged only while
 // the link's thread goes round too).
 void FrameLoop::tick() {
   publish_health();
   say_device_changes();
+  say_link_capacity();
   // A snapshot no pair came for (the cameras went, or the trigger stopped, after it was asked
   // for) is answered within a bound.
   if (snapshot_pending_ && board_.clock().now() - snapshot_asked_at_ > kSnapshotWait) {

@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <variant>
 
 #include "epipole/core/error.hpp"
+#include "epipole/firmware/journal.hpp"
+#include "epipole/firmware/link_budget.hpp"
 #include "epipole/firmware/thread_roles.hpp"
 #include "steady_time.hpp"
 
@@ -16,6 +19,7 @@ namespace {
 // One write attempt; commands are read between attempts.
 constexpr hal::Nanoseconds kWriteTimeout = 50'000'000;
 constexpr hal::Nanoseconds kIdlePoll = 5'000'000;
+constexpr std::chrono::milliseconds kFaultPause{50};
 std::uint64_t rejected(const protocol::DecoderStats& s) {
   return s.bad_cobs + s.too_long + s.bad_crc + s.bad_version + s.unknown_type + s.bad_body;
 }
@@ -27,6 +31,7 @@ Link::Link(hal::SerialPort* port, hal::Clock& clock, LinkConfig config)
       config_(config),
       bytes_per_ns_(static_cast<double>(config.baud) / 10.0 * 1e-9),
       tokens_(bytes_per_ns_ * static_cast<double>(config.burst)),
+      reserve_(static_cast<double>(essential_reserve_bytes(config.protocol))),
       last_refill_(clock.now()) {
   require(config.baud > 0, "serial link: baud rate ", config.baud, " is not positive");
   require(config.queue_bytes >= 2 * sizeof(encode_buffer_), "serial link: a queue of ",
@@ -52,22 +57,23 @@ void Link::stop(hal::Nanoseconds drain) {
   thread_.join();
 }
 
-bool Link::within_budget(std::size_t bytes) {
+bool Link::within_budget(std::size_t bytes, double reserve) {
   const hal::Nanoseconds now = clock_.now();
   const double cap = bytes_per_ns_ * static_cast<double>(config_.burst);
   tokens_ = std::min(cap, tokens_ + bytes_per_ns_ * static_cast<double>(now - last_refill_));
   last_refill_ = now;
-  if (static_cast<double>(bytes) > tokens_) return false;
+  if (static_cast<double>(bytes) + reserve > tokens_) return false;
   tokens_ -= static_cast<double>(bytes);
   return true;
 }
 
-bool Link::enqueue(std::span<const std::uint8_t> frame) {
+bool Link::enqueue(std::span<const std::uint8_t> frame, bool essential) {
   if (port_ == nullptr) return true;
   const std::lock_guard lock(mutex_);
-  if (!within_budget(frame.size()) || frames_size_ == kMaxFrames ||
-      config_.queue_bytes - ring_size_ < frame.size()) {
+  const bool fits = within_budget(frame.size(), essential ? 0.0 : reserve_);
+  if (!fits || frames_size_ == kMaxFrames || config_.queue_bytes - ring_size_ < frame.size()) {
     ++counters_.messages_dropped;
+    if (!fits) ++counters_.over_budget;
     return false;
   }
   std::size_t at = (ring_head_ + ring_size_) % config_.queue_bytes;
@@ -85,21 +91,25 @@ bool Link::publish(const protocol::Message& message) {
   if (config_.protocol != LinkProtocol::epipole) return false;
   const std::size_t n = protocol::encode_frame(message, sequence_, encode_buffer_);
   ++sequence_;
-  return enqueue({encode_buffer_.data(), n});
+  const bool essential = std::holds_alternative<protocol::FrameSummary>(message) ||
+                         std::holds_alternative<protocol::Health>(message) ||
+                         std::holds_alternative<protocol::CalibrationHealth>(message) ||
+                         std::holds_alternative<protocol::CommandAck>(message);
+  return enqueue({encode_buffer_.data(), n}, essential);
 }
 
 bool Link::publish_heartbeat(std::uint8_t system_status) {
   if (config_.protocol != LinkProtocol::mavlink) return false;
   const std::size_t n = mavlink::encode_heartbeat(config_.identity, mavlink_sequence_++,
                                                   encode_buffer_, system_status);
-  return enqueue({encode_buffer_.data(), n});
+  return enqueue({encode_buffer_.data(), n}, true);
 }
 
 bool Link::publish_obstacle_distance(const mavlink::ObstacleDistance& message) {
   if (config_.protocol != LinkProtocol::mavlink) return false;
   const std::size_t n = mavlink::encode_obstacle_distance(message, config_.identity,
                                                           mavlink_sequence_++, encode_buffer_);
-  return enqueue({encode_buffer_.data(), n});
+  return enqueue({encode_buffer_.data(), n}, true);
 }
 
 bool Link::next_command(Command& out) {
@@ -111,7 +121,7 @@ bool Link::next_command(Command& out) {
     return true;
   }
   if (overflowed_size_ > 0) {
-    out = Command{overflowed_[overflowed_head_], protocol::Message{}, false, true};
+    out = Command{overflowed_[overflowed_head_], protocol::Message{}, true};
     overflowed_head_ = (overflowed_head_ + 1) % kMaxCommands;
     --overflowed_size_;
     return true;
@@ -220,27 +230,51 @@ void Link::take_bytes(std::span<const std::byte> bytes) {
       }
       continue;
     }
-    commands_[(commands_head_ + commands_size_) % kMaxCommands] = {
-        decoded->sequence, decoded->message, decoded->replay, false};
+    commands_[(commands_head_ + commands_size_) % kMaxCommands] = {decoded->sequence,
+                                                                   decoded->message, false};
     ++commands_size_;
   }
 }
 
 void Link::run() {
   enter_thread_role_or_say(ThreadRole::link);
+  bool failed = false;  // in a run of faults, said in the journal at its start
   for (;;) {
     last_round_ = steady_now();
-    const bool wrote = write_front();
-    if (stopping_) {
-      bool empty = false;
+    try {
+      const bool wrote = write_front();
+      if (stopping_) {
+        bool empty = false;
+        {
+          const std::lock_guard lock(mutex_);
+          empty = frames_size_ == 0;
+        }
+        if (empty || steady_now() >= drain_deadline_.load()) return;
+        continue;
+      }
+      read_commands(wrote ? 0 : kIdlePoll);
+      failed = false;
+    } catch (const std::exception& e) {
+      // The port's recovery can fail in ways it did not foresee (out of memory in a look-up):
+      // said once, the frame in hand tried again, and the thread goes on; it never ends the
+      // firmware.
+      if (!failed && faults_said_.allow(steady_now())) {
+        const unsigned long long unsaid = faults_said_.left_out();
+        if (unsaid == 0) {
+          journal(Priority::error, "serial link: %s; trying again", e.what());
+        } else {
+          journal(Priority::error, "serial link: %s; trying again (%llu runs of faults not said)",
+                  e.what(), unsaid);
+        }
+      }
+      failed = true;
       {
         const std::lock_guard lock(mutex_);
-        empty = frames_size_ == 0;
+        ++counters_.thread_faults;
       }
-      if (empty || steady_now() >= drain_deadline_.load()) return;
-      continue;
+      if (stopping_) return;
+      std::this_thread::sleep_for(kFaultPause);
     }
-    read_commands(wrote ? 0 : kIdlePoll);
   }
 }
 

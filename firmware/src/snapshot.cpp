@@ -13,10 +13,13 @@
 #include <condition_variable>
 #include <cstdio>
 #include <cstring>
+#include <exception>
+#include <functional>
 #include <mutex>
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/image.hpp"
+#include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/thread_roles.hpp"
 
 namespace epipole::firmware {
@@ -36,6 +39,7 @@ struct SnapshotWriter::Shared {
   std::optional<SnapshotDone> done;
   std::atomic<std::uint64_t> written{0};
   std::atomic<std::uint64_t> failures{0};
+  std::function<void()> before_write;  // set before the first snapshot (tests)
 };
 
 namespace {
@@ -181,7 +185,13 @@ void run(const std::shared_ptr<SnapshotWriter::Shared>& shared) {
     s.wake.wait(lock, [&] { return s.pending || s.stopping; });
     if (!s.pending) return;
     lock.unlock();
-    const bool ok = write_all(s);
+    bool ok = false;
+    try {
+      if (s.before_write) s.before_write();
+      ok = write_all(s);
+    } catch (const std::exception& e) {  // nothing leaves the thread: it is a failed snapshot
+      journal(Priority::error, "snapshot: %s", e.what());
+    }
     (ok ? s.written : s.failures)++;
     lock.lock();
     s.done = SnapshotDone{s.sequence, ok};
@@ -305,6 +315,10 @@ std::optional<SnapshotDone> SnapshotWriter::finished() {
   std::optional<SnapshotDone> done = shared_->done;
   shared_->done.reset();
   return done;
+}
+
+void SnapshotWriter::before_each_write(std::function<void()> hook) {
+  if (enabled()) shared_->before_write = std::move(hook);
 }
 
 bool SnapshotWriter::flush(std::chrono::milliseconds timeout) {

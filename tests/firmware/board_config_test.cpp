@@ -153,6 +153,13 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
       {"bad baud", "serial: {backend: none}",
        "serial: {backend: termios, device: /dev/ttyS0, baud: 12345}",
        "serial.baud: 12345 is not a baud rate termios supports"},
+      {"a baud rate that cannot carry the summaries", "serial: {backend: none}",
+       "serial: {backend: pty, baud: 9600}",
+       "serial.baud: 9600 baud carries 960 bytes/s, but the pair summaries and health alone "
+       "need"},
+      {"nor MAVLink's obstacle distances", "serial: {backend: none}",
+       "serial: {backend: pty, baud: 19200, protocol: mavlink}",
+       "serial.baud: 19200 baud carries 1920 bytes/s, but the obstacle distances"},
       {"bad protocol", "serial: {backend: none}", "serial: {backend: none, protocol: nmea}",
        "serial.protocol: 'nmea' is not one of epipole, mavlink"},
       {"unknown scene", "",

@@ -4,11 +4,17 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <mutex>
 #include <set>
+#include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "sim_rig.hpp"
 
@@ -119,6 +125,77 @@ TEST(Snapshots, AFolderThatCannotBeListedIsRefusedNotTakenForEmpty) {
   std::filesystem::remove(folder);
   EXPECT_EQ(writer.count(), 0) << "a missing folder holds none";
   EXPECT_EQ(writer.can_take(), SnapshotRefusal::none);
+}
+
+// A file system that stalls (a dying SD card): flush() gives up after its timeout, and the
+// writer's destructor returns without waiting for the write (SIGTERM is not held up); the
+// thread finishes it on its own.
+TEST(Snapshots, AStalledWriteIsGivenUpByFlushAndDoesNotHoldUpTheStop) {
+  test::TempDir dir;
+  const std::filesystem::path folder = dir.path() / "snapshots";
+  struct Gate {
+    std::mutex mutex;
+    std::condition_variable open;
+    bool released = false;
+    std::atomic<bool> entered{false};
+  };
+  const auto gate = std::make_shared<Gate>();
+  Pair pair;
+  {
+    SnapshotWriter writer(folder, kW, kH, {.max_count = 10, .min_free_bytes = 0});
+    writer.before_each_write([gate] {
+      gate->entered = true;
+      std::unique_lock lock(gate->mutex);
+      gate->open.wait(lock, [&] { return gate->released; });
+    });
+    ASSERT_TRUE(writer.take(pair.result(3), 9));
+    EXPECT_FALSE(writer.flush(std::chrono::milliseconds(200)));
+    EXPECT_TRUE(gate->entered);
+    EXPECT_EQ(writer.can_take(), SnapshotRefusal::busy);
+    EXPECT_FALSE(writer.finished().has_value());
+  }  // the destructor waits SnapshotWriter::kStopWait, then leaves the write to its thread
+  {
+    const std::lock_guard lock(gate->mutex);
+    EXPECT_FALSE(gate->released) << "the stop did not wait for the write to end";
+    gate->released = true;
+  }
+  gate->open.notify_all();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!std::filesystem::exists(folder / "snapshot-000000-right.pgm") &&
+         std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_TRUE(std::filesystem::exists(folder / "snapshot-000000-right.pgm"))
+      << "the thread finished the write";
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));  // and its sync
+}
+
+// An exception on the writer thread (what the file system's code did not foresee) is a failed
+// snapshot, answered as such; the thread goes on and writes the next.
+TEST(Snapshots, AnExceptionWhileWritingIsAFailedSnapshotAndTheNextIsWritten) {
+  test::TempDir dir;
+  Pair pair;
+  SnapshotWriter writer(dir.path() / "snapshots", kW, kH, {.max_count = 10, .min_free_bytes = 0});
+  auto calls = std::make_shared<std::atomic<int>>(0);
+  writer.before_each_write([calls] {
+    if ((*calls)++ == 0) throw std::runtime_error("the card's driver gave up");
+  });
+  ::testing::internal::CaptureStderr();
+  ASSERT_TRUE(writer.take(pair.result(1), 4));
+  ASSERT_TRUE(writer.flush(kWait));
+  const std::string journal = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(journal.find("snapshot: the card's driver gave up"), std::string::npos) << journal;
+  std::optional<SnapshotDone> done = writer.finished();
+  ASSERT_TRUE(done.has_value());
+  EXPECT_EQ(done->sequence, 4);
+  EXPECT_FALSE(done->ok);
+  EXPECT_EQ(writer.failures(), 1u);
+  ASSERT_TRUE(writer.take(pair.result(2), 5));
+  ASSERT_TRUE(writer.flush(kWait));
+  done = writer.finished();
+  ASSERT_TRUE(done.has_value());
+  EXPECT_TRUE(done->ok);
+  EXPECT_EQ(writer.written(), 1u);
 }
 
 }  // namespace

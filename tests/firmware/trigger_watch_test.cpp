@@ -105,21 +105,60 @@ TEST(TriggerWatch, ALineThatThrowsNeverEndsTheThread) {
 
 // Edges closer than a quarter period to the one before are bounces: the watch's record ignores
 // them, and takes the new gap when the rate changes.
+// Edges 1 ms apart on the line's own clock, however the thread is scheduled: what is a bounce
+// depends on the edges' times alone.
+class SteppingLine final : public hal::TriggerLine {
+ public:
+  const hal::TriggerConfig& config() const override { return config_; }
+  void start() override {}
+  void stop() override {}
+  hal::EdgeResult wait_edge(hal::Nanoseconds) override {
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+    if (hold_) {
+      parked_ = true;
+      return {hal::EdgeStatus::timeout, {}};
+    }
+    parked_ = false;
+    const std::uint32_t n = next_++;
+    return {hal::EdgeStatus::ok, {n, 1'000'000'000 + static_cast<hal::Nanoseconds>(n) * 1'000'000}};
+  }
+  void set_rate(double) override {}
+  // No edge until release(); parked(): the watch's thread has seen that (its counts are still).
+  void hold() { hold_ = true; }
+  bool parked() const { return parked_; }
+  void release() { hold_ = false; }
+
+ private:
+  hal::TriggerConfig config_;
+  std::uint32_t next_ = 0;  // the watch's thread only
+  std::atomic<bool> hold_{false};
+  std::atomic<bool> parked_{false};
+};
+
 TEST(TriggerWatch, TheRecordIgnoresBouncesByTheCurrentPeriod) {
-  TickingLine line;
+  SteppingLine line;
   TriggerWatch watch(line, 100'000'000);  // 10 Hz: an edge 1 ms after another is a bounce
   watch.start();
-  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-  while (watch.bounces() < 20 && std::chrono::steady_clock::now() < end) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  EXPECT_GE(watch.bounces(), 20u);
-  EXPECT_LE(watch.record().added(), 1u + watch.bounces() / 50);
-  watch.set_period(1'000'000);  // 1 kHz: 1 ms apart is the rate
+  const auto until = [](const auto& done) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (!done() && std::chrono::steady_clock::now() < end) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+  };
+  until([&] { return watch.bounces() >= 60; });
+  line.hold();
+  until([&] { return line.parked(); });
+  const std::uint64_t bounces = watch.bounces();
   const std::uint64_t added = watch.record().added();
-  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  watch.set_period(1'000'000);  // 1 kHz: 1 ms apart is the rate
+  line.release();
+  until([&] { return watch.record().added() > added + 20; });
   watch.stop();
+  EXPECT_GE(bounces, 60u);
+  // At 10 Hz an edge is taken 25 ms (25 edges) after the one taken before: the first, the 26th...
+  EXPECT_EQ(added, (added + bounces + 24) / 25) << bounces << " bounces";
   EXPECT_GT(watch.record().added(), added + 20);
+  EXPECT_EQ(watch.bounces(), bounces) << "at 1 kHz none is a bounce";
 }
 
 }  // namespace

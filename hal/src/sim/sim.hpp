@@ -92,7 +92,7 @@ enum class SimFaultKind {
   drop,            // the frames of `count` triggers from `sequence` never arrive
   delay,           // the frame arrives `duration` late (and with it those queued behind it)
   stall,           // nothing arrives for `duration` from trigger `sequence`: frames then are lost
-  disconnect,      // from trigger `sequence`: device_lost until reopen(); `count` reopens fail
+  disconnect,      // from trigger `sequence`: device_lost until reopen(); `value` reopens fail
   corrupt_pixels,  // the frame's pixels are garbage (nothing tells: like a bad sensor link)
   damaged,         // the driver flags the frame damaged: acquire() reports corrupt, no frame
   wrong_sequence,  // the frame reports sequence `value` instead of its own

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -98,6 +99,7 @@ class FrameLoop {
   void tick();
   void publish_health();
   void say_device_changes();
+  void say_link_capacity();
   bool trigger_quiet() const;
   hal::PairResult next_pair();
   bool take_freshest(hal::PairResult& got);
@@ -145,10 +147,8 @@ class FrameLoop {
   std::function<void()> heartbeat_;
   RunSummary summary_;
   bool started_ = false;
-  CommandMemory commands_;
-  JournalLimit refusals_said_{
-      1'000'000'000};  // refused commands: a journal line a second  // each command applied once
-                       // (retries, reboots: protocol.md)
+  CommandMemory commands_;  // each command applied once (retries, reboots: protocol.md)
+  JournalLimit refusals_said_{1'000'000'000};  // refused commands: a journal line a second
   bool snapshot_pending_ = false;
   std::uint16_t snapshot_sequence_ = 0;
   hal::Nanoseconds snapshot_asked_at_ = 0;
@@ -163,6 +163,17 @@ class FrameLoop {
   bool trigger_quiet_ = false;       // said in the journal, and in health's flags
   hal::Nanoseconds started_at_ = 0;  // the pairer's, as last said in the journal
   bool serial_connected_ = true;
+  // The lines of the left and right camera, the trigger's pauses and the serial port.
+  static constexpr hal::Nanoseconds kDeviceLinesEvery = 10'000'000'000;
+  std::array<JournalEpisodes, 4> device_lines_{
+      JournalEpisodes(kDeviceLinesEvery), JournalEpisodes(kDeviceLinesEvery),
+      JournalEpisodes(kDeviceLinesEvery), JournalEpisodes(kDeviceLinesEvery)};
+  // Messages the baud rate cannot carry: said when they start being dropped, and once every
+  // message fitted for kLinkFitsAgain.
+  bool link_over_budget_ = false;
+  std::uint64_t over_budget_seen_ = 0;
+  hal::Nanoseconds over_budget_at_ = 0;
+  static constexpr hal::Nanoseconds kLinkFitsAgain = 10'000'000'000;
   std::optional<calib::HealthFigure> last_calibration_health_;  // of the latest matches
 };
 

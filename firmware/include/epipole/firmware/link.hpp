@@ -9,6 +9,7 @@
 #include <span>
 #include <thread>
 
+#include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/protocol/codec.hpp"
 #include "epipole/firmware/protocol/mavlink.hpp"
 #include "epipole/hal/clock.hpp"
@@ -22,7 +23,8 @@ struct LinkConfig {
   LinkProtocol protocol = LinkProtocol::epipole;
   mavlink::Identity identity;
   // The link's capacity: 8N1 moves baud / 10 bytes a second. Messages that would exceed it are
-  // dropped (and counted) rather than queued behind, so the robot always gets fresh data.
+  // dropped (and counted) rather than queued behind, so the robot always gets fresh data; the
+  // larger ones leave a reserve for the summaries, health and acks (link_budget.hpp).
   int baud = 115200;
   hal::Nanoseconds burst = 250'000'000;  // the budget may be saved up for this long
   std::size_t queue_bytes = 16 * 1024;   // encoded frames waiting for the port
@@ -31,18 +33,19 @@ struct LinkConfig {
 struct LinkCounters {
   std::uint64_t messages_sent = 0;     // written to the port completely
   std::uint64_t messages_dropped = 0;  // over budget, queue full, or lost to a hang-up
+  std::uint64_t over_budget = 0;       // of those, more than the baud rate carries
   std::uint64_t bytes_written = 0;
   std::uint64_t commands = 0;         // valid commands received
   std::uint64_t rejected_frames = 0;  // received frames the decoder rejected (and overflows
                                       // that could not even be answered)
   std::uint64_t stuck_writes = 0;     // frames given up because the port took nothing
+  std::uint64_t thread_faults = 0;    // exceptions from the port the thread caught and went on
 };
 
 // A command from the robot, with the sequence number its ack must carry.
 struct Command {
   std::uint16_t sequence = 0;
   protocol::Message message;
-  bool replay = false;    // its sequence number came before: answer, do not apply again
   bool overflow = false;  // more came at once than the queue holds: not kept (message empty)
 };
 
@@ -91,8 +94,10 @@ class Link {
   std::uint16_t next_sequence() const { return sequence_; }
 
  private:
-  bool enqueue(std::span<const std::uint8_t> frame);
-  bool within_budget(std::size_t bytes);
+  // An essential message (link_budget.hpp) may take the whole budget; the others leave the
+  // reserve for the essential ones.
+  bool enqueue(std::span<const std::uint8_t> frame, bool essential);
+  bool within_budget(std::size_t bytes, double reserve);
   void run();
   bool write_front();
   void read_commands(hal::Nanoseconds timeout);
@@ -102,6 +107,8 @@ class Link {
   LinkConfig config_;
   double bytes_per_ns_;
   double tokens_;
+  double reserve_;                            // bytes of budget kept for essential messages
+  JournalLimit faults_said_{10'000'000'000};  // runs of the port's exceptions: a line in 10 s
   hal::Nanoseconds last_refill_;
   std::uint16_t sequence_ = 0;
   std::uint8_t mavlink_sequence_ = 0;
@@ -124,7 +131,8 @@ class Link {
   // The link thread's own state.
   std::array<std::uint8_t, protocol::kMaxFrameSize + mavlink::kMaxFrameSize> write_buffer_{};
   std::array<std::byte, 512> read_buffer_{};
-  protocol::FrameDecoder decoder_{true};         // replays delivered, to be answered
+  // Replays delivered: the frame loop answers a resend by its content (CommandMemory).
+  protocol::FrameDecoder decoder_{true};
   bool broken_frame_ = false;                    // the last frame was given up half written
   std::atomic<hal::Nanoseconds> last_round_{0};  // steady time the thread last went round
   std::atomic<bool> stopping_{false};

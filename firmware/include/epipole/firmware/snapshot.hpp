@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -68,6 +69,9 @@ class SnapshotWriter {
   // Waits until the snapshot being written (if any) is on disk, at most `timeout`: false when it
   // is still being written then (a stalled file system).
   bool flush(std::chrono::milliseconds timeout);
+  // Runs on the writer thread before each snapshot is written, before the first take() (tests:
+  // a file system that stalls, or throws).
+  void before_each_write(std::function<void()> hook);
   std::uint64_t written() const;
   std::uint64_t failures() const;
   // Snapshots in the folder now (their left raw files); nothing when it cannot be listed.
