@@ -233,6 +233,59 @@ TEST(EPIPOLE_VBOARD_SUITE, TriggerStopsAndRestarts) {
       << context(run);
   expect_triggers_accounted(run);
 }
+// The trigger line's glitches, from the guest's driver on the gpio-sim line: a bounce right after
+// edge 20 (a second rising edge some hundred microseconds later), no edge for frame 26, edge 32
+// made 30 ms late (after the 15 pairs the delay is learned from); with the edge delay learned, and
+// given in the board file. The bounce is ignored and counted, the missed edge costs its own pair
+// (counted off trigger), the late edge still carries its pair, and every other pair carries its own
+// edge, its number following on.
+void expect_glitches_cost_at_most_their_own_pair(const std::string& delay_argument) {
+  const BoardRun run = boot_virtual_board(
+      kArch, kInitramfs,
+      "epipole.frames=0 epipole.seconds=14 epipole.glitches=bounce:20,miss:26,late:32:30" +
+          delay_argument,
+      kTimeoutSeconds);
+  ASSERT_EQ(run.exit_code, 0) << context(run);
+  ASSERT_EQ(run.firmware_exit, 0) << context(run);
+  for (const char* glitch :
+       {"vboard-trigger: bounce 20 ", "vboard-trigger: missed 26", "vboard-trigger: late 32 "}) {
+    ASSERT_NE(run.console.find(glitch), std::string::npos) << glitch << "; " << context(run);
+  }
+  expect_clean_link(run);
+  const std::vector<FrameSummary> frames = run.all<FrameSummary>();
+  expect_frames_carry_their_edges(run, 0, frames.size());
+  expect_triggers_accounted(run);
+  // The late edge's pair was published with that edge's time; pairs after the last glitch.
+  const auto late = run.edges.find(32);
+  ASSERT_NE(late, run.edges.end()) << context(run);
+  EXPECT_TRUE(std::any_of(frames.begin(), frames.end(),
+                          [&](const FrameSummary& f) { return edge_of(run, f) == late; }))
+      << "no pair carries the late edge; " << context(run);
+  EXPECT_GE(std::count_if(frames.begin(), frames.end(),
+                          [&](const FrameSummary& f) {
+                            return static_cast<std::int64_t>(f.trigger_ns) > late->second.after_ns;
+                          }),
+            5)
+      << context(run);
+  const std::vector<Health> health = run.all<Health>();
+  ASSERT_FALSE(health.empty()) << context(run);
+  EXPECT_GE(health.back().trigger_bounces, 1u) << "the bounce after edge 20";
+  EXPECT_GE(health.back().pairs_off_trigger, 1u) << "the pair of frame 26";
+  EXPECT_EQ(health.back().camera_reopens, 0);
+  EXPECT_EQ(health.back().trigger_losses, 0);
+  std::printf("vboard %s%s: %zu pairs, %u bounces, %u pairs off trigger\n", kArch.c_str(),
+              delay_argument.c_str(), frames.size(), health.back().trigger_bounces,
+              health.back().pairs_off_trigger);
+}
+
+TEST(EPIPOLE_VBOARD_SUITE, TriggerGlitchesWithTheEdgeDelayLearned) {
+  expect_glitches_cost_at_most_their_own_pair("");
+}
+
+TEST(EPIPOLE_VBOARD_SUITE, TriggerGlitchesWithTheEdgeDelayGiven) {
+  expect_glitches_cost_at_most_their_own_pair(" epipole.edge_delay_us=80000");
+}
+
 // Both cameras disappear under the firmware (unbound from vivid, as if unplugged) 4 s after it
 // started; vivid is unloaded as soon as the firmware has let go of them and loaded again. The
 // firmware reopens each camera with back-off until it is back, counts both reopens in health, and

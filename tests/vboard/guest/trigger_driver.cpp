@@ -13,9 +13,12 @@
 // with the CLOCK_MONOTONIC
 // times just before and after it was made, and each completion it read, for the host to check the
 // edge times the firmware reports. It can stop after every N edges for a while and start again (the
-// trigger-loss fault).
+// trigger-loss fault), and make glitches at given edges: a bounce (a second rising edge right after
+// edge N, as fast as the line can be pulled down and up again), a missed edge (frame N gets none),
+// a late edge (edge N made MS milliseconds after it was due).
 //
 //   vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ CAMERA [--pause-every N --pause-ms MS]
+//                  [--bounce-at N] [--miss-at N] [--late-at N:MS]
 //
 // CAMERA: the left camera's device node (its minor number picks its v4l2_dqbuf events).
 #include <fcntl.h>
@@ -141,14 +144,22 @@ class Line {
     if (fd_ < 0) fail(std::string(pull_path) + ": " + std::strerror(errno));
     pull(fd_, "pull-down", path_);
   }
-  // A 1 ms pulse: the rising edge is the trigger.
-  void pulse() {
+  // A 1 ms pulse: the rising edge is the trigger. With `bounce`, the line drops and rises again
+  // at once after it: a second rising edge some hundred microseconds later, which is no trigger.
+  void pulse(bool bounce = false) {
     const std::int64_t before = now_ns();
     pull(fd_, "pull-up", path_);
     const std::int64_t after = now_ns();
     std::printf("vboard-trigger: edge %ld %lld %lld\n", edges_++, static_cast<long long>(before),
                 static_cast<long long>(after));
     ++pulses_;
+    if (bounce) {
+      pull(fd_, "pull-down", path_);
+      const std::int64_t bounced = now_ns();
+      pull(fd_, "pull-up", path_);
+      std::printf("vboard-trigger: bounce %ld %lld %lld\n", edges_ - 1,
+                  static_cast<long long>(bounced), static_cast<long long>(now_ns()));
+    }
     std::fflush(stdout);
     sleep_until(after + 1'000'000);
     pull(fd_, "pull-down", path_);
@@ -172,7 +183,7 @@ int main(int argc, char** argv) {
   if (argc < 7) {
     fail(
         "usage: vboard-trigger CHIP OFFSET PULL TRACE_PIPE RATE_HZ CAMERA [--pause-every N "
-        "--pause-ms MS]");
+        "--pause-ms MS] [--bounce-at N] [--miss-at N] [--late-at N:MS]");
   }
   const char* chip_path = argv[1];
   const auto offset = static_cast<unsigned>(number(argv[2], "OFFSET"));
@@ -183,12 +194,25 @@ int main(int argc, char** argv) {
   if (stat(argv[6], &camera) != 0) fail(std::string(argv[6]) + ": " + std::strerror(errno));
   const auto camera_minor = static_cast<long>(minor(camera.st_rdev));
   long pause_every = 0, pause_ms = 0;
-  for (int i = 7; i + 1 < argc; i += 2) {
+  long bounce_at = -1, miss_at = -1, late_at = -1, late_ms = 0;
+  for (int i = 7; i < argc; i += 2) {
     const std::string option = argv[i];
+    if (i + 1 >= argc) fail("option '" + option + "' needs a value");
+    std::string value = argv[i + 1];
     if (option == "--pause-every") {
-      pause_every = number(argv[i + 1], "--pause-every");
+      pause_every = number(value.c_str(), "--pause-every");
     } else if (option == "--pause-ms") {
-      pause_ms = number(argv[i + 1], "--pause-ms");
+      pause_ms = number(value.c_str(), "--pause-ms");
+    } else if (option == "--bounce-at") {
+      bounce_at = number(value.c_str(), "--bounce-at");
+    } else if (option == "--miss-at") {
+      miss_at = number(value.c_str(), "--miss-at");
+    } else if (option == "--late-at") {
+      const std::size_t colon = value.find(':');
+      if (colon == std::string::npos) fail("--late-at: '" + value + "' is not N:MS");
+      late_ms = number(value.substr(colon + 1).c_str(), "--late-at MS");
+      value.resize(colon);
+      late_at = number(value.c_str(), "--late-at N");
     } else {
       fail("unknown option '" + option + "'");
     }
@@ -261,9 +285,18 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
       continue;
     }
-    line.skip_to(sequence + 1);      // behind: no edge for a frame already done
-    sleep_until(done + period / 2);  // the next frame's edge, half a period early
-    line.pulse();
+    line.skip_to(sequence + 1);  // behind: no edge for a frame already done
+    const long next = line.edges();
+    if (next == miss_at) {  // the frame comes, its edge does not
+      std::printf("vboard-trigger: missed %ld\n", next);
+      std::fflush(stdout);
+      line.skip_to(next + 1);
+      continue;
+    }
+    // The next frame's edge, half a period early (a late one, later).
+    sleep_until(done + period / 2 + (next == late_at ? late_ms * 1'000'000 : 0));
+    if (next == late_at) std::printf("vboard-trigger: late %ld %ld ms\n", next, late_ms);
+    line.pulse(next == bounce_at);
   }
   fail(std::string(trace_path) + ": the trace ended");
 }
