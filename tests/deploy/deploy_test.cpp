@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "epipole/firmware/protocol/codec.hpp"
@@ -50,13 +51,27 @@ std::vector<T> all_of(const std::vector<protocol::DecodedMessage>& messages) {
   return out;
 }
 
+// The robot asks for a snapshot once the admin's board has streamed 10 pairs (the guest checks
+// the files in the service's state folder).
+constexpr std::uint16_t kSnapshotCommand = 1;
+Robot snapshot_after_ten_pairs() {
+  return [pairs = 0](const protocol::DecodedMessage& m) mutable {
+    std::vector<std::uint8_t> bytes;
+    if (std::holds_alternative<protocol::FrameSummary>(m.message) && ++pairs == 10) {
+      bytes.resize(protocol::kMaxFrameSize);
+      bytes.resize(protocol::encode_frame(protocol::Snapshot{}, kSnapshotCommand, bytes));
+    }
+    return bytes;
+  };
+}
+
 TEST(Deployment, InstallRunFaultsUpgradesRemoveAndPurge) {
   const std::string uart0 = ::testing::TempDir() + "deploy-uart0.bin";
   std::remove(uart0.c_str());
-  const BoardRun run =
-      run_board({std::string(source_dir()) + "/scripts/deploy/boot.sh", kRun + "/rootfs",
-                 kRun + "/disk.qcow2", kRun + "/payload.img"},
-                "EPIPOLE_DEPLOY_LINK", {{"EPIPOLE_DEPLOY_UART0", uart0}}, "deploy", 900);
+  const BoardRun run = run_board({std::string(source_dir()) + "/scripts/deploy/boot.sh",
+                                  kRun + "/rootfs", kRun + "/disk.qcow2", kRun + "/payload.img"},
+                                 "EPIPOLE_DEPLOY_LINK", {{"EPIPOLE_DEPLOY_UART0", uart0}}, "deploy",
+                                 900, 0, snapshot_after_ten_pairs());
   const std::vector<std::string> verdicts = lines_with(run.console, "deploy: ");
   for (const std::string& v : verdicts) std::printf("  %s\n", v.c_str());
   std::printf("  (the guest ran %.0f s)\n", run.seconds);
@@ -65,15 +80,33 @@ TEST(Deployment, InstallRunFaultsUpgradesRemoveAndPurge) {
   EXPECT_TRUE(lines_with(run.console, "deploy: FAILED").empty()) << run.console;
   ASSERT_EQ(lines_with(run.console, "deploy: all passed").size(), 1u) << run.console;
   // The steps the issue names, each checked in the guest.
-  for (const char* step :
-       {"apt install epipole_", "enabled on the first install",
-        "active (running) with the package's board file", "runs as the epipole user",
-        "journal: not calibrated", "journal: waits for the missing cameras",
-        "journal: waits for the missing trigger line", "no crash loop", "watchdog pinged",
-        "only the trigger's chip for the gpio group", "restarted with the edited board file",
-        "restarted after kill -9", "journal: cameras recovered", "recovered without a restart",
-        "the edited board file kept", "restarted by the upgrade", "still disabled",
-        "the board file kept (a conffile)", "purged: nothing of the package left"}) {
+  for (const char* step : {"apt install epipole_",
+                           "enabled on the first install",
+                           "active (running) with the package's board file",
+                           "runs as the epipole user",
+                           "journal: not calibrated",
+                           "journal: waits for the missing cameras",
+                           "journal: waits for the missing trigger line",
+                           "no crash loop",
+                           "watchdog pinged",
+                           "only the trigger's chip for the gpio group",
+                           "restarted with the edited board file",
+                           "frame loop and workers SCHED_FIFO 50",
+                           "vision worker SCHED_FIFO 50",
+                           "link thread SCHED_FIFO 51",
+                           "trigger thread SCHED_FIFO 52",
+                           "snapshot thread at normal scheduling",
+                           "the firmware's threads on CPU 1",
+                           "memory locked",
+                           "snapshot written in the state folder",
+                           "restarted after kill -9",
+                           "journal: cameras recovered",
+                           "recovered without a restart",
+                           "the edited board file kept",
+                           "restarted by the upgrade",
+                           "still disabled",
+                           "the board file kept (a conffile)",
+                           "purged: nothing of the package left"}) {
     EXPECT_FALSE(lines_with(run.console, std::string("deploy: ok: ") + step).empty()) << step;
   }
 
@@ -110,6 +143,11 @@ TEST(Deployment, InstallRunFaultsUpgradesRemoveAndPurge) {
   EXPECT_TRUE(std::any_of(health.begin(), health.end(), [](const protocol::Health& h) {
     return h.camera_reopens >= 2;
   })) << "the cameras' reload is counted";
+  // The snapshot, answered once written and synced.
+  const auto acks = run.all<protocol::CommandAck>();
+  ASSERT_EQ(acks.size(), 1u);
+  EXPECT_EQ(acks[0].command_sequence, kSnapshotCommand);
+  EXPECT_EQ(acks[0].status, protocol::AckStatus::ok);
 }
 
 }  // namespace

@@ -14,6 +14,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <optional>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -66,15 +68,33 @@ int connect_link(const std::string& path, pid_t qemu, Clock::time_point deadline
 }
 
 // Reads until QEMU closes the link, the deadline, or (when given) the time to stop.
+// What the robot sends back goes out whole before the next read (a few bytes: the socket takes
+// them at once).
+void answer(int fd, const Robot& robot, protocol::FrameDecoder& decoder,
+            std::span<const std::uint8_t> bytes) {
+  for (const std::uint8_t b : bytes) {
+    const std::optional<protocol::DecodedMessage> m = decoder.push(b);
+    if (!m) continue;
+    const std::vector<std::uint8_t> reply = robot(*m);
+    for (std::size_t done = 0; done < reply.size();) {
+      const ssize_t n = write(fd, reply.data() + done, reply.size() - done);
+      if (n <= 0) return;
+      done += static_cast<std::size_t>(n);
+    }
+  }
+}
+
 void read_until_closed(int fd, std::vector<std::uint8_t>& out, Clock::time_point deadline,
-                       Clock::time_point stop = Clock::time_point::max()) {
+                       Clock::time_point stop = Clock::time_point::max(), const Robot& robot = {}) {
   std::array<std::uint8_t, 4096> buffer{};
+  protocol::FrameDecoder decoder;
   while (Clock::now() < deadline && Clock::now() < stop) {
     pollfd p{fd, POLLIN, 0};
     if (poll(&p, 1, 100) <= 0) continue;
     const ssize_t n = read(fd, buffer.data(), buffer.size());
     if (n <= 0) return;
     out.insert(out.end(), buffer.begin(), buffer.begin() + n);
+    if (robot) answer(fd, robot, decoder, std::span(buffer.data(), static_cast<std::size_t>(n)));
   }
 }
 
@@ -128,7 +148,7 @@ BoardRun boot_virtual_board(const std::string& arch, const std::string& initramf
 
 BoardRun run_board(const std::vector<std::string>& command, const std::string& link_variable,
                    Environment environment, const std::string& name, int timeout_s,
-                   double disconnect_after_s) {
+                   double disconnect_after_s, const Robot& robot) {
   BoardRun run;
   const std::string base = ::testing::TempDir() + name + "-" + std::to_string(getpid());
   const std::string socket_path = base + ".sock", console_path = base + ".console";
@@ -151,7 +171,7 @@ BoardRun run_board(const std::vector<std::string>& command, const std::string& l
       fd = connect_link(socket_path, qemu, deadline);
     }
     if (fd >= 0) {
-      read_until_closed(fd, run.link, deadline);
+      read_until_closed(fd, run.link, deadline, Clock::time_point::max(), robot);
       close(fd);
     }
   }

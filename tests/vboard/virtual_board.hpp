@@ -5,6 +5,7 @@
 // off, decoded with the project's own protocol decoder, and the console kept for the guest
 // helpers' reports.
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
@@ -58,12 +59,16 @@ BoardRun boot_virtual_board(const std::string& arch, const std::string& initramf
 
 using Environment = std::vector<std::pair<std::string, std::string>>;
 
+// The robot at the host's end of the link: told of each message as it arrives, it returns the
+// bytes to send back (none: nothing).
+using Robot = std::function<std::vector<std::uint8_t>(const protocol::DecodedMessage&)>;
+
 // Runs a board's boot command (a script that execs QEMU) with the extra environment and its
 // link on a unix socket ("socket:PATH" in the variable `link_variable`), reads the link until
 // QEMU closes it, and decodes it; the console is the command's output. `name` names its files
 // in the test's temporary folder. boot_virtual_board() is this with scripts/vboard/boot.sh.
 BoardRun run_board(const std::vector<std::string>& command, const std::string& link_variable,
                    Environment environment, const std::string& name, int timeout_s,
-                   double disconnect_after_s = 0);
+                   double disconnect_after_s = 0, const Robot& robot = {});
 
 }  // namespace epipole::test

@@ -70,6 +70,31 @@ only_the_trigger_chip() {
   done
 }
 cameras_recovered() { [ "$(journal_since "$1" | grep -c 'camera .* recovered')" -ge 2 ]; }
+# The firmware's threads as ps sees them: name, scheduling class, real-time priority.
+threads() { ps -L -o comm=,cls=,rtprio= -p "$(main_pid)"; }
+# thread_runs NAME CLASS PRIORITY: there is a thread of that name, and each runs so.
+thread_runs() {
+  threads | awk -v n="$1" -v c="$2" -v p="$3" \
+    '$1 == n { seen = 1; if ($2 != c || $3 != p) bad = 1 } END { exit !(seen && !bad) }'
+}
+# Every thread the firmware starts allowed on CPU 1 only (threads.affinity); the threads
+# libraries start before main (libcamera's LTTng listeners, epipole-fw-ust) keep their CPUs.
+all_on_cpu1() {
+  for task in /proc/"$(main_pid)"/task/*; do
+    case $(cat "$task/comm") in
+      epipole-fw | epipole-work | epipole-link | epipole-trigger | epipole-snap)
+        [ "$(awk '/^Cpus_allowed_list/ { print $2 }' "$task/status")" = 1 ] || return 1 ;;
+    esac
+  done
+}
+memory_locked() { [ "$(awk '/^VmLck/ { print $2 }' /proc/"$(main_pid)"/status)" -gt 0 ]; }
+# A snapshot the robot asked for (deploy_test.cpp sends one on the link), written by the service
+# into its state folder, readable by the epipole group only (UMask=0027).
+snapshot_written() {
+  file=$(ls /var/lib/epipole/snapshots/snapshot-*-left-raw.pgm 2>/dev/null | head -1)
+  [ -n "$file" ] && [ "$(stat -c %U:%G:%a "$file")" = epipole:epipole:640 ] &&
+    [ "$(head -c 2 "$file")" = P5 ]
+}
 # The package as built (no suffix), or as the upgrade the suffix names.
 package() { ls "$here"/epipole_*_arm64.deb | grep -e "_[0-9.]*${1}_arm64.deb\$" | head -1; }
 
@@ -120,7 +145,7 @@ cp "$here/udev.rules" /etc/udev/rules.d/60-epipole.rules
 check "the board's rules applied" sh -c 'udevadm control --reload &&
   udevadm trigger --action=change --subsystem-match=gpio && udevadm settle -t 30'
 check "only the trigger's chip for the gpio group" only_the_trigger_chip
-"$here/vboard-trigger" "/dev/$trigger_chip" 0 "$trigger_pull" "$trace/trace_pipe" 5 /dev/video0 \
+taskset -c 0 "$here/vboard-trigger" "/dev/$trigger_chip" 0 "$trigger_pull" "$trace/trace_pipe" 5 /dev/video0 \
   >/tmp/trigger.log 2>&1 &
 t=$(date +%s)
 check "restarted with the edited board file" restarted
@@ -129,6 +154,16 @@ check "streams for 10 s without a restart" stays_up 10
 check "journal: not calibrated" journal_has "$t" "not calibrated"
 check "runs as the epipole user" runs_as_epipole
 check "watchdog pinged" watchdog_pinged
+# The Raspberry Pi 5's scheduling and memory settings, under the unit's sandbox as installed.
+say "threads: $(threads | sort | uniq -c | tr -s ' \n' ' ')"
+check "frame loop and workers SCHED_FIFO 50" thread_runs epipole-fw FF 50
+check "vision worker SCHED_FIFO 50" thread_runs epipole-work FF 50
+check "link thread SCHED_FIFO 51" thread_runs epipole-link FF 51
+check "trigger thread SCHED_FIFO 52" thread_runs epipole-trigger FF 52
+check "snapshot thread at normal scheduling" thread_runs epipole-snap TS -
+check "the firmware's threads on CPU 1" all_on_cpu1
+check "memory locked" memory_locked
+check "snapshot written in the state folder" within 60 snapshot_written
 
 # 3. Killed: systemd starts it again.
 pid=$(main_pid)
