@@ -34,6 +34,13 @@ namespace {
 using protocol::Stage;
 
 // What the loop did, frame by frame, and every message it published.
+// How often `what` occurs in `text` (journal lines).
+std::size_t occurrences(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = 0; (at = text.find(what, at)) != std::string::npos; ++at) ++n;
+  return n;
+}
+
 struct Recorder final : FrameObserver {
   struct Seen {
     std::uint32_t frame;
@@ -498,11 +505,7 @@ TEST(FrameLoop, AStoppedTriggerIsWaitedForNotReopenedFor) {
   ::testing::internal::CaptureStderr();
   const RunSummary s = fw.run(90, stop);
   const std::string journal = ::testing::internal::GetCapturedStderr();
-  const auto lines = [&](const std::string& what) {
-    std::size_t n = 0;
-    for (std::size_t at = 0; (at = journal.find(what, at)) != std::string::npos; ++at) ++n;
-    return n;
-  };
+  const auto lines = [&](const std::string& what) { return occurrences(journal, what); };
   EXPECT_EQ(lines("trigger sim: no edge for 100 ms, waiting for it"), 1u) << journal;
   EXPECT_EQ(lines("trigger sim: edges again"), 1u) << journal;
   EXPECT_EQ(lines("camera"), 0u) << journal;
@@ -620,11 +623,7 @@ TEST(FrameLoop, ACameraThatFlapsIsSaidOnceInTenSeconds) {
   ::testing::internal::CaptureStderr();
   const RunSummary s = fw.run(440, stop);
   const std::string journal = ::testing::internal::GetCapturedStderr();
-  const auto lines = [&](const std::string& what) {
-    std::size_t n = 0;
-    for (std::size_t at = 0; (at = journal.find(what, at)) != std::string::npos; ++at) ++n;
-    return n;
-  };
+  const auto lines = [&](const std::string& what) { return occurrences(journal, what); };
   EXPECT_EQ(s.faults.camera_reopens, 4u) << "every loss is counted";
   EXPECT_EQ(lines("lost, reopening"), 2u) << journal;
   EXPECT_EQ(lines("recovered"), 2u) << journal;
@@ -886,11 +885,7 @@ TEST(FrameLoop, ALinkTooSlowForEveryMessageKeepsTheSummariesAndSaysSoOnce) {
   EXPECT_LT(points, 60u) << "the points of the first 60 pairs do not all fit";
   EXPECT_GT(s.link.over_budget, 0u);
   EXPECT_EQ(s.link.messages_dropped, s.link.over_budget);
-  const auto lines = [&](const std::string& what) {
-    std::size_t n = 0;
-    for (std::size_t at = 0; (at = journal.find(what, at)) != std::string::npos; ++at) ++n;
-    return n;
-  };
+  const auto lines = [&](const std::string& what) { return occurrences(journal, what); };
   EXPECT_EQ(lines("serial link: 57600 baud cannot carry every message at 30.0 pairs/s"), 1u)
       << journal;
   EXPECT_EQ(lines("serial link: every message fits again"), 1u) << journal;
