@@ -96,11 +96,11 @@ TEST(Link, DropsWhatExceedsTheByteBudgetButKeepsAReserveForTheEssentials) {
   Link link(&pty, clock, config);
   Robot robot(pty.peer_path());
   link.start();
-  const std::size_t reserve = essential_reserve_bytes(LinkProtocol::epipole);
-  const std::size_t each = frame_bytes(obstacles(0));
+  const std::uint64_t reserve = essential_reserve_bytes(LinkProtocol::epipole);
+  const std::uint64_t each = frame_bytes(obstacles(0));
   ASSERT_LT(reserve + each, 480u);
-  const std::size_t fit = (480 - reserve) / each;  // those that leave the reserve
-  std::size_t accepted = 0;
+  const std::uint64_t fit = (480 - reserve) / each;  // those that leave the reserve
+  std::uint64_t accepted = 0;
   for (std::uint32_t i = 0; i < 10; ++i) accepted += link.publish(obstacles(i)) ? 1 : 0;
   EXPECT_EQ(accepted, fit);
   // What the obstacles left is the essentials' to take.
@@ -113,7 +113,8 @@ TEST(Link, DropsWhatExceedsTheByteBudgetButKeepsAReserveForTheEssentials) {
   const auto received = robot.receive();
   link.stop();
   ASSERT_EQ(received.size(), fit + 4);
-  EXPECT_TRUE(std::holds_alternative<protocol::CalibrationHealth>(received[fit + 2].message));
+  EXPECT_TRUE(std::holds_alternative<protocol::CalibrationHealth>(
+      received[static_cast<std::size_t>(fit) + 2].message));
   EXPECT_EQ(std::get<protocol::Obstacles>(received.back().message).frame, 10u);
   EXPECT_EQ(link.counters().messages_dropped, 10 - fit);
 }
