@@ -1,6 +1,9 @@
 #include "epipole/firmware/protocol/codec.hpp"
 
+#include <array>
 #include <type_traits>
+#include <utility>
+#include <variant>
 
 #include "epipole/core/bytes.hpp"
 #include "epipole/core/crc32.hpp"
@@ -91,95 +94,62 @@ std::optional<Message> read_as(std::span<const std::uint8_t> body) {
   return Message(message);
 }
 
-bool is_known(std::uint8_t type) {
-  switch (static_cast<MessageType>(type)) {
-    case MessageType::health:
-    case MessageType::frame_summary:
-    case MessageType::detections:
-    case MessageType::obstacles:
-    case MessageType::points:
-    case MessageType::calibration_health:
-    case MessageType::command_ack:
-    case MessageType::depth_grid:
-    case MessageType::set_trigger_rate:
-    case MessageType::set_exposure:
-    case MessageType::set_stages:
-    case MessageType::snapshot:
-      return true;
+// Calls f(std::type_identity<M>{}) for each message type M of the Message variant, until one
+// call returns true; whether one did.
+template <class F>
+bool any_message_type(F&& f) {
+  return [&]<std::size_t... I>(std::index_sequence<I...>) {
+    return (f(std::type_identity<std::variant_alternative_t<I, Message>>{}) || ...);
   }
-  return false;
+  (std::make_index_sequence<std::variant_size_v<Message>>{});
+}
+
+constexpr bool types_are_distinct() {
+  return []<std::size_t... I>(std::index_sequence<I...>) {
+    const std::array<MessageType, sizeof...(I)> types{
+        std::variant_alternative_t<I, Message>::kType...};
+    for (std::size_t i = 0; i < types.size(); ++i) {
+      for (std::size_t j = i + 1; j < types.size(); ++j) {
+        if (types[i] == types[j]) return false;
+      }
+    }
+    return true;
+  }
+  (std::make_index_sequence<std::variant_size_v<Message>>{});
+}
+static_assert(types_are_distinct(), "two messages have the same type byte");
+
+bool is_known(std::uint8_t type) {
+  return any_message_type(
+      [&](auto t) { return decltype(t)::type::kType == static_cast<MessageType>(type); });
 }
 
 }  // namespace
 
 MessageType type_of(const Message& message) {
-  static constexpr MessageType kTypes[] = {
-      MessageType::health,      MessageType::frame_summary,    MessageType::detections,
-      MessageType::obstacles,   MessageType::points,           MessageType::calibration_health,
-      MessageType::command_ack, MessageType::set_trigger_rate, MessageType::set_exposure,
-      MessageType::set_stages,  MessageType::snapshot,         MessageType::depth_grid};
-  static_assert(std::size(kTypes) == std::variant_size_v<Message>);
-  return kTypes[message.index()];
+  return std::visit([](const auto& m) { return std::decay_t<decltype(m)>::kType; }, message);
 }
 
 const char* name_of(MessageType type) {
-  switch (type) {
-    case MessageType::health:
-      return "health";
-    case MessageType::frame_summary:
-      return "frame";
-    case MessageType::detections:
-      return "detections";
-    case MessageType::obstacles:
-      return "obstacles";
-    case MessageType::points:
-      return "points";
-    case MessageType::calibration_health:
-      return "calibration";
-    case MessageType::command_ack:
-      return "ack";
-    case MessageType::depth_grid:
-      return "depth_grid";
-    case MessageType::set_trigger_rate:
-      return "set_trigger_rate";
-    case MessageType::set_exposure:
-      return "set_exposure";
-    case MessageType::set_stages:
-      return "set_stages";
-    case MessageType::snapshot:
-      return "snapshot";
-  }
-  return "unknown";
+  const char* name = "unknown";
+  any_message_type([&](auto t) {
+    using M = typename decltype(t)::type;
+    if (M::kType != type) return false;
+    name = M::kName;
+    return true;
+  });
+  return name;
 }
 
 std::optional<Message> decode_body(MessageType type, std::span<const std::uint8_t> body) {
-  switch (type) {
-    case MessageType::health:
-      return read_as<Health>(body);
-    case MessageType::frame_summary:
-      return read_as<FrameSummary>(body);
-    case MessageType::detections:
-      return read_as<Detections>(body);
-    case MessageType::obstacles:
-      return read_as<Obstacles>(body);
-    case MessageType::points:
-      return read_as<Points>(body);
-    case MessageType::calibration_health:
-      return read_as<CalibrationHealth>(body);
-    case MessageType::command_ack:
-      return read_as<CommandAck>(body);
-    case MessageType::depth_grid:
-      return read_as<DepthGrid>(body);
-    case MessageType::set_trigger_rate:
-      return read_as<SetTriggerRate>(body);
-    case MessageType::set_exposure:
-      return read_as<SetExposure>(body);
-    case MessageType::set_stages:
-      return read_as<SetStages>(body);
-    case MessageType::snapshot:
-      return read_as<Snapshot>(body);
-  }
-  return std::nullopt;
+  std::optional<Message> message;
+  any_message_type([&](auto t) {
+    using M = typename decltype(t)::type;
+    if (M::kType != type) return false;
+    message = read_as<M>(body);
+    return true;
+  });
+  return message;
 }
 
 std::size_t encode_frame(const Message& message, std::uint16_t sequence,

@@ -8,8 +8,10 @@
 
 namespace epipole::protocol {
 
-// Epipole serial protocol, version 3 (docs/protocol.md). Every number is little-endian on the
-// wire; sizes here are the wire sizes. Version 2 added the flags of health and frame.
+// The Epipole serial protocol (docs/protocol.md says what each version changed). Every number is
+// little-endian on the wire; sizes here are the wire sizes. A message is its struct: its type
+// byte and name (kType, kName), here, and its fields in wire order, in fields.hpp; the codec,
+// the decoder's checks and the host tool's JSON take both from there.
 
 inline constexpr std::uint8_t kVersion = 5;
 
@@ -44,6 +46,8 @@ inline constexpr std::uint16_t kHealthWaitingForTrigger = 1u << 2;
 // differences modulo 2^32. frames + dropped = the triggers fired up to and with the newest
 // frame summary sent before this message.
 struct Health {
+  static constexpr MessageType kType = MessageType::health;
+  static constexpr const char* kName = "health";
   std::uint32_t uptime_ms = 0;
   std::uint32_t frames = 0;          // pairs published
   std::uint32_t dropped = 0;         // triggers not published: the sum of the four dropped_*
@@ -83,6 +87,8 @@ inline constexpr std::uint8_t kFrameTriggerFromCapture = 1u << 0;
 
 // One per processed pair.
 struct FrameSummary {
+  static constexpr MessageType kType = MessageType::frame_summary;
+  static constexpr const char* kName = "frame";
   std::uint32_t frame = 0;       // trigger sequence number
   std::uint64_t trigger_ns = 0;  // trigger edge, CLOCK_MONOTONIC
   std::uint32_t latency_us = 0;  // trigger to this message
@@ -106,6 +112,8 @@ struct Detection {
 
 inline constexpr int kMaxDetections = 32;
 struct Detections {
+  static constexpr MessageType kType = MessageType::detections;
+  static constexpr const char* kName = "detections";
   std::uint32_t frame = 0;
   std::uint8_t count = 0;
   std::array<Detection, kMaxDetections> items{};
@@ -114,6 +122,8 @@ struct Detections {
 
 inline constexpr int kMaxSectors = 72;
 struct Obstacles {
+  static constexpr MessageType kType = MessageType::obstacles;
+  static constexpr const char* kName = "obstacles";
   std::uint32_t frame = 0;
   std::uint16_t field_of_view_centideg = 0;  // horizontal, split evenly into `count` sectors
   std::uint8_t count = 0;
@@ -126,6 +136,8 @@ struct Obstacles {
 // field of view evenly by angle. count is columns x rows.
 inline constexpr int kMaxGridCells = 240;
 struct DepthGrid {
+  static constexpr MessageType kType = MessageType::depth_grid;
+  static constexpr const char* kName = "depth_grid";
   std::uint32_t frame = 0;
   std::uint16_t field_of_view_centideg = 0;  // horizontal
   std::uint16_t vertical_field_of_view_centideg = 0;
@@ -143,6 +155,8 @@ struct Point {
 
 inline constexpr int kMaxPoints = 48;
 struct Points {
+  static constexpr MessageType kType = MessageType::points;
+  static constexpr const char* kName = "points";
   std::uint32_t frame = 0;
   std::uint8_t count = 0;
   std::array<Point, kMaxPoints> items{};
@@ -150,6 +164,8 @@ struct Points {
 };
 
 struct CalibrationHealth {
+  static constexpr MessageType kType = MessageType::calibration_health;
+  static constexpr const char* kName = "calibration";
   std::uint16_t matches = 0;
   std::uint16_t median_offset_centipx = 0;  // |vertical offset| of matches, x 100
   std::uint16_t p90_offset_centipx = 0;
@@ -172,6 +188,8 @@ enum class AckReason : std::uint8_t {
   no_pairs = 7,       // no pair to take it from: a camera is gone or the trigger stopped
 };
 struct CommandAck {
+  static constexpr MessageType kType = MessageType::command_ack;
+  static constexpr const char* kName = "ack";
   std::uint16_t command_sequence = 0;
   AckStatus status = AckStatus::ok;
   AckReason reason = AckReason::none;
@@ -179,19 +197,27 @@ struct CommandAck {
 };
 
 struct SetTriggerRate {
+  static constexpr MessageType kType = MessageType::set_trigger_rate;
+  static constexpr const char* kName = "set_trigger_rate";
   std::uint32_t rate_millihz = 0;
   friend bool operator==(const SetTriggerRate&, const SetTriggerRate&) = default;
 };
 struct SetExposure {
+  static constexpr MessageType kType = MessageType::set_exposure;
+  static constexpr const char* kName = "set_exposure";
   std::uint32_t exposure_us = 0;
   std::uint16_t gain_centidb = 0;
   friend bool operator==(const SetExposure&, const SetExposure&) = default;
 };
 struct SetStages {
+  static constexpr MessageType kType = MessageType::set_stages;
+  static constexpr const char* kName = "set_stages";
   StageMask enabled_mask = 0;  // bit per Stage (capture and publish always run)
   friend bool operator==(const SetStages&, const SetStages&) = default;
 };
 struct Snapshot {
+  static constexpr MessageType kType = MessageType::snapshot;
+  static constexpr const char* kName = "snapshot";
   friend bool operator==(const Snapshot&, const Snapshot&) = default;
 };
 
