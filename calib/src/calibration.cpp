@@ -159,9 +159,10 @@ void validate(const StereoCalibration& c) {
   }
 }
 
-StereoCalibration parse_calibration(const std::string& yaml, const std::string& file_name) {
-  const yaml::Fields f(file_name);
-  const YAML::Node root = f.parse(yaml);
+namespace {
+
+// The header: a calibration file of a version this build reads.
+void read_header(const yaml::Fields& f, const YAML::Node& root, const std::string& file_name) {
   if (!root.IsMap()) {
     throw Error(cat(file_name,
                     ": not a calibration file (expected a YAML map with format: ", kFormat, ")"));
@@ -179,23 +180,9 @@ StereoCalibration parse_calibration(const std::string& yaml, const std::string& 
   f.only_keys(root, "",
               {"format", "version", "date", "source", "image_size", "cameras", "extrinsics",
                "rectification", "quality"});
+}
 
-  StereoCalibration c;
-  c.date = f.text(f.child(root, "", "date"), "date");
-  if (const YAML::Node source = f.optional_child(root, "", "source")) {
-    c.source = f.text(source, "source");
-  }
-
-  const YAML::Node size = f.child(root, "", "image_size");
-  f.only_keys(size, "image_size", {"width", "height"});
-  c.width = f.integer(f.child(size, "image_size", "width"), "image_size.width");
-  c.height = f.integer(f.child(size, "image_size", "height"), "image_size.height");
-
-  const YAML::Node cameras = f.child(root, "", "cameras");
-  f.only_keys(cameras, "cameras", {"left", "right"});
-  c.left = read_camera(f, cameras, "left");
-  c.right = read_camera(f, cameras, "right");
-
+void read_geometry(const yaml::Fields& f, const YAML::Node& root, StereoCalibration& c) {
   const YAML::Node extrinsics = f.child(root, "", "extrinsics");
   f.only_keys(extrinsics, "extrinsics", {"R", "T"});
   c.R = detail::matrix(f, f.child(extrinsics, "extrinsics", "R"), "extrinsics.R", 3, 3);
@@ -211,27 +198,53 @@ StereoCalibration parse_calibration(const std::string& yaml, const std::string& 
   c.left.projection = detail::matrix(f, f.child(rect, rp, "P1"), rp + ".P1", 3, 4);
   c.right.projection = detail::matrix(f, f.child(rect, rp, "P2"), rp + ".P2", 3, 4);
   c.Q = detail::matrix(f, f.child(rect, rp, "Q"), rp + ".Q", 4, 4);
+}
 
-  if (const YAML::Node quality = f.optional_child(root, "", "quality")) {
-    f.only_keys(quality, "quality", {"rms", "views"});
-    if (const YAML::Node rms = f.optional_child(quality, "quality", "rms")) {
-      c.rms = f.number(rms, "quality.rms");
-    }
-    if (const YAML::Node views = f.optional_child(quality, "quality", "views")) {
-      if (!views.IsSequence()) f.fail("quality.views", "expected a sequence of views");
-      for (std::size_t i = 0; i < views.size(); ++i) {
-        const std::string vp = cat("quality.views[", i, "]");
-        const YAML::Node v = views[i];
-        f.only_keys(v, vp, {"left", "right", "left_rms", "right_rms"});
-        ViewError e;
-        e.left = f.text(f.child(v, vp, "left"), vp + ".left");
-        e.right = f.text(f.child(v, vp, "right"), vp + ".right");
-        e.left_rms = f.number(f.child(v, vp, "left_rms"), vp + ".left_rms");
-        e.right_rms = f.number(f.child(v, vp, "right_rms"), vp + ".right_rms");
-        c.views.push_back(std::move(e));
-      }
-    }
+void read_quality(const yaml::Fields& f, const YAML::Node& root, StereoCalibration& c) {
+  const YAML::Node quality = f.optional_child(root, "", "quality");
+  if (!quality) return;
+  f.only_keys(quality, "quality", {"rms", "views"});
+  if (const YAML::Node rms = f.optional_child(quality, "quality", "rms")) {
+    c.rms = f.number(rms, "quality.rms");
   }
+  const YAML::Node views = f.optional_child(quality, "quality", "views");
+  if (!views) return;
+  if (!views.IsSequence()) f.fail("quality.views", "expected a sequence of views");
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const std::string vp = cat("quality.views[", i, "]");
+    const YAML::Node v = views[i];
+    f.only_keys(v, vp, {"left", "right", "left_rms", "right_rms"});
+    ViewError e;
+    e.left = f.text(f.child(v, vp, "left"), vp + ".left");
+    e.right = f.text(f.child(v, vp, "right"), vp + ".right");
+    e.left_rms = f.number(f.child(v, vp, "left_rms"), vp + ".left_rms");
+    e.right_rms = f.number(f.child(v, vp, "right_rms"), vp + ".right_rms");
+    c.views.push_back(std::move(e));
+  }
+}
+
+}  // namespace
+
+StereoCalibration parse_calibration(const std::string& yaml, const std::string& file_name) {
+  const yaml::Fields f(file_name);
+  const YAML::Node root = f.parse(yaml);
+  read_header(f, root, file_name);
+
+  StereoCalibration c;
+  c.date = f.text(f.child(root, "", "date"), "date");
+  if (const YAML::Node source = f.optional_child(root, "", "source")) {
+    c.source = f.text(source, "source");
+  }
+  const YAML::Node size = f.child(root, "", "image_size");
+  f.only_keys(size, "image_size", {"width", "height"});
+  c.width = f.integer(f.child(size, "image_size", "width"), "image_size.width");
+  c.height = f.integer(f.child(size, "image_size", "height"), "image_size.height");
+  const YAML::Node cameras = f.child(root, "", "cameras");
+  f.only_keys(cameras, "cameras", {"left", "right"});
+  c.left = read_camera(f, cameras, "left");
+  c.right = read_camera(f, cameras, "right");
+  read_geometry(f, root, c);
+  read_quality(f, root, c);
 
   try {
     validate(c);

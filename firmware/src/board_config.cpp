@@ -564,82 +564,104 @@ std::string watchdog_problem(const BoardConfig& c, hal::Nanoseconds watchdog_int
              "with the processing after it could let the watchdog fire");
 }
 
-void validate(const BoardConfig& c, const std::string& file) {
-  const auto fail = [&](const std::string& key, const std::string& message) {
+namespace {
+
+// The checks across keys, each failing with the file and the key.
+struct Checks {
+  const BoardConfig& c;
+  const std::string& file;
+
+  [[noreturn]] void fail(const std::string& key, const std::string& message) const {
     throw Error(cat(file, ": ", key, ": ", message));
-  };
-  if (c.cameras.left.width != c.cameras.right.width ||
-      c.cameras.left.height != c.cameras.right.height) {
-    fail("cameras", "left and right cameras differ in size");
   }
-  const hal::BackendRegistry& registry = hal::BackendRegistry::builtin();
-  const auto known = [&](const char* key, const std::string& backend,
-                         std::vector<std::string> names, bool none_allowed) {
-    if (none_allowed) names.emplace_back(hal::kNoBackend);
-    if (std::find(names.begin(), names.end(), backend) == names.end()) {
-      std::string list;
-      for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-      fail(key, cat("'", backend, "' is not one of ", list));
+
+  // The period frames come at: the trigger's, or free running the faster camera's.
+  hal::Nanoseconds frame_period() const {
+    if (c.has_trigger()) return c.pairing.trigger_period;
+    return hal::period_of(std::max({c.cameras.left.fps, c.cameras.right.fps, 1e-3}));
+  }
+
+  void backends() const {
+    const hal::BackendRegistry& registry = hal::BackendRegistry::builtin();
+    const auto known = [&](const char* key, const std::string& backend,
+                           std::vector<std::string> names, bool none_allowed) {
+      if (none_allowed) names.emplace_back(hal::kNoBackend);
+      if (std::find(names.begin(), names.end(), backend) == names.end()) {
+        std::string list;
+        for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
+        fail(key, cat("'", backend, "' is not one of ", list));
+      }
+    };
+    known("cameras.backend", c.cameras.backend, registry.camera_backends(), false);
+    known("trigger.backend", c.trigger.backend, registry.trigger_backends(), true);
+    known("serial.backend", c.serial.backend, registry.serial_backends(), true);
+  }
+
+  void pairing() const {
+    if (c.has_trigger() && c.pairing.trigger_period > 0 &&
+        2 * c.pairing.tolerance >= c.pairing.trigger_period) {
+      fail(
+          "pairing.tolerance_us",
+          cat(c.pairing.tolerance / 1000, " us is not below half the trigger period (",
+              c.pairing.trigger_period / 1000, " us): frames of neighbouring triggers could pair"));
     }
-  };
-  known("cameras.backend", c.cameras.backend, registry.camera_backends(), false);
-  known("trigger.backend", c.trigger.backend, registry.trigger_backends(), true);
-  known("serial.backend", c.serial.backend, registry.serial_backends(), true);
-  if (c.has_trigger() && c.pairing.trigger_period > 0 &&
-      2 * c.pairing.tolerance >= c.pairing.trigger_period) {
-    fail("pairing.tolerance_us",
-         cat(c.pairing.tolerance / 1000, " us is not below half the trigger period (",
-             c.pairing.trigger_period / 1000, " us): frames of neighbouring triggers could pair"));
-  }
-  if (c.has_trigger() && c.pairing.trigger_period > 0 &&
-      2 * c.pairing.edge_tolerance >= c.pairing.trigger_period) {
-    fail("pairing.edge_tolerance_us",
-         cat(c.pairing.edge_tolerance / 1000, " us is not below half the trigger period"));
-  }
-  if (!c.has_trigger()) {  // free running: pairs are matched by time
-    const double fps = std::max(c.cameras.left.fps, c.cameras.right.fps);
-    if (2 * static_cast<double>(c.pairing.tolerance) >= 1e9 / fps) {
-      fail("pairing.tolerance_us",
-           cat(c.pairing.tolerance / 1000, " us is not below half the cameras' frame period (",
-               std::llround(1e6 / fps), " us at ", fps,
-               " fps): without a trigger, frames are paired by time"));
+    if (c.has_trigger() && c.pairing.trigger_period > 0 &&
+        2 * c.pairing.edge_tolerance >= c.pairing.trigger_period) {
+      fail("pairing.edge_tolerance_us",
+           cat(c.pairing.edge_tolerance / 1000, " us is not below half the trigger period"));
+    }
+    if (!c.has_trigger()) {  // free running: pairs are matched by time
+      const double fps = std::max(c.cameras.left.fps, c.cameras.right.fps);
+      if (2 * static_cast<double>(c.pairing.tolerance) >= 1e9 / fps) {
+        fail("pairing.tolerance_us",
+             cat(c.pairing.tolerance / 1000, " us is not below half the cameras' frame period (",
+                 std::llround(1e6 / fps), " us at ", fps,
+                 " fps): without a trigger, frames are paired by time"));
+      }
     }
   }
-  for (const hal::CameraConfig* camera : {&c.cameras.left, &c.cameras.right}) {
-    const hal::Nanoseconds period =
-        c.has_trigger() ? c.pairing.trigger_period : hal::period_of(std::max(camera->fps, 1e-3));
-    if (const std::string problem =
-            frame_timing_problem(period, camera->exposure, c.cameras.timeout);
-        !problem.empty()) {
-      fail(c.has_trigger() ? "trigger.rate_hz" : "cameras.fps", problem);
+
+  void frame_timing() const {
+    for (const hal::CameraConfig* camera : {&c.cameras.left, &c.cameras.right}) {
+      const hal::Nanoseconds period =
+          c.has_trigger() ? c.pairing.trigger_period : hal::period_of(std::max(camera->fps, 1e-3));
+      if (const std::string problem =
+              frame_timing_problem(period, camera->exposure, c.cameras.timeout);
+          !problem.empty()) {
+        fail(c.has_trigger() ? "trigger.rate_hz" : "cameras.fps", problem);
+      }
     }
   }
-  if (c.has_link()) {
-    const hal::Nanoseconds period =
-        c.has_trigger()
-            ? c.pairing.trigger_period
-            : hal::period_of(std::max(std::max(c.cameras.left.fps, c.cameras.right.fps), 1e-3));
+
+  void link() const {
+    if (!c.has_link()) return;
     const LinkProtocol protocol = c.serial.protocol == BoardConfig::LinkProtocol::mavlink
                                       ? LinkProtocol::mavlink
                                       : LinkProtocol::epipole;
-    if (const std::string problem = link_capacity_problem(protocol, c.serial.port.baud, period);
+    if (const std::string problem =
+            link_capacity_problem(protocol, c.serial.port.baud, frame_period());
         !problem.empty()) {
       fail("serial.baud", problem);
     }
   }
-  if (protocol::has_stage(c.stages, protocol::Stage::disparity) &&
-      c.stereo.max_disparity >= c.width()) {
-    fail("stereo.max_disparity",
-         cat(c.stereo.max_disparity, " is not smaller than the width ", c.width()));
+
+  void stages_and_threads() const {
+    if (protocol::has_stage(c.stages, protocol::Stage::disparity) &&
+        c.stereo.max_disparity >= c.width()) {
+      fail("stereo.max_disparity",
+           cat(c.stereo.max_disparity, " is not smaller than the width ", c.width()));
+    }
+    if (protocol::has_stage(c.stages, protocol::Stage::detect) && c.detector.max_size != 0 &&
+        c.detector.max_size < c.detector.min_size) {
+      fail("detector.max_size", "is smaller than min_size");
+    }
+    if (c.threads.realtime_priority > 0 && c.threads.realtime_priority > 99) {
+      fail("threads.realtime_priority", "must be in 1..99");
+    }
   }
-  if (protocol::has_stage(c.stages, protocol::Stage::detect) && c.detector.max_size != 0 &&
-      c.detector.max_size < c.detector.min_size) {
-    fail("detector.max_size", "is smaller than min_size");
-  }
-  if (c.threads.realtime_priority > 0 && c.threads.realtime_priority > 99) {
-    fail("threads.realtime_priority", "must be in 1..99");
-  }
-  if (c.simulated()) {
+
+  void sim() const {
+    if (!c.simulated()) return;
     if (c.sim.scenes.empty()) fail("sim.scenes", "the simulated cameras need at least one scene");
     if (c.sim_scene() == nullptr) {
       std::string names;
@@ -647,6 +669,22 @@ void validate(const BoardConfig& c, const std::string& file) {
       fail("sim.scene", cat("'", c.sim.scene, "' is not a scene of this board (", names, ")"));
     }
   }
+};
+
+}  // namespace
+
+void validate(const BoardConfig& c, const std::string& file) {
+  const Checks checks{c, file};
+  if (c.cameras.left.width != c.cameras.right.width ||
+      c.cameras.left.height != c.cameras.right.height) {
+    checks.fail("cameras", "left and right cameras differ in size");
+  }
+  checks.backends();
+  checks.pairing();
+  checks.frame_timing();
+  checks.link();
+  checks.stages_and_threads();
+  checks.sim();
 }
 
 BoardConfig parse_board_config(const std::string& yaml_text, const fs::path& file) {

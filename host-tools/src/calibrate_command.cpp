@@ -292,6 +292,162 @@ void run_import(const CalibrateOptions& options) {
   if (options.json) std::cout << summary.dump(2) << "\n";
 }
 
+// The pairs whose board was found in both images, and those rejected (with the reason).
+struct Views {
+  std::vector<View> found;
+  nlohmann::json rejected = nlohmann::json::array();
+  int width = 0;
+  int height = 0;
+};
+
+Views find_views(const std::vector<std::string>& lefts, const std::vector<std::string>& rights,
+                 Board board) {
+  Views out;
+  std::string first;
+  Progress progress;
+  for (std::size_t i = 0; i < lefts.size(); ++i) {
+    progress.show(cat("calibrate: pair ", i + 1, " of ", lefts.size(), ": ", lefts[i]));
+    const GrayImage left = load_gray(lefts[i]);
+    const GrayImage right = load_gray(rights[i]);
+    const std::pair<const GrayImage*, const std::string*> images[] = {{&left, &lefts[i]},
+                                                                      {&right, &rights[i]}};
+    for (const auto& [image, name] : images) {
+      if (first.empty()) {
+        out.width = image->width();
+        out.height = image->height();
+        first = *name;
+      }
+      require(image->width() == out.width && image->height() == out.height, *name, ": image is ",
+              image->width(), "x", image->height(), " but ", first, " is ", out.width, "x",
+              out.height, ": every image of a calibration must have the same size");
+    }
+    require(out.width >= 2 * board.columns && out.height >= 2 * board.rows, first, ": a ",
+            out.width, "x", out.height, " image is too small for a board of ", board.columns, "x",
+            board.rows, " inner corners");
+    View v{lefts[i], rights[i], {}, {}, 0, 0, false, true};
+    bool found_left = false;
+    bool found_right = false;
+    v.left_corners = find_board(left, board, &found_left);
+    v.right_corners = find_board(right, board, &found_right);
+    if (found_left && found_right) {
+      out.found.push_back(std::move(v));
+    } else {
+      const char* where = !found_left && !found_right ? "both images"
+                          : !found_left               ? "the left image"
+                                                      : "the right image";
+      out.rejected.push_back({{"left", lefts[i]},
+                              {"right", rights[i]},
+                              {"reason", std::string("board not found in ") + where}});
+    }
+  }
+  progress.done();
+  return out;
+}
+
+// Flags the views whose worse camera is far above the typical view; how many.
+int flag_outliers(std::vector<View>& views) {
+  std::vector<double> worst;
+  for (const View& v : views) worst.push_back(std::max(v.left_rms, v.right_rms));
+  std::vector<double> sorted = worst;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
+                   sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  int outliers = 0;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    views[i].outlier = worst[i] > kOutlierFactor * median;
+    outliers += views[i].outlier ? 1 : 0;
+  }
+  return outliers;
+}
+
+calib::CameraCalibration camera_of(const cv::Mat& k, const cv::Mat& d, const cv::Mat& r,
+                                   const cv::Mat& p, const std::string& id) {
+  calib::CameraCalibration cam;
+  cam.id = id;
+  cam.camera.intrinsics = {k.at<double>(0, 0), k.at<double>(1, 1), k.at<double>(0, 2),
+                           k.at<double>(1, 2)};
+  const auto coefficient = [&](int i) { return d.at<double>(i); };
+  cam.camera.distortion = {coefficient(0), coefficient(1), coefficient(2), coefficient(3),
+                           coefficient(4)};
+  cam.rectification = eigen3(r);
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 4; ++col) cam.projection(row, col) = p.at<double>(row, col);
+  }
+  return cam;
+}
+
+// The rig's calibration with OpenCV's rectification of it (alpha as asked), and the views used.
+calib::StereoCalibration rectified(const StereoResult& result, cv::Size size,
+                                   const CalibrateOptions& options,
+                                   const std::vector<View>& views) {
+  cv::Mat R1, R2, P1, P2, Q;
+  cv::stereoRectify(result.K1, result.D1, result.K2, result.D2, size, result.R, result.T, R1, R2,
+                    P1, P2, Q, cv::CALIB_ZERO_DISPARITY, options.alpha);
+  calib::StereoCalibration c;
+  c.width = size.width;
+  c.height = size.height;
+  c.left = camera_of(result.K1, result.D1, R1, P1, options.left_id);
+  c.right = camera_of(result.K2, result.D2, R2, P2, options.right_id);
+  c.R = eigen3(result.R);
+  c.T = {result.T.at<double>(0), result.T.at<double>(1), result.T.at<double>(2)};
+  for (int row = 0; row < 4; ++row) {
+    for (int col = 0; col < 4; ++col) c.Q(row, col) = Q.at<double>(row, col);
+  }
+  c.rms = result.rms;
+  for (const View& v : views) {
+    if (v.used) c.views.push_back({v.left, v.right, v.left_rms, v.right_rms});
+  }
+  c.date = calib::utc_now();
+  c.source = "epipole calibrate";
+  return c;
+}
+
+// What --report writes and --json prints (the exports added later).
+nlohmann::json calibration_report(const calib::StereoCalibration& c, const Views& views,
+                                  std::size_t pairs, double rms_with_all, Board board,
+                                  const CalibrateOptions& options) {
+  const RowError row_error = rectified_row_error(c, views.found);
+  nlohmann::json view_list = nlohmann::json::array();
+  nlohmann::json outlier_list = nlohmann::json::array();
+  for (const View& v : views.found) {
+    view_list.push_back({{"left", v.left},
+                         {"right", v.right},
+                         {"left_rms", v.left_rms},
+                         {"right_rms", v.right_rms},
+                         {"outlier", v.outlier},
+                         {"used", v.used}});
+    if (v.outlier) outlier_list.push_back({{"left", v.left}, {"right", v.right}});
+  }
+  nlohmann::json report = {
+      {"rms", c.rms.value_or(0.0)},
+      {"rms_before_dropping_outliers", rms_with_all},
+      {"image_size", {{"width", c.width}, {"height", c.height}}},
+      {"board",
+       {{"type", "chessboard"},
+        {"columns", board.columns},
+        {"rows", board.rows},
+        {"square", options.square}}},
+      {"pairs", pairs},
+      {"views_used", c.views.size()},
+      {"views", view_list},
+      {"rejected", views.rejected},
+      {"outliers", outlier_list},
+      {"outlier_rule",
+       "worse camera's view RMS > 3 x the median of that figure over the accepted views"},
+      {"rectified_row_error",
+       {{"mean", row_error.mean},
+        {"median", row_error.figure.median_px},
+        {"p90", row_error.figure.p90_px},
+        {"max", row_error.max},
+        {"points", row_error.figure.matches}}},
+      {"alpha", options.alpha},
+      {"baseline", c.T.norm()},
+      {"left", camera_json(c.left)},
+      {"right", camera_json(c.right)},
+      {"output", options.output}};
+  return report;
+}
+
 void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global) {
   if (!options.from_opencv.empty() || !options.from_ros.empty()) {
     run_import(options);
@@ -307,156 +463,27 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
   const std::vector<std::string> rights = expand(options.right_glob, "--right");
   require(lefts.size() == rights.size(), "--left matches ", lefts.size(), " files but --right ",
           rights.size(), ": the images must come in pairs (sorted by name)");
+  Views views = find_views(lefts, rights, board);
+  require(static_cast<int>(views.found.size()) >= kMinViews,
+          "calibrate: the board was found in both images of only ", views.found.size(), " of ",
+          lefts.size(), " pairs (need at least ", kMinViews, ")");
 
-  std::vector<View> views;
-  nlohmann::json rejected = nlohmann::json::array();
-  int width = 0;
-  int height = 0;
-  std::string first;
   Progress progress;
-  for (std::size_t i = 0; i < lefts.size(); ++i) {
-    progress.show(cat("calibrate: pair ", i + 1, " of ", lefts.size(), ": ", lefts[i]));
-    const GrayImage left = load_gray(lefts[i]);
-    const GrayImage right = load_gray(rights[i]);
-    const std::pair<const GrayImage*, const std::string*> images[] = {{&left, &lefts[i]},
-                                                                      {&right, &rights[i]}};
-    for (const auto& [image, name] : images) {
-      if (first.empty()) {
-        width = image->width();
-        height = image->height();
-        first = *name;
-      }
-      require(image->width() == width && image->height() == height, *name, ": image is ",
-              image->width(), "x", image->height(), " but ", first, " is ", width, "x", height,
-              ": every image of a calibration must have the same size");
-    }
-    require(width >= 2 * board.columns && height >= 2 * board.rows, first, ": a ", width, "x",
-            height, " image is too small for a board of ", board.columns, "x", board.rows,
-            " inner corners");
-    View v{lefts[i], rights[i], {}, {}, 0, 0, false, true};
-    bool found_left = false;
-    bool found_right = false;
-    v.left_corners = find_board(left, board, &found_left);
-    v.right_corners = find_board(right, board, &found_right);
-    if (found_left && found_right) {
-      views.push_back(std::move(v));
-    } else {
-      const char* where = !found_left && !found_right ? "both images"
-                          : !found_left               ? "the left image"
-                                                      : "the right image";
-      rejected.push_back({{"left", lefts[i]},
-                          {"right", rights[i]},
-                          {"reason", std::string("board not found in ") + where}});
-    }
-  }
-  require(static_cast<int>(views.size()) >= kMinViews,
-          "calibrate: the board was found in both "
-          "images of only ",
-          views.size(), " of ", lefts.size(), " pairs (need at least ", kMinViews, ")");
-
-  progress.show(cat("calibrate: calibrating with ", views.size(), " views"));
-  const cv::Size size(width, height);
-  StereoResult result = stereo_calibrate(views, board, options.square, size);
-  // Outliers: the worse camera of a view far above the typical view.
-  std::vector<double> worst;
-  for (const View& v : views) worst.push_back(std::max(v.left_rms, v.right_rms));
-  std::vector<double> sorted = worst;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
-                   sorted.end());
-  const double median = sorted[sorted.size() / 2];
-  int outliers = 0;
-  for (std::size_t i = 0; i < views.size(); ++i) {
-    views[i].outlier = worst[i] > kOutlierFactor * median;
-    outliers += views[i].outlier ? 1 : 0;
-  }
+  progress.show(cat("calibrate: calibrating with ", views.found.size(), " views"));
+  const cv::Size size(views.width, views.height);
+  StereoResult result = stereo_calibrate(views.found, board, options.square, size);
+  const int outliers = flag_outliers(views.found);
   const double rms_with_all = result.rms;
   if (options.drop_outliers && outliers > 0 &&
-      static_cast<int>(views.size()) - outliers >= kMinViews) {
-    for (View& v : views) v.used = !v.outlier;
-    result = stereo_calibrate(views, board, options.square, size);
+      static_cast<int>(views.found.size()) - outliers >= kMinViews) {
+    for (View& v : views.found) v.used = !v.outlier;
+    result = stereo_calibrate(views.found, board, options.square, size);
   }
-
   progress.done();
-  cv::Mat R1, R2, P1, P2, Q;
-  cv::stereoRectify(result.K1, result.D1, result.K2, result.D2, size, result.R, result.T, R1, R2,
-                    P1, P2, Q, cv::CALIB_ZERO_DISPARITY, options.alpha);
-
-  calib::StereoCalibration c;
-  c.width = width;
-  c.height = height;
-  const auto camera = [](const cv::Mat& k, const cv::Mat& d, const cv::Mat& r, const cv::Mat& p,
-                         const std::string& id) {
-    calib::CameraCalibration cam;
-    cam.id = id;
-    cam.camera.intrinsics = {k.at<double>(0, 0), k.at<double>(1, 1), k.at<double>(0, 2),
-                             k.at<double>(1, 2)};
-    const auto coefficient = [&](int i) { return d.at<double>(i); };
-    cam.camera.distortion = {coefficient(0), coefficient(1), coefficient(2), coefficient(3),
-                             coefficient(4)};
-    cam.rectification = eigen3(r);
-    for (int row = 0; row < 3; ++row) {
-      for (int col = 0; col < 4; ++col) cam.projection(row, col) = p.at<double>(row, col);
-    }
-    return cam;
-  };
-  c.left = camera(result.K1, result.D1, R1, P1, options.left_id);
-  c.right = camera(result.K2, result.D2, R2, P2, options.right_id);
-  c.R = eigen3(result.R);
-  c.T = {result.T.at<double>(0), result.T.at<double>(1), result.T.at<double>(2)};
-  for (int row = 0; row < 4; ++row) {
-    for (int col = 0; col < 4; ++col) c.Q(row, col) = Q.at<double>(row, col);
-  }
-  c.rms = result.rms;
-  for (const View& v : views) {
-    if (v.used) c.views.push_back({v.left, v.right, v.left_rms, v.right_rms});
-  }
-  c.date = calib::utc_now();
-  c.source = "epipole calibrate";
+  const calib::StereoCalibration c = rectified(result, size, options, views.found);
   calib::save_calibration(options.output, c);
 
-  const RowError row_error = rectified_row_error(c, views);
-  int used_views = 0;
-  nlohmann::json view_list = nlohmann::json::array();
-  nlohmann::json outlier_list = nlohmann::json::array();
-  for (const View& v : views) {
-    used_views += v.used ? 1 : 0;
-    view_list.push_back({{"left", v.left},
-                         {"right", v.right},
-                         {"left_rms", v.left_rms},
-                         {"right_rms", v.right_rms},
-                         {"outlier", v.outlier},
-                         {"used", v.used}});
-    if (v.outlier) outlier_list.push_back({{"left", v.left}, {"right", v.right}});
-  }
-
-  // The report (--report writes it, --json prints it, with the exports added).
-  nlohmann::json report = {
-      {"rms", result.rms},
-      {"rms_before_dropping_outliers", rms_with_all},
-      {"image_size", {{"width", width}, {"height", height}}},
-      {"board",
-       {{"type", "chessboard"},
-        {"columns", board.columns},
-        {"rows", board.rows},
-        {"square", options.square}}},
-      {"pairs", lefts.size()},
-      {"views_used", used_views},
-      {"views", view_list},
-      {"rejected", rejected},
-      {"outliers", outlier_list},
-      {"outlier_rule",
-       "worse camera's view RMS > 3 x the median of that figure over the accepted views"},
-      {"rectified_row_error",
-       {{"mean", row_error.mean},
-        {"median", row_error.figure.median_px},
-        {"p90", row_error.figure.p90_px},
-        {"max", row_error.max},
-        {"points", row_error.figure.matches}}},
-      {"alpha", options.alpha},
-      {"baseline", c.T.norm()},
-      {"left", camera_json(c.left)},
-      {"right", camera_json(c.right)},
-      {"output", options.output}};
+  nlohmann::json report = calibration_report(c, views, lefts.size(), rms_with_all, board, options);
   if (!options.report.empty()) {
     std::ofstream out(options.report);
     out << report.dump(2) << "\n";
@@ -464,17 +491,18 @@ void run_calibrate(const CalibrateOptions& options, const GlobalOptions& global)
     require(static_cast<bool>(out), options.report, ": cannot write the report");
   }
   if (!options.preview.empty()) {
-    const View& v = *std::find_if(views.begin(), views.end(), [](const View& w) { return w.used; });
-    write_preview(c, load_gray(v.left), load_gray(v.right), options.preview,
+    const auto used =
+        std::find_if(views.found.begin(), views.found.end(), [](const View& w) { return w.used; });
+    write_preview(c, load_gray(used->left), load_gray(used->right), options.preview,
                   parse_simd_path(global.kernels));
   }
-
   if (!options.json) {
-    std::cout << "calibrated " << used_views << " of " << lefts.size() << " pairs ("
-              << rejected.size() << " rejected, " << outliers << " outlier"
+    std::cout << "calibrated " << c.views.size() << " of " << lefts.size() << " pairs ("
+              << views.rejected.size() << " rejected, " << outliers << " outlier"
               << (outliers == 1 ? "" : "s") << (options.drop_outliers ? " dropped" : " flagged")
-              << "): RMS " << result.rms << " px, rectified row error mean " << row_error.mean
-              << " px; wrote " << options.output << "\n";
+              << "): RMS " << result.rms << " px, rectified row error mean "
+              << report["rectified_row_error"]["mean"].get<double>() << " px; wrote "
+              << options.output << "\n";
   }
   export_calibration(options, c, report);
   if (options.json) std::cout << report.dump(2) << "\n";

@@ -88,6 +88,73 @@ RgbImage match_picture(GrayView left, GrayView right, std::span<const vision::Sp
   return picture;
 }
 
+// What a match found, for its report.
+struct MatchRun {
+  int width = 0;
+  int height = 0;
+  std::string kernels;
+  bool rectified = false;
+  bool truncated = false;
+  const Corners* corners = nullptr;
+  std::span<const vision::SparseMatch> matches;
+  const std::vector<firmware::SparsePoint>* points = nullptr;  // null without a calibration
+  double milliseconds = 0;
+};
+
+nlohmann::json match_json(const MatchOptions& options, const MatchRun& run) {
+  nlohmann::json m = nlohmann::json::array();
+  for (const vision::SparseMatch& s : run.matches) {
+    m.push_back({{"xl", s.xl},
+                 {"yl", s.yl},
+                 {"xr", s.xr},
+                 {"yr", s.yr},
+                 {"disparity", s.disparity},
+                 {"distance", s.distance}});
+  }
+  nlohmann::json out = {{"width", run.width},
+                        {"height", run.height},
+                        {"detector", options.detector},
+                        {"kernels", run.kernels},
+                        {"rectified", run.rectified},
+                        {"max_disparity", options.max_disparity},
+                        {"row_tolerance", options.row_tolerance},
+                        {"ratio", options.ratio},
+                        {"left_corners", run.corners->left.size()},
+                        {"right_corners", run.corners->right.size()},
+                        {"truncated", run.truncated},
+                        {"milliseconds", run.milliseconds},
+                        {"matches", std::move(m)}};
+  if (run.points != nullptr) {
+    nlohmann::json p = nlohmann::json::array();
+    for (const firmware::SparsePoint& s : *run.points) {
+      p.push_back({{"xl", s.xl},
+                   {"yl", s.yl},
+                   {"disparity", s.disparity},
+                   {"x", s.x},
+                   {"y", s.y},
+                   {"z", s.z}});
+    }
+    out["points"] = std::move(p);
+  } else {
+    out["points"] = nullptr;
+    out["points_note"] = "no 3-D points without --calib (the pair is taken as rectified)";
+  }
+  return out;
+}
+
+void print_match(const MatchOptions& options, const MatchRun& run) {
+  std::cout << run.matches.size() << " matches of " << run.corners->left.size() << " / "
+            << run.corners->right.size() << " corners (" << options.detector << ", "
+            << options.max_disparity << " disparities, " << run.kernels << ") in "
+            << run.milliseconds << " ms";
+  if (run.points != nullptr) {
+    std::cout << ", " << run.points->size() << " 3-D points";
+  } else {
+    std::cout << " (no 3-D points without --calib)";
+  }
+  std::cout << (run.truncated ? ", truncated" : "") << "\n";
+}
+
 void run_match(const MatchOptions& options, const GlobalOptions& global) {
   const SimdPath path = parse_simd_path(global.kernels);
   const StereoInput input = load_stereo_input(options.left, options.right, options.calib, path);
@@ -115,57 +182,19 @@ void run_match(const MatchOptions& options, const GlobalOptions& global) {
     points.resize(matches.size());
     points.resize(firmware::triangulate_matches(triangulator, matches, points));
   }
-
+  const MatchRun run{width,
+                     height,
+                     std::string(to_string(matcher.simd_path())),
+                     input.rectifiers.has_value(),
+                     matcher.truncated(),
+                     &corners,
+                     matches,
+                     input.calibration ? &points : nullptr,
+                     elapsed.count()};
   if (options.json) {
-    nlohmann::json m = nlohmann::json::array();
-    for (const vision::SparseMatch& s : matches) {
-      m.push_back({{"xl", s.xl},
-                   {"yl", s.yl},
-                   {"xr", s.xr},
-                   {"yr", s.yr},
-                   {"disparity", s.disparity},
-                   {"distance", s.distance}});
-    }
-    nlohmann::json out = {{"width", width},
-                          {"height", height},
-                          {"detector", options.detector},
-                          {"kernels", to_string(matcher.simd_path())},
-                          {"rectified", input.rectifiers.has_value()},
-                          {"max_disparity", options.max_disparity},
-                          {"row_tolerance", options.row_tolerance},
-                          {"ratio", options.ratio},
-                          {"left_corners", corners.left.size()},
-                          {"right_corners", corners.right.size()},
-                          {"truncated", matcher.truncated()},
-                          {"milliseconds", elapsed.count()},
-                          {"matches", std::move(m)}};
-    if (input.calibration) {
-      nlohmann::json p = nlohmann::json::array();
-      for (const firmware::SparsePoint& s : points) {
-        p.push_back({{"xl", s.xl},
-                     {"yl", s.yl},
-                     {"disparity", s.disparity},
-                     {"x", s.x},
-                     {"y", s.y},
-                     {"z", s.z}});
-      }
-      out["points"] = std::move(p);
-    } else {
-      out["points"] = nullptr;
-      out["points_note"] = "no 3-D points without --calib (the pair is taken as rectified)";
-    }
-    std::cout << out.dump() << "\n";
+    std::cout << match_json(options, run).dump() << "\n";
   } else {
-    std::cout << matches.size() << " matches of " << corners.left.size() << " / "
-              << corners.right.size() << " corners (" << options.detector << ", "
-              << options.max_disparity << " disparities, " << to_string(matcher.simd_path())
-              << ") in " << elapsed.count() << " ms";
-    if (input.calibration) {
-      std::cout << ", " << points.size() << " 3-D points";
-    } else {
-      std::cout << " (no 3-D points without --calib)";
-    }
-    std::cout << (matcher.truncated() ? ", truncated" : "") << "\n";
+    print_match(options, run);
   }
   if (!options.draw.empty()) {
     const RgbImage picture = match_picture(input.left, input.right, matches, options.max_disparity);

@@ -241,6 +241,73 @@ HaarStump CascadeProgram::haar_stump(int node) const {
   return s;
 }
 
+bool CascadeProgram::fixed_stage(ProgramStage& stage, std::vector<std::int64_t>& deltas) const {
+  double magnitude = 0.0;
+  std::int64_t base = 0;
+  deltas.clear();
+  for (int k = 0; k < stage.weak_count; ++k) {
+    const int i = stage.first_weak + k;
+    const double left = std::ldexp(static_cast<double>(leaves[2 * i]), fixed_shift);
+    const double right = std::ldexp(static_cast<double>(leaves[2 * i + 1]), fixed_shift);
+    magnitude += std::max(std::abs(left), std::abs(right));
+    if (!(magnitude < 0x1p52)) return false;
+    const auto left_fixed = static_cast<std::int64_t>(left);
+    const auto right_fixed = static_cast<std::int64_t>(right);
+    base += right_fixed;
+    deltas.push_back(left_fixed - right_fixed);
+  }
+  // sum < T  <=>  base + selected < ceil(T * 2^shift) for integer sums.
+  const double threshold = std::ceil(std::ldexp(static_cast<double>(stage.threshold), fixed_shift));
+  if (!(std::abs(threshold) < 0x1p62)) return false;
+  stage.fixed_threshold = static_cast<std::int64_t>(threshold) - base;
+  stage.split_shift = split_shift_for(stage.weak_count);
+  std::int64_t high_magnitude = 0;
+  for (const std::int64_t d : deltas) high_magnitude += std::abs(d >> stage.split_shift);
+  return high_magnitude <= std::numeric_limits<std::int32_t>::max();
+}
+
+// Grouped by kind, in HaarStumpKind's order: the kernels run a loop of each.
+void CascadeProgram::add_haar_stumps(ProgramStage& stage, const std::vector<std::int64_t>& deltas) {
+  std::vector<HaarStump> by_kind[3];  // indexed by HaarStumpKind
+  for (int k = 0; k < stage.weak_count; ++k) {
+    const int i = stage.first_weak + k;
+    HaarStump stump = haar_stump(i);
+    set_delta(stump.params, deltas[static_cast<std::size_t>(k)], stage.split_shift);
+    const HaarStumpKind kind = haar[nodes[i].feature].rect_count == 3 ? HaarStumpKind::three_rects
+                               : integer_weights && merge_six_corners(stump)
+                                   ? HaarStumpKind::six_corners
+                                   : HaarStumpKind::two_rects;
+    by_kind[static_cast<int>(kind)].push_back(stump);
+  }
+  const auto count = [&by_kind](HaarStumpKind kind) {
+    return static_cast<int>(by_kind[static_cast<int>(kind)].size());
+  };
+  stage.six_count = count(HaarStumpKind::six_corners);
+  stage.pair_count = count(HaarStumpKind::two_rects);
+  for (const auto& stumps : by_kind) {
+    haar_stumps.insert(haar_stumps.end(), stumps.begin(), stumps.end());
+  }
+}
+
+void CascadeProgram::add_lbp_stumps(const ProgramStage& stage,
+                                    const std::vector<std::int64_t>& deltas) {
+  for (int k = 0; k < stage.weak_count; ++k) {
+    const int i = stage.first_weak + k;
+    LbpStump stump;
+    const LbpTerms& terms = lbp[nodes[i].feature];
+    std::transform(std::begin(terms.offsets), std::end(terms.offsets), stump.offsets,
+                   [](std::int32_t o) { return in_bytes(o); });
+    set_delta(stump.params, deltas[static_cast<std::size_t>(k)], stage.split_shift);
+    for (int word = 0; word < 8; ++word) {
+      for (int byte = 0; byte < 4; ++byte) {
+        stump.subset[4 * word + byte] =
+            static_cast<std::uint8_t>(subsets[8 * i + word] >> (8 * byte));
+      }
+    }
+    lbp_stumps.push_back(stump);
+  }
+}
+
 // The stumps in fixed point for the SIMD kernels, when that is exact (fixed_point_exact). The
 // cascade is stump-based: weak classifier i is node i.
 void CascadeProgram::build_fixed_point() {
@@ -263,77 +330,14 @@ void CascadeProgram::build_fixed_point() {
   fixed_point_exact = true;
   std::vector<std::int64_t> deltas;
   for (ProgramStage& stage : stages) {
-    double magnitude = 0.0;
-    std::int64_t base = 0;
-    deltas.clear();
-    for (int k = 0; k < stage.weak_count; ++k) {
-      const int i = stage.first_weak + k;
-      const double left = std::ldexp(static_cast<double>(leaves[2 * i]), fixed_shift);
-      const double right = std::ldexp(static_cast<double>(leaves[2 * i + 1]), fixed_shift);
-      magnitude += std::max(std::abs(left), std::abs(right));
-      if (!(magnitude < 0x1p52)) {
-        fixed_point_exact = false;
-        break;
-      }
-      const auto left_fixed = static_cast<std::int64_t>(left);
-      const auto right_fixed = static_cast<std::int64_t>(right);
-      base += right_fixed;
-      deltas.push_back(left_fixed - right_fixed);
-    }
-    // sum < T  <=>  base + selected < ceil(T * 2^shift) for integer sums.
-    const double threshold =
-        std::ceil(std::ldexp(static_cast<double>(stage.threshold), fixed_shift));
-    if (!fixed_point_exact || !(std::abs(threshold) < 0x1p62)) {
+    if (!fixed_stage(stage, deltas)) {
       fixed_point_exact = false;
       break;
     }
-    stage.fixed_threshold = static_cast<std::int64_t>(threshold) - base;
-    stage.split_shift = split_shift_for(stage.weak_count);
-    std::int64_t high_magnitude = 0;
-    for (const std::int64_t d : deltas) high_magnitude += std::abs(d >> stage.split_shift);
-    if (high_magnitude > std::numeric_limits<std::int32_t>::max()) {
-      fixed_point_exact = false;
-      break;
-    }
-    const auto set_stump_delta = [&](StumpParams& params, int k) {
-      set_delta(params, deltas[static_cast<std::size_t>(k)], stage.split_shift);
-    };
     if (type == CascadeFeatureType::haar) {
-      // Grouped by kind, in HaarStumpKind's order: the kernels run a loop of each.
-      std::vector<HaarStump> by_kind[3];  // indexed by HaarStumpKind
-      for (int k = 0; k < stage.weak_count; ++k) {
-        const int i = stage.first_weak + k;
-        HaarStump stump = haar_stump(i);
-        set_stump_delta(stump.params, k);
-        const HaarStumpKind kind =
-            haar[nodes[i].feature].rect_count == 3        ? HaarStumpKind::three_rects
-            : integer_weights && merge_six_corners(stump) ? HaarStumpKind::six_corners
-                                                          : HaarStumpKind::two_rects;
-        by_kind[static_cast<int>(kind)].push_back(stump);
-      }
-      const auto count = [&by_kind](HaarStumpKind kind) {
-        return static_cast<int>(by_kind[static_cast<int>(kind)].size());
-      };
-      stage.six_count = count(HaarStumpKind::six_corners);
-      stage.pair_count = count(HaarStumpKind::two_rects);
-      for (const auto& stumps : by_kind)
-        haar_stumps.insert(haar_stumps.end(), stumps.begin(), stumps.end());
-      continue;
-    }
-    for (int k = 0; k < stage.weak_count; ++k) {
-      const int i = stage.first_weak + k;
-      LbpStump stump;
-      const LbpTerms& terms = lbp[nodes[i].feature];
-      std::transform(std::begin(terms.offsets), std::end(terms.offsets), stump.offsets,
-                     [](std::int32_t o) { return in_bytes(o); });
-      set_stump_delta(stump.params, k);
-      for (int word = 0; word < 8; ++word) {
-        for (int byte = 0; byte < 4; ++byte) {
-          stump.subset[4 * word + byte] =
-              static_cast<std::uint8_t>(subsets[8 * i + word] >> (8 * byte));
-        }
-      }
-      lbp_stumps.push_back(stump);
+      add_haar_stumps(stage, deltas);
+    } else {
+      add_lbp_stumps(stage, deltas);
     }
   }
   // The SIMD kernels compute nf = area * squares - sum^2 exactly in int64 and convert it to

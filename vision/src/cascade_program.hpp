@@ -150,6 +150,11 @@ struct CascadeProgram {
 
  private:
   void build_fixed_point();
+  // One stage's fixed-point threshold and split shift, and each weak classifier's leaf delta;
+  // false when they are not exact.
+  bool fixed_stage(ProgramStage& stage, std::vector<std::int64_t>& deltas) const;
+  void add_haar_stumps(ProgramStage& stage, const std::vector<std::int64_t>& deltas);
+  void add_lbp_stumps(const ProgramStage& stage, const std::vector<std::int64_t>& deltas);
   HaarStump haar_stump(int node) const;  // a stump's (its weak classifier's only node)
 };
 

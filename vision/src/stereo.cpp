@@ -276,10 +276,46 @@ struct StereoMatcher::Worker {
   }
   void cost_row(GrayView left, GrayView right, int y, int disparities, int bits,
                 std::uint8_t* cost_out);
+
+  // Every buffer sized for the image and the method, once.
+  void allocate(const StereoConfig& config, SimdPath path) {
+    const std::size_t uw = static_cast<std::size_t>(config.width);
+    const std::size_t ud = static_cast<std::size_t>(config.max_disparity);
+    const std::size_t wd = uw * ud;
+    const std::size_t stride = ud + 32;
+    kernels = kernels::stereo_kernels(path);
+    left_census.assign(kernels::kCensusBytes * uw, 0);
+    right_census.assign(kernels::kCensusBytes * uw, 0);
+    reversed.assign(kernels::kCensusBytes * (uw + ud), 0);
+    sums.assign(wd, 0);
+    window.assign(2 * (uw + ud), 0);
+    best.assign(uw, -1);
+    right_best.assign(uw, -1);
+    if (config.method != StereoMethod::sgm) {
+      cost.assign(wd * static_cast<std::size_t>(config.block_size + 1), 0);
+      columns.assign(wd, 0);
+      return;
+    }
+    cost.assign(wd, 0);
+    scratch.assign(2 * stride, 0);
+    for (auto& row : paths) {
+      for (auto& p : row) {
+        p.assign((uw + 2) * stride, 0);
+        for (std::size_t x = 0; x < uw; ++x) {
+          p[(x + 1) * stride + 15] = kernels::kSgmPad;
+          p[(x + 1) * stride + 16 + ud] = kernels::kSgmPad;
+        }
+      }
+    }
+    for (auto& row : mins) {
+      for (auto& m : row) m.assign(uw + 2, 0);
+    }
+  }
 };
 
-StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPool* pool)
-    : config_(config), path_(path), pool_(pool) {
+namespace {
+
+void check_config(const StereoConfig& config, SimdPath path, const ThreadPool* pool) {
   const int W = config.width;
   const int H = config.height;
   const int D = config.max_disparity;
@@ -310,47 +346,25 @@ StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPo
   require(pool == nullptr || pool->threads() <= config.threads, "the stereo matcher's pool has ",
           pool == nullptr ? 0 : pool->threads(), " workers, more than its ", config.threads,
           " threads");
+}
+
+}  // namespace
+
+StereoMatcher::StereoMatcher(const StereoConfig& config, SimdPath path, ThreadPool* pool)
+    : config_(config), path_(path), pool_(pool) {
+  check_config(config, path, pool);
+  const int W = config.width;
+  const int H = config.height;
   if (pool_ == nullptr) {
     own_pool_ = std::make_unique<ThreadPool>(config.threads);
     pool_ = own_pool_.get();
   }
-
-  const std::size_t wd = static_cast<std::size_t>(W) * static_cast<std::size_t>(D);
-  const std::size_t stride = static_cast<std::size_t>(D) + 32;
-  const std::size_t uw = static_cast<std::size_t>(W);
-  const std::size_t ud = static_cast<std::size_t>(D);
   for (int t = 0; t < config.threads; ++t) {
     auto w = std::make_unique<Worker>();
-    w->kernels = kernels::stereo_kernels(path);
-    w->left_census.assign(kernels::kCensusBytes * uw, 0);
-    w->right_census.assign(kernels::kCensusBytes * uw, 0);
-    w->reversed.assign(kernels::kCensusBytes * (uw + ud), 0);
-    w->sums.assign(wd, 0);
-    w->window.assign(2 * (uw + ud), 0);
-    w->best.assign(uw, -1);
-    w->right_best.assign(uw, -1);
-    if (config.method == StereoMethod::sgm) {
-      w->cost.assign(wd, 0);
-      w->scratch.assign(2 * stride, 0);
-      for (auto& row : w->paths) {
-        for (auto& p : row) {
-          p.assign((uw + 2) * stride, 0);
-          for (std::size_t x = 0; x < uw; ++x) {
-            p[(x + 1) * stride + 15] = kernels::kSgmPad;
-            p[(x + 1) * stride + 16 + ud] = kernels::kSgmPad;
-          }
-        }
-      }
-      for (auto& row : w->mins) {
-        for (auto& m : row) m.assign(uw + 2, 0);
-      }
-    } else {
-      w->cost.assign(wd * static_cast<std::size_t>(config.block_size + 1), 0);
-      w->columns.assign(wd, 0);
-    }
+    w->allocate(config, path);
     workers_.push_back(std::move(w));
   }
-  const std::size_t padded = (uw + 2) * (static_cast<std::size_t>(H) + 2);
+  const std::size_t padded = (static_cast<std::size_t>(W) + 2) * (static_cast<std::size_t>(H) + 2);
   padded_.assign(padded, kInvalidDisparity);
   disparity_ = ImageView<std::int16_t>(padded_.data() + W + 3, W, H, W + 2);
   if (config.speckle_size > 0) {
