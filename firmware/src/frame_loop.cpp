@@ -453,13 +453,13 @@ void FrameLoop::say_device_changes() {
   if (serial != nullptr && serial->connected() != serial_connected_) {
     serial_connected_ = !serial_connected_;
     const std::string& device = config_.serial.port.device;
-    const char* name = device.empty() ? board_.serial_peer().c_str() : device.c_str();
+    const std::string name = device.empty() ? board_.serial_peer() : device;  // on a change only
     JournalEpisodes& lines = device_lines_[3];
     if (!serial_connected_ && lines.begins(now)) {
-      journal(Priority::warning, "serial port %s gone (hung up), waiting for it%s", name,
+      journal(Priority::warning, "serial port %s gone (hung up), waiting for it%s", name.c_str(),
               LeftOut(lines.left_out(), "hang-ups").text);
     } else if (serial_connected_ && lines.end_is_said()) {
-      journal(Priority::info, "serial port %s open", name);
+      journal(Priority::info, "serial port %s open", name.c_str());
     }
   }
 }
