@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
-#include <variant>
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/journal.hpp"
@@ -91,11 +90,7 @@ bool Link::publish(const protocol::Message& message) {
   if (config_.protocol != LinkProtocol::epipole) return false;
   const std::size_t n = protocol::encode_frame(message, sequence_, encode_buffer_);
   ++sequence_;
-  const bool essential = std::holds_alternative<protocol::FrameSummary>(message) ||
-                         std::holds_alternative<protocol::Health>(message) ||
-                         std::holds_alternative<protocol::CalibrationHealth>(message) ||
-                         std::holds_alternative<protocol::CommandAck>(message);
-  return enqueue({encode_buffer_.data(), n}, essential);
+  return enqueue({encode_buffer_.data(), n}, is_essential(message));
 }
 
 bool Link::publish_heartbeat(std::uint8_t system_status) {

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <variant>
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/protocol/codec.hpp"
@@ -56,6 +57,13 @@ std::uint64_t essential_bytes_per_second(LinkProtocol protocol, hal::Nanoseconds
   const double pairs_per_second = 1e9 / static_cast<double>(frame_period);
   return static_cast<std::uint64_t>(std::ceil(pairs_per_second * static_cast<double>(e.per_pair))) +
          e.per_second;
+}
+
+bool is_essential(const protocol::Message& message) {
+  return std::holds_alternative<protocol::FrameSummary>(message) ||
+         std::holds_alternative<protocol::Health>(message) ||
+         std::holds_alternative<protocol::CalibrationHealth>(message) ||
+         std::holds_alternative<protocol::CommandAck>(message);
 }
 
 std::uint64_t essential_reserve_bytes(LinkProtocol protocol) {

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "epipole/firmware/link.hpp"
+#include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/hal/clock.hpp"
 
 namespace epipole::firmware {
@@ -13,6 +14,10 @@ namespace epipole::firmware {
 // each at its largest encoding. The larger messages (detections, depth grids, points) are
 // dropped and counted when the baud rate cannot carry them too.
 std::uint64_t essential_bytes_per_second(LinkProtocol protocol, hal::Nanoseconds frame_period);
+
+// Whether the link may give `message` the whole budget (the essential messages above, and the
+// acks: rare and small, so not in the reserve).
+bool is_essential(const protocol::Message& message);
 
 // What the link keeps in its budget for those (one pair's and one second's): the other messages
 // are sent only when as much is left after them.
