@@ -1,9 +1,12 @@
 #include "epipole/core/yaml_fields.hpp"
 
+#include <glob.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <system_error>
 
@@ -178,6 +181,58 @@ bool Fields::boolean(const YAML::Node& node, const std::string& key) const {
     if (s == "false" || s == "no" || s == "off") return false;
   }
   fail(key, "expected true or false, found " + kind(node));
+}
+
+std::string Fields::expand(const std::string& value, const std::string& key) const {
+  std::string out;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    if (value.compare(i, 2, "${") != 0) {
+      out += value[i];
+      continue;
+    }
+    const std::size_t end = value.find('}', i);
+    if (end == std::string::npos) fail(key, cat("'", value, "': unterminated ${"));
+    const std::string name = value.substr(i + 2, end - i - 2);
+    if (name == "EPIPOLE_DATA_DIR") {
+      out += default_data_directory().string();
+    } else if (const char* v = std::getenv(name.c_str()); v != nullptr) {
+      out += v;
+    } else {
+      fail(key, cat("'", value, "': environment variable ", name, " is not set"));
+    }
+    i = end;
+  }
+  return out;
+}
+
+std::filesystem::path Fields::path(const YAML::Node& node, const std::string& key) const {
+  const std::string value = text(node, key);
+  if (value.empty()) fail(key, "is an empty path");
+  std::filesystem::path p = expand(value, key);
+  return p.is_absolute() ? p : std::filesystem::path(file_).parent_path() / p;
+}
+
+std::vector<std::filesystem::path> Fields::files(const YAML::Node& node,
+                                                 const std::string& key) const {
+  std::vector<std::filesystem::path> out;
+  const auto add = [&](const YAML::Node& item, const std::string& k) {
+    const std::filesystem::path p = path(item, k);
+    if (p.string().find_first_of("*?[") == std::string::npos) {
+      out.push_back(p);
+      return;
+    }
+    glob_t g{};
+    const int rc = ::glob(p.c_str(), 0, nullptr, &g);
+    for (std::size_t i = 0; rc == 0 && i < g.gl_pathc; ++i) out.emplace_back(g.gl_pathv[i]);
+    globfree(&g);
+    if (rc != 0) fail(k, cat("no file matches '", p.string(), "'"));
+  };
+  if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) add(node[i], cat(key, "[", i, "]"));
+  } else {
+    add(node, key);
+  }
+  return out;
 }
 
 }  // namespace epipole::yaml

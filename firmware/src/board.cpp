@@ -4,9 +4,7 @@
 
 namespace epipole::firmware {
 
-namespace {
-
-hal::HardwareConfig hardware_config(const BoardConfig& config, SceneImages sim_images) {
+hal::HardwareConfig hardware_config(const BoardConfig& config) {
   hal::HardwareConfig h;
   h.camera_backend = config.cameras.backend;
   h.left = config.cameras.left;
@@ -15,22 +13,16 @@ hal::HardwareConfig hardware_config(const BoardConfig& config, SceneImages sim_i
   h.trigger = config.trigger.line;
   h.serial_backend = config.serial.backend;
   h.serial = config.serial.port;
-  h.sim.left = std::move(sim_images.left);
-  h.sim.right = std::move(sim_images.right);
-  h.sim.seed = config.sim.seed;
-  h.sim.drop_rate = config.sim.drop_rate;
-  h.sim.corrupt_rate = config.sim.corrupt_rate;
-  h.sim.charge_compute = config.sim.charge_compute;
+  h.width = config.width();
+  h.height = config.height();
+  h.sections = config.sections;
   return h;
 }
 
-}  // namespace
+Board::Board(const BoardConfig& config) : Board(hardware_config(config)) {}
 
-Board::Board(const BoardConfig& config)
-    : Board(config, config.simulated() ? load_scene_images(config) : SceneImages{}) {}
-
-Board::Board(const BoardConfig& config, SceneImages sim_images)
-    : hardware_(hardware_config(config, std::move(sim_images))),
+Board::Board(hal::HardwareConfig hardware)
+    : hardware_(std::move(hardware)),
       left_(hardware_.camera(hal::Side::left), hardware_.clock()),
       right_(hardware_.camera(hal::Side::right), hardware_.clock()) {
   if (hal::SerialPort* port = hardware_.serial()) {

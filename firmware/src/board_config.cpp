@@ -1,6 +1,5 @@
 #include "epipole/firmware/board_config.hpp"
 
-#include <glob.h>
 #include <cmath>
 #include <cstdlib>
 
@@ -19,16 +18,6 @@ namespace epipole::firmware {
 
 namespace fs = std::filesystem;
 
-const BoardConfig::SimScene* BoardConfig::sim_scene() const {
-  for (const SimScene& s : sim.scenes) {
-    if (s.name == sim.scene) return &s;
-  }
-  return nullptr;
-}
-
-bool BoardConfig::simulated() const {
-  return hal::BackendRegistry::builtin().camera_traits(cameras.backend).simulated;
-}
 bool BoardConfig::has_trigger() const {
   return trigger.backend != hal::kNoBackend;
 }
@@ -36,48 +25,18 @@ bool BoardConfig::has_link() const {
   return serial.backend != hal::kNoBackend;
 }
 
-fs::path default_data_directory() {
-  if (const char* dir = std::getenv("EPIPOLE_DATA_DIR"); dir != nullptr && *dir != '\0') {
-    return dir;
-  }
-  if (const char* cache = std::getenv("XDG_CACHE_HOME"); cache != nullptr && *cache != '\0') {
-    return fs::path(cache) / "epipole" / "data";
-  }
-  const char* home = std::getenv("HOME");
-  return fs::path(home != nullptr ? home : ".") / ".cache" / "epipole" / "data";
-}
-
 namespace {
 
 // Reads one board file: every key known, every value checked, errors naming file and key.
 class BoardReader {
  public:
-  explicit BoardReader(const fs::path& file) : file_(file), f_(file.string()) {}
+  BoardReader(const fs::path& file, std::span<const hal::BackendOption> camera_options)
+      : file_(file), f_(file.string()), camera_options_(camera_options) {}
 
   BoardConfig read(const std::string& text) {
     const YAML::Node root = f_.parse(text);
     f_.require_map(root, "");
-    f_.only_keys(root, "",
-                 {"version",
-                  "name",
-                  "cameras",
-                  "trigger",
-                  "pairing",
-                  "serial",
-                  "calibration",
-                  "stages",
-                  "corners",
-                  "stereo",
-                  "sparse",
-                  "detector",
-                  "obstacles",
-                  "depth_grid",
-                  "threads",
-                  "memory_budget_mb",
-                  "snapshot_directory",
-                  "snapshot_limit",
-                  "snapshot_min_free_mb",
-                  "sim"});
+    only_known_keys(root);
     const int version = f_.integer(f_.child(root, "", "version"), "version");
     if (version < 1 || version > BoardConfig::kVersion) {
       f_.fail("version", cat(version, " is not a board file version this firmware reads (1..",
@@ -91,7 +50,7 @@ class BoardReader {
     read_pairing(root, c);
     read_serial(root, c);
     if (const YAML::Node n = f_.optional_child(root, "", "calibration"); n.IsDefined()) {
-      c.calibration = path(n, "calibration");
+      c.calibration = f_.path(n, "calibration");
     }
     read_stages(root, c);
     read_corners(root, c);
@@ -107,11 +66,11 @@ class BoardReader {
       c.memory_budget_bytes = static_cast<std::size_t>(mb * 1024 * 1024);
     }
     if (const YAML::Node n = f_.optional_child(root, "", "snapshot_directory"); n.IsDefined()) {
-      c.snapshot_directory = path(n, "snapshot_directory");
+      c.snapshot_directory = f_.path(n, "snapshot_directory");
     }
     integer(root, "", "snapshot_limit", c.snapshot_limit, 1, 1'000'000);
     number(root, "", "snapshot_min_free_mb", c.snapshot_min_free_mb, 0, 1e7);
-    read_sim(root, c);
+    read_backend_sections(root, c);
     return c;
   }
 
@@ -170,56 +129,6 @@ class BoardReader {
     });
   }
 
-  std::string expand(const std::string& value, const std::string& key) const {
-    std::string out;
-    for (std::size_t i = 0; i < value.size(); ++i) {
-      if (value.compare(i, 2, "${") != 0) {
-        out += value[i];
-        continue;
-      }
-      const std::size_t end = value.find('}', i);
-      if (end == std::string::npos) f_.fail(key, cat("'", value, "': unterminated ${"));
-      const std::string name = value.substr(i + 2, end - i - 2);
-      if (name == "EPIPOLE_DATA_DIR") {
-        out += default_data_directory().string();
-      } else if (const char* v = std::getenv(name.c_str()); v != nullptr) {
-        out += v;
-      } else {
-        f_.fail(key, cat("'", value, "': environment variable ", name, " is not set"));
-      }
-      i = end;
-    }
-    return out;
-  }
-  fs::path path(const YAML::Node& n, const std::string& key) const {
-    const std::string value = f_.text(n, key);
-    if (value.empty()) f_.fail(key, "is an empty path");
-    fs::path p = expand(value, key);
-    return p.is_absolute() ? p : file_.parent_path() / p;
-  }
-  // A file name, a glob pattern (matched in name order) or a sequence of them.
-  std::vector<fs::path> files(const YAML::Node& n, const std::string& key) const {
-    std::vector<fs::path> out;
-    const auto add = [&](const YAML::Node& item, const std::string& k) {
-      const fs::path p = path(item, k);
-      if (p.string().find_first_of("*?[") == std::string::npos) {
-        out.push_back(p);
-        return;
-      }
-      glob_t g{};
-      const int rc = ::glob(p.c_str(), 0, nullptr, &g);
-      for (std::size_t i = 0; rc == 0 && i < g.gl_pathc; ++i) out.emplace_back(g.gl_pathv[i]);
-      globfree(&g);
-      if (rc != 0) f_.fail(k, cat("no file matches '", p.string(), "'"));
-    };
-    if (n.IsSequence()) {
-      for (std::size_t i = 0; i < n.size(); ++i) add(n[i], cat(key, "[", i, "]"));
-    } else {
-      add(n, key);
-    }
-    return out;
-  }
-
   void read_camera(const YAML::Node& cams, const char* side, hal::CameraConfig& camera) {
     const std::string p = cat("cameras.", side);
     const YAML::Node n = f_.child(cams, "cameras", side);
@@ -238,7 +147,7 @@ class BoardReader {
     hal::CameraConfig common;
     common.width = f_.integer(f_.child(n, "cameras", "width"), "cameras.width");
     common.height = f_.integer(f_.child(n, "cameras", "height"), "cameras.height");
-    text(n, "cameras", "backend", c.cameras.backend);
+    c.cameras.backend = f_.text(f_.child(n, "cameras", "backend"), "cameras.backend");
     optional(n, "cameras", "format", common.format, [&](const YAML::Node& v, const std::string& k) {
       const std::string s = f_.text(v, k);
       const auto format = hal::parse_pixel_format(s);
@@ -271,9 +180,8 @@ class BoardReader {
   void read_trigger(const YAML::Node& root, BoardConfig& c) {
     const YAML::Node n =
         section(root, "trigger", {"backend", "line", "chip", "role", "rate_hz", "pulse_width_us"});
-    text(n, "trigger", "backend", c.trigger.backend);
+    c.trigger.backend = f_.text(f_.child(n, "trigger", "backend"), "trigger.backend");
     hal::TriggerConfig& t = c.trigger.line;
-    t.line = "sim";
     text(n, "trigger", "line", t.line);
     text(n, "trigger", "chip", t.chip);
     choice(n, "trigger", "role", t.role, {"master", "slave"});
@@ -407,7 +315,7 @@ class BoardReader {
         root, "detector", {"cascade", "scale_factor", "min_neighbors", "min_size", "max_size"});
     if (n.IsDefined()) {
       if (const YAML::Node p = f_.optional_child(n, "detector", "cascade"); p.IsDefined()) {
-        c.detector.cascade = path(p, "detector.cascade");
+        c.detector.cascade = f_.path(p, "detector.cascade");
       }
     }
     number(n, "detector", "scale_factor", c.detector.scale_factor, 1.0001, 4.0);
@@ -483,58 +391,57 @@ class BoardReader {
     c.threads.count = count != 0 ? count : std::clamp(cpus, 1, 64);
   }
 
-  void read_sim(const YAML::Node& root, BoardConfig& c) {
-    const YAML::Node n = section(
-        root, "sim", {"scene", "scenes", "charge_compute", "drop_rate", "corrupt_rate", "seed"});
-    if (!n.IsDefined()) return;
-    text(n, "sim", "scene", c.sim.scene);
-    boolean(n, "sim", "charge_compute", c.sim.charge_compute);
-    number(n, "sim", "drop_rate", c.sim.drop_rate, 0, 1);
-    number(n, "sim", "corrupt_rate", c.sim.corrupt_rate, 0, 1);
-    int seed = 1;
-    integer(n, "sim", "seed", seed, 0, 1'000'000'000);
-    c.sim.seed = static_cast<std::uint64_t>(seed);
-    const YAML::Node scenes = f_.child(n, "sim", "scenes");
-    f_.require_map(scenes, "sim.scenes");
-    for (const auto& entry : scenes) {
-      BoardConfig::SimScene s;
-      s.name = entry.first.Scalar();
-      const std::string p = "sim.scenes." + s.name;
-      const YAML::Node m = entry.second;
-      f_.only_keys(m, p,
-                   {"left", "right", "side_by_side", "synthesize", "disparity", "max_frames",
-                    "calibration"});
-      integer(m, p, "max_frames", s.max_frames, 1, 100'000);
-      if (const YAML::Node v = f_.optional_child(m, p, "side_by_side"); v.IsDefined()) {
-        for (const char* other : {"left", "right", "synthesize"}) {
-          if (f_.optional_child(m, p, other).IsDefined()) {
-            f_.fail(p, cat("side_by_side and ", other, " are two sources: give one"));
-          }
-        }
-        s.side_by_side = path(v, p + ".side_by_side");
-      } else if (const YAML::Node y = f_.optional_child(m, p, "synthesize"); y.IsDefined()) {
-        s.synthesize = path(y, p + ".synthesize");
-        s.synthesize_disparity = f_.integer(f_.child(m, p, "disparity"), p + ".disparity");
-        if (s.synthesize_disparity < 0 || s.synthesize_disparity > 255) {
-          f_.fail(p + ".disparity", "must be in 0..255");
-        }
-      } else {
-        s.left = files(f_.child(m, p, "left"), p + ".left");
-        s.right = files(f_.child(m, p, "right"), p + ".right");
-        if (s.left.size() != s.right.size()) {
-          f_.fail(p, cat(s.left.size(), " left images but ", s.right.size(), " right images"));
-        }
-      }
-      if (const YAML::Node v = f_.optional_child(m, p, "calibration"); v.IsDefined()) {
-        s.calibration = path(v, p + ".calibration");
-      }
-      c.sim.scenes.push_back(std::move(s));
+  // The sections backends read themselves: each one present, and each one a chosen backend needs
+  // (which may say what is missing); the options given for the cameras go to theirs.
+  void read_backend_sections(const YAML::Node& root, BoardConfig& c) {
+    const hal::BackendRegistry& registry = hal::BackendRegistry::builtin();
+    const char* cameras = registry.camera_traits(c.cameras.backend).section;
+    const char* trigger = registry.trigger_traits(c.trigger.backend).section;
+    if (cameras == nullptr && !camera_options_.empty()) {
+      f_.fail("cameras.backend",
+              cat("'", c.cameras.backend, "' takes no option '", camera_options_.front().key, "'"));
     }
-    if (c.sim.scene.empty() && !c.sim.scenes.empty()) c.sim.scene = c.sim.scenes.front().name;
+    for (const hal::SectionBackend& section : registry.sections()) {
+      const YAML::Node n = f_.optional_child(root, "", section.name.c_str());
+      const bool for_cameras = cameras != nullptr && section.name == cameras;
+      const bool needed = for_cameras || (trigger != nullptr && section.name == trigger);
+      if (!n.IsDefined() && !needed) continue;
+      c.sections.set(
+          section.name,
+          section.read(n, f_,
+                       for_cameras ? camera_options_ : std::span<const hal::BackendOption>()));
+    }
+  }
+
+  void only_known_keys(const YAML::Node& root) const {
+    std::vector<std::string_view> known = {"version",
+                                           "name",
+                                           "cameras",
+                                           "trigger",
+                                           "pairing",
+                                           "serial",
+                                           "calibration",
+                                           "stages",
+                                           "corners",
+                                           "stereo",
+                                           "sparse",
+                                           "detector",
+                                           "obstacles",
+                                           "depth_grid",
+                                           "threads",
+                                           "memory_budget_mb",
+                                           "snapshot_directory",
+                                           "snapshot_limit",
+                                           "snapshot_min_free_mb"};
+    for (const hal::SectionBackend& section : hal::BackendRegistry::builtin().sections()) {
+      known.push_back(section.name);
+    }
+    f_.only_keys(root, "", known);
   }
 
   fs::path file_;
   yaml::Fields f_;
+  std::span<const hal::BackendOption> camera_options_;
 };
 
 }  // namespace
@@ -659,16 +566,6 @@ struct Checks {
       fail("threads.realtime_priority", "must be in 1..99");
     }
   }
-
-  void sim() const {
-    if (!c.simulated()) return;
-    if (c.sim.scenes.empty()) fail("sim.scenes", "the simulated cameras need at least one scene");
-    if (c.sim_scene() == nullptr) {
-      std::string names;
-      for (const auto& s : c.sim.scenes) names += (names.empty() ? "" : ", ") + s.name;
-      fail("sim.scene", cat("'", c.sim.scene, "' is not a scene of this board (", names, ")"));
-    }
-  }
 };
 
 }  // namespace
@@ -684,11 +581,11 @@ void validate(const BoardConfig& c, const std::string& file) {
   checks.frame_timing();
   checks.link();
   checks.stages_and_threads();
-  checks.sim();
 }
 
-BoardConfig parse_board_config(const std::string& yaml_text, const fs::path& file) {
-  BoardConfig c = BoardReader(file).read(yaml_text);
+BoardConfig parse_board_config(const std::string& yaml_text, const fs::path& file,
+                               std::span<const hal::BackendOption> camera_options) {
+  BoardConfig c = BoardReader(file, camera_options).read(yaml_text);
   validate(c, file.string());
   return c;
 }
@@ -745,13 +642,14 @@ BoardConfig load_board_config(const fs::path& path) {
   return parse_board_config(read_text_file(file), file);
 }
 
-BoardConfig load_board_config(const fs::path& path, std::span<const std::string> overrides) {
-  if (overrides.empty()) return load_board_config(path);
+BoardConfig load_board_config(const fs::path& path, std::span<const std::string> overrides,
+                              std::span<const hal::BackendOption> camera_options) {
   const fs::path file = board_file(path);
+  if (overrides.empty()) return parse_board_config(read_text_file(file), file, camera_options);
   const YAML::Node root = yaml::Fields(file.string()).parse(read_text_file(file));
   if (!root.IsMap()) throw Error(cat(file.string(), ": expected a YAML map of keys"));
   for (const std::string& setting : overrides) apply_override(root, setting, file.string());
-  return parse_board_config(YAML::Dump(root), file);
+  return parse_board_config(YAML::Dump(root), file, camera_options);
 }
 
 }  // namespace epipole::firmware

@@ -27,9 +27,12 @@ void check_budget(const std::string& board, std::optional<std::size_t> budget, s
           needed / 1024, " KiB but the budget is ", *budget / 1024, " KiB");
 }
 
-const BoardConfig::SimScene* scene_with_calibration(const BoardConfig& config) {
-  const BoardConfig::SimScene* scene = config.sim_scene();
-  return scene != nullptr && config.simulated() && !scene->calibration.empty() ? scene : nullptr;
+// The calibration file the section of the cameras' backend names, if any.
+std::filesystem::path backend_calibration(const BoardConfig& config) {
+  const char* section =
+      hal::BackendRegistry::builtin().camera_traits(config.cameras.backend).section;
+  const hal::BackendSettings* settings = section ? config.sections.find(section) : nullptr;
+  return settings != nullptr ? settings->calibration() : std::filesystem::path();
 }
 
 // Not there, rather than there but unreadable (that one is an error when it is loaded).
@@ -41,8 +44,8 @@ bool not_there(const std::filesystem::path& file) {
 }  // namespace
 
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config) {
-  if (const BoardConfig::SimScene* scene = scene_with_calibration(config)) {
-    return calib::load_calibration(scene->calibration);
+  if (const std::filesystem::path file = backend_calibration(config); !file.empty()) {
+    return calib::load_calibration(file);
   }
   if (config.calibration.empty() || not_there(config.calibration)) return std::nullopt;
   return calib::load_calibration(config.calibration);
@@ -68,8 +71,8 @@ Firmware::Firmware(BoardConfig config) : config_(std::move(config)) {
   build(std::make_unique<Board>(config_));
 }
 
-Firmware::Firmware(BoardConfig config, SceneImages sim_images) : config_(std::move(config)) {
-  build(std::make_unique<Board>(config_, std::move(sim_images)));
+Firmware::Firmware(BoardConfig config, std::unique_ptr<Board> board) : config_(std::move(config)) {
+  build(std::move(board));
 }
 
 Firmware::~Firmware() = default;
@@ -96,50 +99,11 @@ MemoryReport Firmware::memory_report() const {
   report.add("link", link_->working_set_bytes());
   loop_->add_memory(report);
   report.add(kCameras, board_->left().working_set_bytes() + board_->right().working_set_bytes() +
-                           board_->hardware().scene_bytes());
+                           board_->hardware().backend_bytes());
   return report;
 }
 
-namespace {
-
-// The first backend of the registry's list that is part of the simulated board.
-template <typename Traits>
-std::string simulated_backend(const std::vector<std::string>& names, Traits traits) {
-  for (const std::string& name : names) {
-    if (traits(name).simulated) return name;
-  }
-  throw Error("this build has no simulated backend to stand in for the board's devices");
-}
-
-// The stand-ins for the board's devices: simulated cameras of the same size (grey, whatever the
-// board's cameras deliver: the frame loop sees gray planes either way) and a simulated trigger
-// master at the board's rate.
-SceneImages stand_in_for_devices(BoardConfig& config) {
-  const hal::BackendRegistry& registry = hal::BackendRegistry::builtin();
-  config.cameras.backend = simulated_backend(
-      registry.camera_backends(), [&](const std::string& n) { return registry.camera_traits(n); });
-  for (auto [camera, name] :
-       {std::pair{&config.cameras.left, "left"}, std::pair{&config.cameras.right, "right"}}) {
-    camera->device = name;
-    camera->format = hal::PixelFormat::grey;
-  }
-  if (config.has_trigger()) {
-    config.trigger.backend =
-        simulated_backend(registry.trigger_backends(),
-                          [&](const std::string& n) { return registry.trigger_traits(n); });
-    config.trigger.line.role = hal::TriggerRole::master;
-  }
-  SceneImages images;
-  images.left.emplace_back(config.width(), config.height());
-  images.right.emplace_back(config.width(), config.height());
-  return images;
-}
-
-}  // namespace
-
 MemoryReport check_memory(BoardConfig config) {
-  const bool stand_in = !config.simulated();
-  SceneImages images = stand_in ? stand_in_for_devices(config) : load_scene_images(config);
   config.serial.backend = std::string(hal::kNoBackend);  // the link's queue is made all the same
   std::optional<TemporaryFolder> snapshots;
   if (!config.snapshot_directory.empty()) {
@@ -149,7 +113,10 @@ MemoryReport check_memory(BoardConfig config) {
   const std::string board = config.name;
   const std::optional<std::size_t> budget = config.memory_budget_bytes;
   config.memory_budget_bytes.reset();  // checked below, without the stand-ins' images
-  MemoryReport report = Firmware(std::move(config), std::move(images)).memory_report();
+  hal::HardwareConfig hardware = hardware_config(config);
+  const bool stand_in = hal::stand_in_for_devices(hardware);
+  MemoryReport report =
+      Firmware(std::move(config), std::make_unique<Board>(std::move(hardware))).memory_report();
   if (stand_in) {
     std::erase_if(report.parts(),
                   [](const MemoryReport::Part& p) { return p.name == Firmware::kCameras; });

@@ -78,7 +78,7 @@ FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline
                   static_cast<std::uint64_t>(config.snapshot_min_free_mb * 1024 * 1024)}),
       stages_(config.stages | protocol::kAlwaysOnStages),
       // The board names its calibration file, and none was loaded: it does not exist yet (a
-      // file that does not read, or a simulated scene's, stops the firmware at start-up).
+      // file that does not read, or a backend section's, stops the firmware at start-up).
       not_calibrated_(!config.calibration.empty() && !pipeline.has_calibration()),
       no_cascade_(!pipeline.missing_cascade().empty()) {}
 
@@ -538,9 +538,6 @@ std::optional<NextPair::Images> FrameLoop::GrabAhead::take() {
       loop_.board_.right().config().buffer_count < 3) {
     return std::nullopt;
   }
-  const hal::Nanoseconds now = steady_now();
-  loop_.board_.clock().spend(now - loop_.charged_until_);
-  loop_.charged_until_ = now;
   const DeferReopen defer(loop_.board_.left_recovery(), loop_.board_.right_recovery());
   const hal::PairResult got = loop_.grabber_.next(0);
   if (got.status == hal::PairStatus::timeout) return std::nullopt;
@@ -613,14 +610,11 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   // summary.
   grabber_.pairer().ledger().published(pair.left.sequence);
   const hal::Nanoseconds t0 = steady_now();
-  charged_until_ = t0;
   const FrameResult& r = pipeline_.process(pair.left.gray, pair.right.gray, pair.left.sequence,
                                            trigger.ns, stages_, &ahead_);
-  clock.spend(steady_now() - charged_until_);
   const hal::Nanoseconds t1 = steady_now();
   publish(r, clock.now() - trigger.ns, trigger.from_capture);
   const hal::Nanoseconds t2 = steady_now();
-  clock.spend(t2 - t1);
   StageTimes times = r.times;
   times[static_cast<std::size_t>(Stage::capture)] = captured;
   times[static_cast<std::size_t>(Stage::publish)] = t2 - t1;

@@ -93,7 +93,9 @@ int main(int argc, char** argv) {
   std::string scene;
   app.add_option("--board", board_path, "Board folder (with board.yaml) or board file")->required();
   app.add_option("--frames", frames, "Stop after this many frame pairs (0: run until stopped)");
-  app.add_option("--scene", scene, "Simulated board: the scene to replay (default: the board's)");
+  app.add_option("--scene", scene,
+                 "The scene the cameras replay, on a board whose cameras' backend has scenes "
+                 "(default: the board file's)");
   bool check = false;
   app.add_flag("--check", check,
                "Validate the board file and print the frame loop's memory per stage, opening no "
@@ -102,11 +104,9 @@ int main(int argc, char** argv) {
 
   firmware::ServiceNotifier service;
   try {
-    firmware::BoardConfig config = firmware::load_board_config(board_path);
-    if (!scene.empty()) {
-      config.sim.scene = scene;
-      firmware::validate(config, board_path);
-    }
+    std::vector<hal::BackendOption> camera_options;
+    if (!scene.empty()) camera_options.push_back({"scene", scene});
+    firmware::BoardConfig config = firmware::load_board_config(board_path, {}, camera_options);
     if (const std::string problem = firmware::watchdog_problem(config, service.watchdog_interval());
         !problem.empty()) {
       throw Error(board_path + ": " + problem);

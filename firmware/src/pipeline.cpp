@@ -5,6 +5,7 @@
 #include <chrono>
 #include <variant>
 
+#include "epipole/core/data_directory.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/cascade_file.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"

@@ -1,5 +1,6 @@
 #include "epipole/hal/clock.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <ctime>
 
@@ -26,20 +27,36 @@ void MonotonicClock::sleep_until(Nanoseconds deadline) {
   }
 }
 
-void VirtualClock::sleep_until(Nanoseconds deadline) {
-  Nanoseconds current = now_.load(std::memory_order_acquire);
-  while (current < deadline &&
-         !now_.compare_exchange_weak(current, deadline, std::memory_order_acq_rel)) {
-  }
+Nanoseconds VirtualClock::now() const {
+  const std::lock_guard lock(mutex_);
+  charge_host_time();
+  return now_;
 }
 
-void VirtualClock::spend(Nanoseconds elapsed) {
-  if (charge_compute_ && elapsed > 0) advance(elapsed);
+void VirtualClock::sleep_until(Nanoseconds deadline) {
+  const std::lock_guard lock(mutex_);
+  charge_host_time();
+  now_ = std::max(now_, deadline);
 }
 
 void VirtualClock::advance(Nanoseconds delta) {
   require(delta >= 0, "a virtual clock cannot go back (advance by ", delta, " ns)");
-  now_.fetch_add(delta, std::memory_order_acq_rel);
+  const std::lock_guard lock(mutex_);
+  charge_host_time();
+  now_ += delta;
+}
+
+void VirtualClock::charge_compute(bool on) {
+  const std::lock_guard lock(mutex_);
+  charge_compute_ = on;
+  host_charged_until_ = MonotonicClock().now();
+}
+
+void VirtualClock::charge_host_time() const {
+  if (!charge_compute_) return;
+  const Nanoseconds host = MonotonicClock().now();
+  now_ += host - host_charged_until_;
+  host_charged_until_ = host;
 }
 
 }  // namespace epipole::hal

@@ -67,6 +67,16 @@ void BackendRegistry::add_unavailable_trigger(std::string name, std::string reas
   triggers_.push_back({std::move(name), {}, std::move(reason), traits});
 }
 
+void BackendRegistry::add_section(SectionBackend section) {
+  sections_.push_back(std::move(section));
+}
+
+const SectionBackend* BackendRegistry::section(std::string_view name) const {
+  const auto it = std::find_if(sections_.begin(), sections_.end(),
+                               [&](const SectionBackend& s) { return s.name == name; });
+  return it != sections_.end() ? &*it : nullptr;
+}
+
 std::unique_ptr<CameraSource> BackendRegistry::create_camera(std::string_view backend,
                                                              const CameraConfig& config,
                                                              const BackendContext& context) const {

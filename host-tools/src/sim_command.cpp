@@ -27,6 +27,8 @@
 #include "epipole/tools/progress.hpp"
 #include "message_json.hpp"
 #include "pictures.hpp"
+#include "sim/sim.hpp"
+#include "sim/sim_settings.hpp"
 #include "stereo_preview.hpp"
 
 namespace epipole::tools {
@@ -201,11 +203,9 @@ class FrameProgress final : public firmware::FrameObserver {
   Progress progress_;
 };
 
-nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& scene,
-                         const SimOptions& options) {
-  firmware::BoardConfig config = board;
-  config.sim.scene = scene;
-  firmware::validate(config, options.board);
+nlohmann::json run_scene(const std::string& scene, const SimOptions& options) {
+  const std::vector<hal::BackendOption> chosen = {{"scene", scene}};
+  firmware::BoardConfig config = firmware::load_board_config(options.board, {}, chosen);
   const fs::path directory = fs::path(options.out) / scene;
   fs::create_directories(directory);
   // The pty's robot end: a link in the output folder, so the firmware's link is easy to find.
@@ -224,7 +224,7 @@ nlohmann::json run_scene(const firmware::BoardConfig& board, const std::string& 
     config.detector.cascade = compiled;
   }
   firmware::Firmware fw(config);
-  const int images = static_cast<int>(fw.board().hardware().scene_images());
+  const int images = static_cast<int>(hal::simulated_board(fw.board().hardware())->scene_images());
   PictureWriter pictures(directory, images, options.pictures, config.stereo.max_disparity);
   FrameProgress progress(pictures, scene, options.frames);
   fw.frame_loop().set_observer(&progress);
@@ -280,18 +280,19 @@ void print_scene(const nlohmann::json& s) {
 
 void run_sim(const SimOptions& options) {
   const firmware::BoardConfig board = firmware::load_board_config(options.board);
-  require(board.simulated(), options.board,
+  require(hal::BackendRegistry::builtin().camera_traits(board.cameras.backend).simulated,
+          options.board,
           ": not a simulated board (cameras.backend "
           "is '",
           board.cameras.backend, "')");
   std::vector<std::string> scenes = options.scenes;
   if (scenes.empty()) {
-    for (const auto& s : board.sim.scenes) scenes.push_back(s.name);
+    for (const auto& s : hal::sim_settings(board.sections).scenes) scenes.push_back(s.name);
   }
   fs::create_directories(options.out);
   nlohmann::json summary = {{"board", board.name}, {"scenes", nlohmann::json::array()}};
   for (const std::string& scene : scenes) {
-    const nlohmann::json s = run_scene(board, scene, options);
+    const nlohmann::json s = run_scene(scene, options);
     if (!options.json) print_scene(s);
     summary["scenes"].push_back(s);
   }

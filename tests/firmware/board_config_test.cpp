@@ -81,8 +81,7 @@ TEST(BoardConfig, ReadsEveryKey) {
   EXPECT_EQ(c.snapshot_directory, rig.dir.path() / "snaps");
   EXPECT_EQ(c.snapshot_limit, 12);
   EXPECT_EQ(c.snapshot_min_free_mb, 500.0);
-  ASSERT_NE(c.sim_scene(), nullptr);
-  EXPECT_EQ(c.sim_scene()->synthesize_disparity, 8);
+  EXPECT_EQ(test::sim(c).chosen().synthesize_disparity, 8);
 }
 
 // Without threads.count the vision stages get the CPUs the firmware may run on: those of
@@ -165,6 +164,9 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
       {"unknown scene", "",
        "sim: {scene: nowhere, scenes: {a: {synthesize: x.png, disparity: 1}}}\n",
        "sim.scene: 'nowhere' is not a scene of this board (a)"},
+      {"a simulated board without its section",
+       "sim: {charge_compute: false, scenes: {test: {synthesize: unused.png, disparity: 8}}}\n", "",
+       "sim.scenes: the simulated cameras need at least one scene"},
       {"glob without files", "synthesize: unused.png, disparity: 8",
        "left: nothing-here-*.png, right: nothing-there-*.png",
        "sim.scenes.test.left: no file matches"},
@@ -211,6 +213,42 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
     EXPECT_NE(error.find(c.expected), std::string::npos) << c.what << ": got '" << error << "'";
     EXPECT_NE(error.find("board.yaml"), std::string::npos) << c.what << ": " << error;
   }
+}
+
+// epipole-fw --scene: an option for the section of the cameras' backend, which checks it; a
+// backend without a section takes none.
+TEST(BoardConfig, CameraOptionsGoToTheCamerasBackendSection) {
+  SimRig rig;
+  const std::string text =
+      rig.yaml("").replace(rig.yaml("").find("scenes: {"), 9,
+                           "scenes: {other: {synthesize: unused.png, disparity: 4}, ");
+  const std::filesystem::path file = rig.dir.path() / "board.yaml";
+  EXPECT_EQ(test::sim(parse_board_config(text, file)).scene, "other") << "the file's first";
+  const std::vector<hal::BackendOption> scene = {{"scene", "test"}};
+  EXPECT_EQ(test::sim(parse_board_config(text, file, scene)).chosen().synthesize_disparity, 8);
+
+  const std::vector<hal::BackendOption> nowhere = {{"scene", "nowhere"}};
+  EXPECT_NE(test::error_of([&] {
+              parse_board_config(text, file, nowhere);
+            }).find("board.yaml: sim.scene: 'nowhere' is not a scene of this board (other, test)"),
+            std::string::npos);
+  const std::vector<hal::BackendOption> colour = {{"colour", "blue"}};
+  EXPECT_NE(test::error_of([&] {
+              parse_board_config(text, file, colour);
+            }).find("the simulated board takes no option 'colour'"),
+            std::string::npos);
+
+  std::string v4l2 = rig.yaml();
+  v4l2.replace(v4l2.find("backend: sim, left: left, right: right"), 38,
+               "backend: v4l2, left: /dev/video0, right: /dev/video2");
+  v4l2.replace(v4l2.find("trigger: {backend: sim"), 22, "trigger: {backend: none");
+  v4l2.replace(v4l2.find("trigger: external"), 17, "trigger: free_running");
+  EXPECT_TRUE(parse_board_config(v4l2, file).sections.find("sim") != nullptr)
+      << "a section the file has is read, used or not";
+  EXPECT_NE(test::error_of([&] {
+              parse_board_config(v4l2, file, scene);
+            }).find("cameras.backend: 'v4l2' takes no option 'scene'"),
+            std::string::npos);
 }
 
 TEST(BoardConfig, AFolderMeansItsBoardFile) {
@@ -297,22 +335,24 @@ TEST(BoardConfig, EveryShippedBoardLoads) {
       loaded.push_back(folder.path().filename().string() + "/" + name);
       // A board's own rig.yaml is made by epipole calibrate on the user's rig; a file that
       // ships in the repository must load.
+      const bool simulated =
+          hal::BackendRegistry::builtin().camera_traits(c.cameras.backend).simulated;
       std::vector<fs::path> calibrations{c.calibration};
-      for (const auto& scene : c.sim.scenes) calibrations.push_back(scene.calibration);
+      if (simulated) {
+        for (const auto& scene : test::sim(c).scenes) {
+          EXPECT_TRUE(fs::exists(scene.calibration)) << name << ": scene " << scene.name;
+          calibrations.push_back(scene.calibration);
+        }
+      }
       for (const fs::path& calibration : calibrations) {
         if (calibration.empty() || !fs::exists(calibration)) continue;
         EXPECT_EQ(test::error_of([&] { calib::load_calibration(calibration); }), "") << calibration;
-      }
-      if (c.simulated()) {
-        for (const auto& scene : c.sim.scenes) {
-          EXPECT_TRUE(fs::exists(scene.calibration)) << name << ": scene " << scene.name;
-        }
       }
       // `epipole-fw --check` on it: the frame loop made with stand-ins for its devices (a
       // simulated board's scene is read from its files, which cross builds cannot read).
       MemoryReport report;
       const std::string check_error = test::error_of([&] { report = check_memory(c); });
-      if (c.simulated() && !can_load_scene_images()) {
+      if (simulated && !hal::can_load_scenes()) {
         EXPECT_NE(check_error.find("cannot read image files"), std::string::npos) << check_error;
         continue;
       }

@@ -82,7 +82,7 @@ struct BoardFolder {
   test::SimRig rig;
   std::filesystem::path link;
   BoardFolder() {
-    const firmware::SceneImages images = rig.images(2);
+    const hal::StereoImages images = rig.images(2);
     for (int i = 0; i < 2; ++i) {
       save_image(rig.dir.path() / ("left" + std::to_string(i) + ".png"),
                  GrayView(images.left[static_cast<std::size_t>(i)].view()));

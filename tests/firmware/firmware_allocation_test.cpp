@@ -54,7 +54,7 @@ TEST(FirmwareAllocations, TheMemoryReportIsTheHeapTheFirmwareHolds) {
   std::size_t held = 0;
   MemoryReport report;
   {
-    const Firmware fw(config, rig.images(2));
+    const Firmware fw(rig.replaying(config, 2));
     held = test::live_bytes_in_all_threads() - before;
     report = fw.memory_report();
   }
@@ -92,7 +92,7 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   config.serial.backend = "pty";
   config.serial.protocol = GetParam();
   config.serial.port.baud = 4'000'000;
-  Firmware fw(config, rig.images(3));
+  Firmware fw(rig.replaying(config, 3));
   hal::TermiosSerialPort robot({fw.board().serial_peer(), 115200});
   std::atomic<bool> reading{true};
   std::thread reader([&] {  // the robot reads, so the link never fills up

@@ -90,7 +90,7 @@ struct Recorder final : FrameObserver {
 
 TEST(FrameLoop, RunsEveryStageOnEveryPairAndPublishesIt) {
   test::SimRig rig;
-  Firmware fw(rig.config, rig.images());
+  Firmware fw(rig.replaying(rig.config));
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
@@ -146,7 +146,7 @@ TEST(FrameLoop, RunsEveryStageOnEveryPairAndPublishesIt) {
 TEST(FrameLoop, TheDepthGridGoesWithEachPair) {
   test::SimRig rig;
   BoardConfig config = rig.parse("depth_grid: {columns: 8, rows: 6}\n");
-  Firmware fw(config, rig.images());
+  Firmware fw(rig.replaying(config));
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
@@ -174,7 +174,7 @@ TEST(FrameLoop, TheDepthGridGoesWithEachPair) {
 TEST(FrameLoop, RunsUncalibratedUntilTheCalibrationFileIsMade) {
   test::SimRig rig;
   std::filesystem::remove(rig.dir.path() / "rig.yaml");
-  Firmware fw(rig.config, rig.images());
+  Firmware fw(rig.replaying(rig.config));
   EXPECT_FALSE(fw.calibration());
   EXPECT_EQ(fw.missing_calibration(), rig.dir.path() / "rig.yaml");
   Recorder recorder;
@@ -196,11 +196,11 @@ TEST(FrameLoop, RunsUncalibratedUntilTheCalibrationFileIsMade) {
   // a simulated scene's calibration that is not there (a mistake in the board file, not a board
   // waiting for its calibration).
   std::ofstream(rig.dir.path() / "rig.yaml") << "version: [\n";
-  EXPECT_NE(test::error_of([&] { Firmware broken(rig.config, rig.images()); }).find("rig.yaml"),
+  EXPECT_NE(test::error_of([&] { Firmware broken(rig.replaying(rig.config)); }).find("rig.yaml"),
             std::string::npos);
   BoardConfig scene = rig.config;
-  scene.sim.scenes[0].calibration = rig.dir.path() / "scene-rig.yaml";
-  EXPECT_NE(test::error_of([&] { Firmware missing(scene, rig.images()); }).find("scene-rig.yaml"),
+  test::sim(scene).scenes[0].calibration = rig.dir.path() / "scene-rig.yaml";
+  EXPECT_NE(test::error_of([&] { Firmware missing(rig.replaying(scene)); }).find("scene-rig.yaml"),
             std::string::npos);
 }
 
@@ -209,7 +209,7 @@ TEST(FrameLoop, PublishesSparsePointsAtTheRigsDepthAndTheCalibrationHealth) {
   BoardConfig config = rig.config;
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   config.sparse.max_points = 20;
-  Firmware fw(config, rig.images());
+  Firmware fw(rig.replaying(config));
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
@@ -240,7 +240,7 @@ TEST(FrameLoop, DetectionsCarryTheirDepth) {
   test::SimRig rig;
   BoardConfig config = rig.config;
   rig.add_cascade(config);
-  Firmware fw(config, rig.images());
+  Firmware fw(rig.replaying(config));
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
@@ -275,7 +275,7 @@ TEST(FrameLoop, AnXmlCascadeIsRefusedWithTheCommandToCompileIt) {
   config.stages |= protocol::stage_bit(protocol::Stage::detect);
   config.detector.cascade = rig.dir.path() / "faces.xml";
   try {
-    Firmware fw(config, rig.images());
+    Firmware fw(rig.replaying(config));
     FAIL() << "the firmware reads compiled cascades only";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("epipole cascade-compile"), std::string::npos) << e.what();
@@ -301,7 +301,7 @@ TEST(FrameLoop, RunsWithoutDetectionUntilTheCompiledCascadeIsMade) {
   EXPECT_EQ(command,
             "epipole cascade-compile " + xml.string() + " " + config.detector.cascade.string());
 
-  Firmware fw(config, rig.images());
+  Firmware fw(rig.replaying(config));
   EXPECT_EQ(fw.pipeline().missing_cascade(), config.detector.cascade);
   EXPECT_EQ(fw.pipeline().available() & stage_bit(Stage::detect), 0u);
   Recorder recorder;
@@ -325,7 +325,7 @@ BoardConfig outrun_by_the_trigger(const test::SimRig& rig) {
   config.pairing.trigger_period = 1'000'000;
   config.pairing.tolerance = 200'000;
   config.pairing.edge_tolerance = 200'000;
-  config.sim.charge_compute = true;
+  test::sim(config).charge_compute = true;
   return config;
 }
 
@@ -333,7 +333,7 @@ TEST(FrameLoop, ChargingComputeTimeSkipsStalePairs) {
   // The loop takes the freshest pair and counts the ones it skipped; latency stays bounded
   // instead of growing.
   test::SimRig rig(320, 240, 8, "");
-  Firmware fw(outrun_by_the_trigger(rig), rig.images());
+  Firmware fw(rig.replaying(outrun_by_the_trigger(rig)));
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
@@ -356,8 +356,8 @@ TEST(FrameLoop, APairThatComesDuringTheOneBeforeIsRectifiedAhead) {
   test::SimRig rig(320, 240, 8, "");
   BoardConfig config = rig.parse_free_running("pairing: {tolerance_us: 400}\n");
   config.cameras.left.fps = config.cameras.right.fps = 1000;
-  config.sim.charge_compute = true;
-  Firmware fw(config, rig.images());
+  test::sim(config).charge_compute = true;
+  Firmware fw(rig.replaying(config));
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
@@ -380,7 +380,7 @@ TEST(FrameLoop, HealthSaysHowBusyTheLoopIsAndHowLongPairsWaitedForIt) {
   // Three health windows, or 400 pairs: with the compute time charged, a slow build (the
   // sanitizers) gets its windows in fewer pairs.
   test::SimRig rig(320, 240, 8, "");
-  Firmware fw(outrun_by_the_trigger(rig), rig.images());
+  Firmware fw(rig.replaying(outrun_by_the_trigger(rig)));
   Recorder recorder;
   recorder.health_to_stop = 3;
   fw.frame_loop().set_observer(&recorder);
@@ -400,9 +400,9 @@ TEST(FrameLoop, HealthSaysHowBusyTheLoopIsAndHowLongPairsWaitedForIt) {
 TEST(FrameLoop, DroppedFramesAreCountedAndNeverMispaired) {
   test::SimRig rig;
   BoardConfig config = rig.config;
-  config.sim.drop_rate = 0.1;
-  config.sim.seed = 5;
-  Firmware fw(config, rig.images());
+  test::sim(config).drop_rate = 0.1;
+  test::sim(config).seed = 5;
+  Firmware fw(rig.replaying(config));
   Recorder recorder;
   // Both halves of every pair must come from one trigger: the right view is the left one
   // shifted, so a mispaired pair would not have the rig's disparity... and the sequences agree.
@@ -430,12 +430,12 @@ int expect_every_trigger_accounted(const Recorder& recorder) {
 
 TEST(FrameLoop, EachLostTriggerIsCountedOnceUnderItsCause) {
   test::SimRig rig;
-  Firmware fw(rig.config, rig.images());
+  Firmware fw(rig.replaying(rig.config));
   const auto inject = [&](hal::Side side, hal::SimFaultKind kind, std::uint32_t sequence) {
     hal::SimFault f;
     f.kind = kind;
     f.sequence = sequence;
-    fw.board().hardware().sim()->camera(side)->inject(f);
+    test::sim_board(fw.board()).camera(side)->inject(f);
   };
   inject(hal::Side::left, hal::SimFaultKind::drop, 10);   // one side
   inject(hal::Side::right, hal::SimFaultKind::drop, 11);  // the other side, the next trigger
@@ -464,8 +464,8 @@ TEST(FrameLoop, EachLostTriggerIsCountedOnceUnderItsCause) {
 // and counted; edge 40, which the record missed, costs its own pair only, counted off trigger.
 TEST(FrameLoop, HealthCountsTheTriggersGlitches) {
   test::SimRig rig;
-  Firmware fw(rig.config, rig.images());
-  hal::SimBoard& board = *fw.board().hardware().sim();
+  Firmware fw(rig.replaying(rig.config));
+  hal::SimBoard& board = test::sim_board(fw.board());
   board.trigger.inject({hal::SimTriggerGlitchKind::extra_edge, 20, 10'000});
   board.trigger.inject({hal::SimTriggerGlitchKind::unrecorded, 40, 0});
   Recorder recorder;
@@ -495,8 +495,8 @@ TEST(FrameLoop, HealthCountsTheTriggersGlitches) {
 // else changes), and every pair after it carries its own edge, its number following on.
 TEST(FrameLoop, AStoppedTriggerIsWaitedForNotReopenedFor) {
   test::SimRig rig;
-  Firmware fw(rig.config, rig.images());
-  hal::SimBoard& board = *fw.board().hardware().sim();
+  Firmware fw(rig.replaying(rig.config));
+  hal::SimBoard& board = test::sim_board(fw.board());
   const hal::Nanoseconds period = hal::period_of(30);
   board.trigger.inject({hal::SimTriggerGlitchKind::pause, 30, 300 * period});  // 10 s
   Recorder recorder;
@@ -537,9 +537,9 @@ TEST(FrameLoop, AStoppedTriggerIsWaitedForNotReopenedFor) {
 TEST(FrameLoop, EveryTriggerIsAccountedForWithRandomDropsOnBothSides) {
   test::SimRig rig;
   BoardConfig config = rig.config;
-  config.sim.drop_rate = 0.1;  // on each side, independently
-  config.sim.seed = 11;
-  Firmware fw(config, rig.images());
+  test::sim(config).drop_rate = 0.1;  // on each side, independently
+  test::sim(config).seed = 11;
+  Firmware fw(rig.replaying(config));
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
@@ -562,9 +562,9 @@ TEST(FrameLoop, EveryTriggerIsAccountedForWhenTheTriggerOutrunsTheLoop) {
   // one side drops at random.
   test::SimRig rig(320, 240, 8, "");
   BoardConfig config = outrun_by_the_trigger(rig);
-  config.sim.drop_rate = 0.1;
-  config.sim.seed = 4;
-  Firmware fw(config, rig.images());
+  test::sim(config).drop_rate = 0.1;
+  test::sim(config).seed = 4;
+  Firmware fw(rig.replaying(config));
   Recorder recorder;
   recorder.health_to_stop = 3;  // as above: three windows, or 300 pairs
   fw.frame_loop().set_observer(&recorder);
@@ -579,12 +579,12 @@ TEST(FrameLoop, EveryTriggerIsAccountedForWhenTheTriggerOutrunsTheLoop) {
 
 TEST(FrameLoop, RecoversFromALostCameraWithoutRestarting) {
   test::SimRig rig;
-  Firmware fw(rig.config, rig.images());
+  Firmware fw(rig.replaying(rig.config));
   hal::SimFault gone;
   gone.kind = hal::SimFaultKind::disconnect;
   gone.sequence = 30;
   gone.value = 2;  // two reopen attempts fail before the camera is back
-  fw.board().hardware().sim()->camera(hal::Side::left)->inject(gone);
+  test::sim_board(fw.board()).camera(hal::Side::left)->inject(gone);
   Recorder recorder;
   fw.frame_loop().set_observer(&recorder);
   const std::atomic<bool> stop{false};
@@ -611,13 +611,13 @@ TEST(FrameLoop, RecoversFromALostCameraWithoutRestarting) {
 // journal says one loss and its return in 10 s; the next loss said counts those left out.
 TEST(FrameLoop, ACameraThatFlapsIsSaidOnceInTenSeconds) {
   test::SimRig rig;
-  Firmware fw(rig.config, rig.images());
+  Firmware fw(rig.replaying(rig.config));
   for (const std::uint32_t at : {30u, 60u, 90u, 420u}) {  // 1, 2, 3 and 14 s
     hal::SimFault gone;
     gone.kind = hal::SimFaultKind::disconnect;
     gone.sequence = at;
     gone.count = 1;
-    fw.board().hardware().sim()->camera(hal::Side::left)->inject(gone);
+    test::sim_board(fw.board()).camera(hal::Side::left)->inject(gone);
   }
   const std::atomic<bool> stop{false};
   ::testing::internal::CaptureStderr();
@@ -649,7 +649,7 @@ struct LinkedRig {
   explicit LinkedRig(const Make& make, int images = 2) {
     config = make(rig);
     config.serial.backend = "pty";
-    fw = std::make_unique<Firmware>(config, rig.images(images));
+    fw = std::make_unique<Firmware>(rig.replaying(config, images));
     robot = std::make_unique<hal::TermiosSerialPort>(
         hal::SerialConfig{fw->board().serial_peer(), 115200});
   }
@@ -1083,7 +1083,7 @@ TEST(FrameLoop, ASnapshotNoPairCameForIsAnsweredWithinABound) {
   gone.kind = hal::SimFaultKind::disconnect;
   gone.sequence = 11;
   gone.value = 1'000'000;  // every reopen fails
-  linked.fw->board().hardware().sim()->camera(hal::Side::right)->inject(gone);
+  test::sim_board(linked.fw->board()).camera(hal::Side::right)->inject(gone);
   Recorder recorder;
   recorder.also = [](const FrameResult&) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
@@ -1177,7 +1177,7 @@ TEST(FrameLoop, SetExposureReachesBothCameras) {
       << "20 s does not fit in the trigger's period";
   EXPECT_EQ(acks[3].reason, protocol::AckReason::out_of_range);
   for (const hal::Side side : {hal::Side::left, hal::Side::right}) {
-    const hal::CameraConfig& c = linked.fw->board().hardware().sim()->camera(side)->config();
+    const hal::CameraConfig& c = test::sim_board(linked.fw->board()).camera(side)->config();
     EXPECT_EQ(c.exposure, 6'000'000);
     EXPECT_NEAR(c.gain, 2.0, 0.001) << "6.02 dB";
   }
@@ -1204,8 +1204,8 @@ TEST(FrameLoop, FreeRunningCamerasWithoutATriggerPairByTime) {
       [](const test::SimRig& r) {
         BoardConfig c = r.parse_free_running("pairing: {tolerance_us: 15000}\n");
         c.cameras.right.fps = 30.3;
-        c.sim.drop_rate = 0.05;
-        c.sim.seed = 3;
+        test::sim(c).drop_rate = 0.05;
+        test::sim(c).seed = 3;
         return c;
       },
       1);
@@ -1243,8 +1243,8 @@ TEST(FrameLoop, FreeRunningCamerasWithoutATriggerPairByTime) {
   EXPECT_GE(longest_gap, 8u) << "the phase went through the band";
   // By sequence, left and right frame n are 0.33 n ms apart: beyond the 15 ms from frame 46 on.
   EXPECT_GT(recorder.frames.back().frame, 240u);
-  const hal::SimCamera& left = *linked.fw->board().hardware().sim()->camera(hal::Side::left);
-  const hal::SimCamera& right = *linked.fw->board().hardware().sim()->camera(hal::Side::right);
+  const hal::SimCamera& left = *test::sim_board(linked.fw->board()).camera(hal::Side::left);
+  const hal::SimCamera& right = *test::sim_board(linked.fw->board()).camera(hal::Side::right);
   const hal::PairingCounters& p = s.pairing;
   EXPECT_EQ(p.pairs, 240u + s.stale);
   EXPECT_GT(p.left().unpaired + p.right().unpaired, 20u);
@@ -1364,7 +1364,7 @@ TEST(FrameLoop, CalibrationOfAnotherSizeIsAnError) {
   test::SimRig rig;
   calib::save_calibration(rig.dir.path() / "rig.yaml", test::ideal_rig(320, 240, 100, 0.1));
   try {
-    Firmware fw(rig.config, rig.images());
+    Firmware fw(rig.replaying(rig.config));
     FAIL() << "the calibration does not fit";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("is for 320x240 images but the cameras deliver 160x96"),
@@ -1375,7 +1375,7 @@ TEST(FrameLoop, CalibrationOfAnotherSizeIsAnError) {
 
 TEST(FrameLoop, MemoryBudgetIsEnforced) {
   test::SimRig rig(160, 96, 8, "memory_budget_mb: 0.01\n");
-  EXPECT_THROW(Firmware(rig.config, rig.images()), Error);
+  EXPECT_THROW(Firmware(rig.replaying(rig.config)), Error);
 }
 
 }  // namespace

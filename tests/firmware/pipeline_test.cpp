@@ -74,7 +74,7 @@ TEST(Pipeline, StagesSharingThePoolGiveWhatOneThreadGives) {
   vision::StereoMatcher three_stripes(stereo);
   const calib::Triangulator triangulator(calibration->Q, 1, 1);
   DetectionDepthEstimator depth(triangulator, stereo.max_disparity);
-  const SceneImages images = rig.images(3);
+  const hal::StereoImages images = rig.images(3);
   int detections = 0;
   int with_depth = 0;
   for (int round = 0; round < 2; ++round) {
@@ -151,7 +151,7 @@ TEST(Pipeline, PairsRectifiedAheadGiveWhatPairByPairGives) {
   ASSERT_TRUE(calibration.has_value());
   Pipeline by_pair(config, calibration);
   Pipeline ahead(config, calibration);
-  const SceneImages images = rig.images(3);
+  const hal::StereoImages images = rig.images(3);
   GivenNextPair next;
   const auto process = [&](Pipeline& p, std::size_t i, std::uint32_t frame, StageMask stages,
                            NextPair* n) -> const FrameResult& {
@@ -237,7 +237,7 @@ TEST(Pipeline, TheTemporalFilterStartsAgainAfterAGap) {
   const auto calibration = load_board_calibration(config);
   ASSERT_TRUE(calibration.has_value());
   // Pair 0 one pixel nearer than pair 1: within the filter's largest step, so blended.
-  SceneImages images = rig.images(2);
+  hal::StereoImages images = rig.images(2);
   images.right[0] = hal::synthesize_right(images.left[0].view(), rig.disparity + 1);
   const auto process = [&](Pipeline& p, std::size_t i, StageMask stages) -> const FrameResult& {
     return p.process(images.left[i].view(), images.right[i].view(), static_cast<std::uint32_t>(i),

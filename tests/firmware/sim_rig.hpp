@@ -17,9 +17,10 @@
 #include "epipole/core/temporary_folder.hpp"
 #include "epipole/firmware/board.hpp"
 #include "epipole/firmware/board_config.hpp"
-#include "epipole/hal/sim_scene.hpp"
 #include "random_image.hpp"
 #include "sim/sim.hpp"
+#include "sim/sim_scene.hpp"
+#include "sim/sim_settings.hpp"
 
 namespace epipole::test {
 
@@ -51,6 +52,21 @@ inline calib::StereoCalibration ideal_rig(int width, int height, double f, doubl
   return c;
 }
 
+// The board's `sim:` section (the simulated board's settings: faults, charging compute).
+inline hal::SimSettings& sim(firmware::BoardConfig& config) {
+  return hal::sim_settings(config.sections);
+}
+inline const hal::SimSettings& sim(const firmware::BoardConfig& config) {
+  return hal::sim_settings(config.sections);
+}
+
+// The simulated board of a firmware.
+inline hal::SimBoard& sim_board(firmware::Board& board) {
+  hal::SimBoard* sim = hal::simulated_board(board.hardware());
+  if (sim == nullptr) throw std::logic_error("sim_rig.hpp: not a simulated board");
+  return *sim;
+}
+
 struct SimRig {
   static constexpr double kFocal = 100.0;
   static constexpr double kBaseline = 0.1;
@@ -63,8 +79,8 @@ struct SimRig {
 
   // The pair: textured left image, right view at `disparity`, `images` of them (different
   // textures).
-  firmware::SceneImages images(int count = 2) const {
-    firmware::SceneImages s;
+  hal::StereoImages images(int count = 2) const {
+    hal::StereoImages s;
     for (int i = 0; i < count; ++i) {
       GrayImage left(width, height);
       fill(left.view(), Pattern::blobs, static_cast<std::uint32_t>(11 + i));
@@ -72,6 +88,11 @@ struct SimRig {
       s.left.push_back(std::move(left));
     }
     return s;
+  }
+  // The configuration with the simulated cameras replaying images(count).
+  firmware::BoardConfig replaying(firmware::BoardConfig c, int count = 2) const {
+    sim(c).images = std::make_shared<const hal::StereoImages>(images(count));
+    return c;
   }
   double depth() const { return kFocal * kBaseline / disparity; }
 

@@ -192,7 +192,7 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
   rig.add_cascade(config);
   config.serial.backend = "pty";
   config.serial.port.baud = 4'000'000;
-  Firmware fw(config, rig.images(3));
+  Firmware fw(rig.replaying(config, 3));
   hal::SimFaultRates rates;
   rates.drop = 0.02;
   rates.damaged = 0.005;
@@ -201,7 +201,7 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
   rates.max_delay = 20'000'000;
   for (const hal::Side side : {hal::Side::left, hal::Side::right}) {
     rates.seed = side == hal::Side::left ? 17 : 71;
-    hal::SimCamera& camera = *fw.board().hardware().sim()->camera(side);
+    hal::SimCamera& camera = *test::sim_board(fw.board()).camera(side);
     camera.set_fault_rates(rates);
     // One camera lost every 3000 triggers, the sides taking turns.
     for (std::uint32_t at = side == hal::Side::left ? 3000 : 4500; at < 3'000'000; at += 3000) {

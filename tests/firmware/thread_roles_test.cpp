@@ -98,7 +98,7 @@ TEST(ThreadRoles, EachThreadRunsAtItsRolesPriority) {
   const std::vector<std::string> problems = apply_scheduling(config.threads);
   EXPECT_TRUE(problems.empty());
   const RealtimeBase reset(10);
-  Firmware fw(config, rig.images());
+  Firmware fw(rig.replaying(config));
   const auto before = sched_getscheduler(0);
   std::map<std::string, Scheduling> seen;
   Scheduling loop{}, started_by_loop{};

@@ -40,8 +40,9 @@ TEST(VideoScene, TheFrameLoopRunsOnAVideoDecodedAtStartUp) {
   const std::string video = test::data_file("samples/Megamind.avi").string();
   const BoardConfig config = parse_board_config(
       with_scene(rig, "synthesize: " + video + ", disparity: 8"), rig.dir.path() / "board.yaml");
-  EXPECT_EQ(config.sim_scene()->max_frames, 300);
-  SceneImages images = load_scene_images(config);
+  const hal::SimScene& scene = hal::sim_settings(config.sections).chosen();
+  EXPECT_EQ(scene.max_frames, 300);
+  hal::StereoImages images = hal::load_scene(scene, config.width(), config.height());
   ASSERT_EQ(images.left.size(), 270u);  // every frame of the sample, fitted to 160x96
   ASSERT_EQ(images.right.size(), 270u);
   EXPECT_EQ(images.left[0].width(), 160);
@@ -52,7 +53,7 @@ TEST(VideoScene, TheFrameLoopRunsOnAVideoDecodedAtStartUp) {
   }
   EXPECT_GT(moved, 500);
 
-  Firmware fw(config, std::move(images));
+  Firmware fw(config);  // decodes it again, as the firmware does at start-up
   Observer observer;
   fw.frame_loop().set_observer(&observer);
   const std::atomic<bool> stop{false};
@@ -70,13 +71,15 @@ TEST(VideoScene, SideBySideAndStereoVideosAndTheirErrors) {
   const std::string megamind = test::data_file("samples/Megamind.avi").string();
   const std::string vtest = test::data_file("samples/vtest.avi").string();
   const auto load = [&](const std::string& scene) {
-    return load_scene_images(
-        parse_board_config(with_scene(rig, scene), rig.dir.path() / "board.yaml"));
+    const BoardConfig config =
+        parse_board_config(with_scene(rig, scene), rig.dir.path() / "board.yaml");
+    return hal::load_scene(hal::sim_settings(config.sections).chosen(), config.width(),
+                           config.height());
   };
-  const SceneImages sbs = load("side_by_side: " + megamind + ", max_frames: 270");
+  const hal::StereoImages sbs = load("side_by_side: " + megamind + ", max_frames: 270");
   ASSERT_EQ(sbs.left.size(), 270u);
   EXPECT_EQ(sbs.right[5].width(), 160);
-  const SceneImages pair = load("left: " + megamind + ", right: " + megamind);
+  const hal::StereoImages pair = load("left: " + megamind + ", right: " + megamind);
   ASSERT_EQ(pair.left.size(), 270u);
 
   struct Case {

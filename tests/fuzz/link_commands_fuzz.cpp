@@ -11,9 +11,10 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/firmware.hpp"
-#include "epipole/hal/sim_scene.hpp"
 #include "fuzz_file.hpp"
 #include "sim/sim.hpp"
+#include "sim/sim_scene.hpp"
+#include "sim/sim_settings.hpp"
 
 namespace {
 
@@ -38,25 +39,28 @@ struct Acks final : firmware::FrameObserver {
   }
 };
 
-firmware::SceneImages images() {
-  firmware::SceneImages s;
+std::shared_ptr<const hal::StereoImages> images() {
+  auto s = std::make_shared<hal::StereoImages>();
   GrayImage left(64, 48);
   for (int y = 0; y < 48; ++y) {
     for (int x = 0; x < 64; ++x) {
       left.view().row(y)[x] = static_cast<std::uint8_t>((x * 37 + y * 91 + x * y) % 251);
     }
   }
-  s.right.push_back(hal::synthesize_right(left.view(), 4));
-  s.left.push_back(std::move(left));
+  s->right.push_back(hal::synthesize_right(left.view(), 4));
+  s->left.push_back(std::move(left));
   return s;
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static const firmware::BoardConfig config =
-      firmware::parse_board_config(kBoard, fuzz::folder() / "board.yaml");
-  firmware::Firmware fw(config, images());
+  static const firmware::BoardConfig config = [] {
+    firmware::BoardConfig c = firmware::parse_board_config(kBoard, fuzz::folder() / "board.yaml");
+    hal::sim_settings(c.sections).images = images();
+    return c;
+  }();
+  firmware::Firmware fw(config);
   Acks acks;
   fw.frame_loop().set_observer(&acks);
   fw.link().take_bytes(std::as_bytes(std::span(data, size)));
@@ -68,7 +72,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (acks.count != s.commands || s.commands != answerable) std::abort();
   hal::validate(fw.board().trigger()->config());  // throws (and the fuzzer reports) if broken
   for (const hal::Side side : {hal::Side::left, hal::Side::right}) {
-    const hal::CameraConfig& camera = fw.board().hardware().sim()->camera(side)->config();
+    const hal::CameraConfig& camera =
+        hal::simulated_board(fw.board().hardware())->camera(side)->config();
     hal::validate_exposure(camera.device, camera.exposure, camera.gain);
   }
   return 0;

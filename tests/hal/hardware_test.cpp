@@ -10,9 +10,20 @@
 
 #include "epipole/core/error.hpp"
 #include "sim/sim.hpp"
+#include "sim/sim_settings.hpp"
 
 namespace epipole::hal {
 namespace {
+
+template <typename F>
+std::string test_error(F f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
 
 constexpr int kSceneWidth = 32;
 constexpr int kSceneHeight = 16;
@@ -29,26 +40,33 @@ HardwareConfig simulated(int images) {
   c.trigger_backend = "sim";
   c.trigger.line = "sim";
   c.trigger.rate_hz = 50;
+  c.width = kSceneWidth;
+  c.height = kSceneHeight;
+  auto sim = std::make_unique<SimSettings>();
+  sim->charge_compute = false;
+  auto scene = std::make_shared<StereoImages>();
   for (int i = 0; i < images; ++i) {
-    c.sim.left.emplace_back(kSceneWidth, kSceneHeight);
-    c.sim.right.emplace_back(kSceneWidth, kSceneHeight);
+    scene->left.emplace_back(kSceneWidth, kSceneHeight);
+    scene->right.emplace_back(kSceneWidth, kSceneHeight);
   }
+  sim->images = std::move(scene);
+  c.sections.set("sim", std::move(sim));
   return c;
 }
 
 TEST(Hardware, ASimulatedBoardRunsOnItsVirtualClockWithItsScene) {
   HardwareConfig c = simulated(3);
-  c.sim.drop_rate = 0.25;
+  sim_settings(c.sections).drop_rate = 0.25;
   Hardware hw(std::move(c));
   EXPECT_EQ(hw.clock().id(), ClockId::virtual_clock);
-  EXPECT_EQ(hw.scene_images(), 3u);
-  EXPECT_EQ(hw.scene_bytes(), 2u * 3u * GrayImage(kSceneWidth, kSceneHeight).size_bytes())
+  ASSERT_NE(simulated_board(hw), nullptr);
+  EXPECT_EQ(simulated_board(hw)->scene_images(), 3u);
+  EXPECT_EQ(hw.backend_bytes(), 2u * 3u * GrayImage(kSceneWidth, kSceneHeight).size_bytes())
       << "rows padded as allocated";
   ASSERT_NE(hw.trigger(), nullptr);
   EXPECT_EQ(hw.serial(), nullptr) << "no link asked for";
-  ASSERT_NE(hw.sim(), nullptr);
-  EXPECT_EQ(hw.sim()->camera(Side::left), &hw.camera(Side::left));
-  EXPECT_EQ(hw.sim()->camera(Side::right), &hw.camera(Side::right));
+  EXPECT_EQ(simulated_board(hw)->camera(Side::left), &hw.camera(Side::left));
+  EXPECT_EQ(simulated_board(hw)->camera(Side::right), &hw.camera(Side::right));
 
   // Each edge of the trigger reaches both cameras (a frame 7 ms later); about a quarter of the
   // frames are dropped on each side.
@@ -93,7 +111,7 @@ TEST(Hardware, RealBackendsRunOnTheMonotonicClockWithoutAScene) {
   BackendRegistry registry;
   int made = 0;
   registry.add_camera("fake", [&](const CameraConfig& config, const BackendContext& context) {
-    EXPECT_EQ(context.sim, nullptr) << "no simulation for a real backend";
+    EXPECT_EQ(context.board, nullptr) << "nothing shared for a backend without a section";
     EXPECT_EQ(context.clock->id(), ClockId::monotonic);
     ++made;
     return std::make_unique<IdleCamera>(config);
@@ -104,10 +122,79 @@ TEST(Hardware, RealBackendsRunOnTheMonotonicClockWithoutAScene) {
   Hardware hw(std::move(c), registry);
   EXPECT_EQ(made, 2);
   EXPECT_EQ(hw.clock().id(), ClockId::monotonic);
-  EXPECT_EQ(hw.sim(), nullptr);
-  EXPECT_EQ(hw.scene_images(), 0u);
-  EXPECT_EQ(hw.scene_bytes(), 0u);
+  EXPECT_EQ(hw.backend_board(), nullptr);
+  EXPECT_EQ(simulated_board(hw), nullptr);
+  EXPECT_EQ(hw.backend_bytes(), 0u);
   EXPECT_EQ(hw.trigger(), nullptr);
+}
+
+// A backend with a section of its own: what it read reaches what its devices share, which gives
+// them the board's clock and counts its memory; the board file knows nothing of it.
+struct Gains final : BackendSettings {
+  int gain = 0;
+  std::unique_ptr<BackendSettings> clone() const override { return std::make_unique<Gains>(*this); }
+};
+
+struct SharedGain final : BackendBoard {
+  explicit SharedGain(int g) : gain(g) {}
+  int gain;
+  VirtualClock clock;
+  Clock* own_clock() override { return &clock; }
+  std::size_t memory_bytes() const override { return 4096; }
+};
+
+TEST(Hardware, ABackendsSectionMakesWhatItsDevicesShare) {
+  BackendRegistry registry;
+  int gain_seen = -1;
+  registry.add_camera("rig",
+                      [&](const CameraConfig& config, const BackendContext& context) {
+                        gain_seen = dynamic_cast<SharedGain&>(*context.board).gain;
+                        EXPECT_EQ(context.clock->id(), ClockId::virtual_clock);
+                        return std::make_unique<IdleCamera>(config);
+                      },
+                      {.section = "rig"});
+  registry.add_section({"rig", nullptr,
+                        [](const BackendSettings& s, const HardwareConfig&) {
+                          return std::make_unique<SharedGain>(dynamic_cast<const Gains&>(s).gain);
+                        },
+                        nullptr});
+  HardwareConfig c = simulated(1);
+  c.camera_backend = "rig";
+  c.trigger_backend = std::string(kNoBackend);
+  const std::string missing = test_error([&] { Hardware hw(c, registry); });
+  EXPECT_NE(missing.find("backend 'rig' needs the board file's 'rig' section"), std::string::npos)
+      << missing;
+
+  auto gains = std::make_unique<Gains>();
+  gains->gain = 12;
+  c.sections.set("rig", std::move(gains));
+  const HardwareConfig copy = c;  // copies the settings
+  Hardware hw(copy, registry);
+  EXPECT_EQ(gain_seen, 12);
+  EXPECT_EQ(hw.clock().id(), ClockId::virtual_clock);
+  EXPECT_EQ(hw.backend_bytes(), 4096u);
+}
+
+TEST(Hardware, StandInsReplaceARealBoardsDevicesButNotASimulatedOnes) {
+  HardwareConfig sim = simulated(1);
+  EXPECT_FALSE(stand_in_for_devices(sim)) << "the simulated board opens nothing";
+
+  HardwareConfig real = simulated(1);
+  real.camera_backend = "v4l2";
+  real.left.device = "/dev/video0";
+  real.left.format = PixelFormat::yuyv;
+  real.right.device = "/dev/video2";
+  real.trigger_backend = "gpiod";
+  real.trigger.role = TriggerRole::slave;
+  real.sections = {};
+  ASSERT_TRUE(stand_in_for_devices(real));
+  EXPECT_EQ(real.camera_backend, "sim");
+  EXPECT_EQ(real.left.format, PixelFormat::grey);
+  EXPECT_EQ(real.trigger_backend, "sim");
+  EXPECT_EQ(real.trigger.role, TriggerRole::master);
+  Hardware hw(std::move(real));
+  EXPECT_EQ(hw.camera(Side::left).config().width, kSceneWidth);
+  EXPECT_EQ(simulated_board(hw)->scene_images(), 1u) << "one blank image of the board's size";
 }
 
 TEST(Hardware, ASimulatedBoardWithoutImagesOrWithAnUnknownPartSaysWhat) {

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "epipole/core/error.hpp"
-#include "epipole/hal/sim_scene.hpp"
 #include "sim/sim.hpp"
+#include "sim/sim_scene.hpp"
 
 namespace epipole::hal {
 namespace {

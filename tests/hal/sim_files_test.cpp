@@ -6,8 +6,8 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
-#include "epipole/hal/sim_files.hpp"
 #include "sim/sim.hpp"
+#include "sim/sim_files.hpp"
 
 namespace epipole::hal {
 namespace {

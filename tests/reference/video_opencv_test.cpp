@@ -15,8 +15,8 @@
 #include <opencv2/videoio.hpp>
 
 #include "epipole/core/error.hpp"
-#include "epipole/hal/sim_files.hpp"
 #include "error_of.hpp"
+#include "sim/sim_files.hpp"
 #include "test_data.hpp"
 
 namespace epipole::hal {

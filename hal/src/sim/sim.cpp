@@ -402,12 +402,31 @@ SimBoard::SimBoard(double rate_hz, std::vector<GrayImage> left_images,
 
 SimBoard::SimBoard(TriggerConfig trigger_config, std::vector<GrayImage> left_images,
                    std::vector<GrayImage> right_images, SimCameraTiming camera_timing)
+    : SimBoard(std::move(trigger_config),
+               std::make_shared<const StereoImages>(
+                   StereoImages{std::move(left_images), std::move(right_images)}),
+               camera_timing) {}
+
+SimBoard::SimBoard(TriggerConfig trigger_config, const std::shared_ptr<const StereoImages>& images,
+                   SimCameraTiming camera_timing)
     : trigger(std::move(trigger_config), clock),
-      left(std::make_shared<const std::vector<GrayImage>>(std::move(left_images))),
-      right(std::make_shared<const std::vector<GrayImage>>(std::move(right_images))),
+      left(images, &images->left),  // sharing ownership of the pair
+      right(images, &images->right),
       timing(camera_timing) {
   require(!left->empty() && left->size() == right->size(), "simulated board: ", left->size(),
           " left and ", right->size(), " right images (must be the same, at least one)");
+}
+
+std::size_t SimBoard::memory_bytes() const {
+  std::size_t bytes = 0;
+  for (const auto* side : {left.get(), right.get()}) {
+    for (const GrayImage& image : *side) bytes += image.size_bytes();
+  }
+  return bytes;
+}
+
+SimBoard* simulated_board(const Hardware& hardware) {
+  return dynamic_cast<SimBoard*>(hardware.backend_board());
 }
 
 // ----------------------------------------------------------------------------------------------

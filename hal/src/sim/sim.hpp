@@ -8,10 +8,13 @@
 #include <vector>
 
 #include "epipole/core/image.hpp"
+#include "epipole/hal/backend_settings.hpp"
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/clock.hpp"
+#include "epipole/hal/hardware.hpp"
 #include "epipole/hal/side.hpp"
 #include "epipole/hal/trigger.hpp"
+#include "sim/sim_files.hpp"
 
 namespace epipole::hal {
 
@@ -211,22 +214,35 @@ class SimCamera final : public CameraSource {
 };
 
 // The simulated board: a virtual clock, the trigger master and the images of the left and
-// right cameras. The registry's "sim" backends create cameras ("left", "right") on it.
-struct SimBoard {
+// right cameras. The registry's "sim" backends create cameras ("left", "right") on it; it is
+// what they share on a hal::Hardware, made from the board file's `sim:` section.
+struct SimBoard final : BackendBoard {
   // The trigger at rate_hz, its pulses a quarter period long.
   SimBoard(double rate_hz, std::vector<GrayImage> left_images, std::vector<GrayImage> right_images,
            SimCameraTiming camera_timing = {});
   // The trigger as configured (the board file's rate and pulse width; a master).
   SimBoard(TriggerConfig trigger_config, std::vector<GrayImage> left_images,
            std::vector<GrayImage> right_images, SimCameraTiming camera_timing = {});
+  // The trigger as configured, replaying images it shares with whoever gave them.
+  SimBoard(TriggerConfig trigger_config, const std::shared_ptr<const StereoImages>& images,
+           SimCameraTiming camera_timing = {});
   VirtualClock clock;
   SimTrigger trigger;
   std::shared_ptr<const std::vector<GrayImage>> left;
   std::shared_ptr<const std::vector<GrayImage>> right;
   SimCameraTiming timing;
+  SimFaultRates fault_rates;  // of the cameras the "sim" backend makes (seeded per side)
   // The cameras the "sim" backend made on this board (null until it did), for fault injection.
   SimCamera* camera(Side side) const { return cameras[index(side)]; }
   std::array<SimCamera*, 2> cameras{};
+
+  Clock* own_clock() override { return &clock; }
+  std::size_t memory_bytes() const override;  // the scene's images
+  std::size_t scene_images() const { return left->size(); }
 };
+
+// The simulated board of a Hardware whose cameras are simulated, else null (for the tests and
+// host tools that drive the simulation).
+SimBoard* simulated_board(const Hardware& hardware);
 
 }  // namespace epipole::hal

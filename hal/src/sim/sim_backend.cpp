@@ -1,11 +1,13 @@
 // The "sim" camera and trigger backends: parts of the simulated board (sim.hpp) that the
-// registry hands out like any other device.
+// registry hands out like any other device, and the board file's `sim:` section they share.
 #include <memory>
 
 #include "backends.hpp"
 #include "epipole/core/error.hpp"
+#include "epipole/hal/hardware.hpp"
 #include "epipole/hal/registry.hpp"
 #include "sim/sim.hpp"
+#include "sim/sim_settings.hpp"
 
 namespace epipole::hal {
 
@@ -26,18 +28,25 @@ class SimTriggerHandle final : public TriggerLine {
   SimTrigger& trigger_;
 };
 
+SimBoard& board_of(const BackendContext& context, const std::string& part) {
+  auto* board = dynamic_cast<SimBoard*>(context.board);
+  require(board != nullptr, part, ": backend 'sim' needs the simulated board");
+  return *board;
+}
+
 std::unique_ptr<CameraSource> make_camera(const CameraConfig& config,
                                           const BackendContext& context) {
-  require(context.sim != nullptr, "camera ", config.device,
-          ": backend 'sim' needs the simulated board");
+  SimBoard& board = board_of(context, "camera " + config.device);
   require(config.device == "left" || config.device == "right", "camera ", config.device,
           ": the simulated board has cameras 'left' and 'right'");
-  SimBoard& board = *context.sim;
   const bool left = config.device == "left";
   SimCameraTiming timing = board.timing;
   if (!left) timing.seed = timing.seed * 0x9e3779b97f4a7c15ULL + 1;  // independent jitter
   auto camera =
       std::make_unique<SimCamera>(config, left ? board.left : board.right, board.clock, timing);
+  SimFaultRates rates = board.fault_rates;
+  if (!left) rates.seed = rates.seed * 2654435761u + 1;  // independent faults per side
+  camera->set_fault_rates(rates);
   // A free-running camera ignores the trigger line: it runs on its own at its frame rate.
   if (config.trigger == TriggerMode::external) board.trigger.connect(*camera);
   board.cameras[left ? 0 : 1] = camera.get();
@@ -46,16 +55,59 @@ std::unique_ptr<CameraSource> make_camera(const CameraConfig& config,
 
 std::unique_ptr<TriggerLine> make_trigger(const TriggerConfig& config,
                                           const BackendContext& context) {
-  require(context.sim != nullptr, "trigger ", config.line,
-          ": backend 'sim' needs the simulated board");
-  return std::make_unique<SimTriggerHandle>(context.sim->trigger);
+  return std::make_unique<SimTriggerHandle>(board_of(context, "trigger " + config.line).trigger);
+}
+
+// The simulated board of a board file: its scene (or the images given instead), its clock and
+// its random faults.
+std::unique_ptr<BackendBoard> make_board(const BackendSettings& settings,
+                                         const HardwareConfig& config) {
+  const auto& sim = dynamic_cast<const SimSettings&>(settings);
+  const std::shared_ptr<const StereoImages> images =
+      sim.images ? sim.images
+                 : std::make_shared<const StereoImages>(
+                       load_scene(sim.chosen(), config.width, config.height));
+  require(!images->left.empty(), "the simulated cameras have no images");
+  SimCameraTiming timing;
+  timing.seed = sim.seed;
+  // Without a trigger line the board's master is there all the same (unused: free running).
+  TriggerConfig trigger = config.trigger;
+  if (trigger.line.empty()) trigger.line = "sim";
+  auto board = std::make_unique<SimBoard>(trigger, images, timing);
+  board->clock.charge_compute(sim.charge_compute);
+  board->fault_rates.drop = sim.drop_rate;
+  board->fault_rates.corrupt_pixels = sim.corrupt_rate;
+  board->fault_rates.seed = sim.seed;
+  return board;
+}
+
+// Simulated cameras of the board's size (grey, whatever the board's cameras deliver: the frame
+// loop sees gray planes either way) showing a blank image, and a simulated trigger master at the
+// board's rate.
+void stand_in(HardwareConfig& config) {
+  config.camera_backend = "sim";
+  for (auto [camera, name] : {std::pair{&config.left, "left"}, std::pair{&config.right, "right"}}) {
+    camera->device = name;
+    camera->format = PixelFormat::grey;
+  }
+  if (config.trigger_backend != kNoBackend) {
+    config.trigger_backend = "sim";
+    config.trigger.role = TriggerRole::master;
+  }
+  auto sim = std::make_unique<SimSettings>();
+  auto blank = std::make_shared<StereoImages>();
+  blank->left.emplace_back(config.width, config.height);
+  blank->right.emplace_back(config.width, config.height);
+  sim->images = std::move(blank);
+  config.sections.set("sim", std::move(sim));
 }
 
 }  // namespace
 
 void register_sim(BackendRegistry& registry) {
-  registry.add_camera("sim", make_camera, {.simulated = true});
-  registry.add_trigger("sim", make_trigger, {.simulated = true});
+  registry.add_camera("sim", make_camera, {.simulated = true, .section = "sim"});
+  registry.add_trigger("sim", make_trigger, {.simulated = true, .section = "sim"});
+  registry.add_section({"sim", read_sim_section, make_board, stand_in});
 }
 
 }  // namespace epipole::hal

@@ -1,4 +1,4 @@
-#include "epipole/hal/sim_files.hpp"
+#include "sim/sim_files.hpp"
 
 #include <algorithm>
 #include <array>
@@ -7,7 +7,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
-#include "epipole/hal/sim_scene.hpp"
+#include "sim/sim_scene.hpp"
 #include "video_decoder.hpp"
 
 namespace epipole::hal {

@@ -1,4 +1,4 @@
-#include "epipole/hal/sim_scene.hpp"
+#include "sim/sim_scene.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -18,10 +18,11 @@
 #include "epipole/firmware/board.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/firmware/pipeline.hpp"
-#include "epipole/hal/sim_scene.hpp"
 #include "epipole/tools/opencv_mat.hpp"
 #include "epipole/tools/progress.hpp"
 #include "opencv_pipeline.hpp"
+#include "sim/sim_scene.hpp"
+#include "sim/sim_settings.hpp"
 #include "timing_summary.hpp"
 
 namespace epipole::tools {
@@ -47,18 +48,13 @@ BenchImages bench_images(const BenchOptions& options, const firmware::BoardConfi
     images.source = options.left + " and " + options.right;
     return images;
   }
-  require(!board.sim.scenes.empty(), "board ", board.name,
+  require(board.sections.find("sim") != nullptr, "board ", board.name,
           " has no simulated scenes to take images from: give --left and --right");
-  if (board.sim_scene() == nullptr) {
-    std::string names;
-    for (const auto& s : board.sim.scenes) names += (names.empty() ? "" : ", ") + s.name;
-    throw Error(
-        cat("board ", board.name, " has no scene '", board.sim.scene, "' (it has ", names, ")"));
-  }
-  firmware::SceneImages scene = firmware::load_scene_images(board);
+  const hal::SimSettings& sim = hal::sim_settings(board.sections);
+  hal::StereoImages scene = hal::load_scene(sim.chosen(), board.width(), board.height());
   images.left = std::move(scene.left);
   images.right = std::move(scene.right);
-  images.source = "scene " + board.sim.scene;
+  images.source = "scene " + sim.scene;
   return images;
 }
 
@@ -103,6 +99,11 @@ class NextBenchPair final : public firmware::NextPair {
   int next_ = 0;
 };
 
+std::vector<hal::BackendOption> scene_option(const std::string& scene) {
+  if (scene.empty()) return {};
+  return {{"scene", scene}};
+}
+
 double ms_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
       .count();
@@ -112,9 +113,9 @@ class Bench {
  public:
   Bench(const BenchOptions& options, SimdPath path)
       : options_(options),
-        board_(firmware::load_board_config(options.board, options.overrides)),
+        board_(firmware::load_board_config(options.board, options.overrides,
+                                           scene_option(options.scene))),
         path_(path) {
-    if (!options.scene.empty()) board_.sim.scene = options.scene;
     if (!options.stages.empty()) {
       board_.stages &= static_cast<protocol::StageMask>(~protocol::kSwitchableStages);
       for (const std::string& name : options.stages) {

@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "epipole/core/data_directory.hpp"
 #include "epipole/core/error.hpp"
 
 namespace epipole::yaml {
@@ -48,12 +49,19 @@ class Fields {
   std::vector<double> matrix(const YAML::Node& node, const std::string& key, int rows,
                              int cols) const;
   bool boolean(const YAML::Node& node, const std::string& key) const;
+  // A path: ${NAME} is the environment variable NAME (${EPIPOLE_DATA_DIR} defaults to
+  // default_data_directory()), a relative path starts in the file's folder; empty is an Error.
+  std::filesystem::path path(const YAML::Node& node, const std::string& key) const;
+  // A file name, a glob pattern (matched in name order) or a sequence of them; a pattern that
+  // matches nothing is an Error.
+  std::vector<std::filesystem::path> files(const YAML::Node& node, const std::string& key) const;
 
   static std::string join(const std::string& path, const std::string& key) {
     return path.empty() ? key : path + "." + key;
   }
 
  private:
+  std::string expand(const std::string& value, const std::string& key) const;
   std::string file_;
 };
 

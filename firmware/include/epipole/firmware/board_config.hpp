@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "epipole/firmware/protocol/stages.hpp"
+#include "epipole/hal/backend_settings.hpp"
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "epipole/hal/stereo_pairing.hpp"
@@ -27,14 +28,14 @@ struct BoardConfig {
   std::filesystem::path directory;  // the folder of the file: relative paths start here
 
   struct Cameras {
-    std::string backend = "sim";  // sim | v4l2 | libcamera
-    hal::CameraConfig left;       // device, size, format, rate, exposure, gain, trigger mode
+    std::string backend;     // a camera backend of the HAL's registry (docs/boards.md)
+    hal::CameraConfig left;  // device, size, format, rate, exposure, gain, trigger mode
     hal::CameraConfig right;
     hal::Nanoseconds timeout = 200'000'000;  // acquire timeout before a camera counts as late
   } cameras;
 
   struct Trigger {
-    std::string backend = "sim";  // sim | gpiod | none (free-running cameras)
+    std::string backend;  // a trigger backend of the registry, or none (free-running cameras)
     hal::TriggerConfig line;
   } trigger;
 
@@ -117,31 +118,13 @@ struct BoardConfig {
   int snapshot_limit = 200;                  // snapshots the folder may hold (those there count)
   double snapshot_min_free_mb = 64;          // left free on its file system
 
-  // The simulated board (backend "sim"): what its cameras replay.
-  struct SimScene {
-    std::string name;
-    std::vector<std::filesystem::path> left;   // image files, paired in order with right,
-    std::vector<std::filesystem::path> right;  // or one video file each (is_video_file())
-    std::filesystem::path side_by_side;        // or: one video, the left view in its left half
-    std::filesystem::path synthesize;   // or: one image or video, the right view made from it
-    int synthesize_disparity = 0;       // ... at this disparity (pixels)
-    int max_frames = 300;               // a video of more frames is refused
-    std::filesystem::path calibration;  // overrides the board's
-  };
-  struct Sim {
-    std::vector<SimScene> scenes;
-    std::string scene;           // the one replayed
-    bool charge_compute = true;  // the virtual clock advances by the host's processing time
-    double drop_rate = 0;        // random faults per frame (both cameras, independent seeds)
-    double corrupt_rate = 0;
-    std::uint64_t seed = 1;
-  } sim;
+  // The board file's sections that backends read themselves (the registry's SectionBackend):
+  // those present and those the chosen backends need.
+  hal::BackendSections sections;
 
   int width() const { return cameras.left.width; }
   int height() const { return cameras.left.height; }
-  const SimScene* sim_scene() const;
   // What the HAL's registry says of the board's backends.
-  bool simulated() const;    // the cameras are the simulated board's
   bool has_trigger() const;  // trigger.backend is not "none" (else free-running cameras)
   bool has_link() const;     // serial.backend is not "none"
 };
@@ -153,14 +136,17 @@ BoardConfig load_board_config(const std::filesystem::path& path);
 // The same with some keys set first, each override `KEY=VALUE`: KEY a dotted path of map keys
 // (`stereo.method`), added when the file has no such key; VALUE read as YAML (`bm`, `[0.2, 0.8]`).
 // The result is validated as a file is. Throws Error naming an override that does not apply.
+// `camera_options` go to the section of the cameras' backend (epipole-fw --scene), which checks
+// them; a backend without a section takes none.
 BoardConfig load_board_config(const std::filesystem::path& path,
-                              std::span<const std::string> overrides);
-BoardConfig parse_board_config(const std::string& yaml, const std::filesystem::path& file);
+                              std::span<const std::string> overrides,
+                              std::span<const hal::BackendOption> camera_options = {});
+BoardConfig parse_board_config(const std::string& yaml, const std::filesystem::path& file,
+                               std::span<const hal::BackendOption> camera_options = {});
 
 // Cross-checks a configuration (also done by the loaders): stage limits against the image size,
 // the pairing tolerance against the trigger period, the trigger period and the exposure against
-// the cameras' timeout (frame_timing_problem), the scene of the simulated board. Throws Error
-// naming the file and the key.
+// the cameras' timeout (frame_timing_problem). Throws Error naming the file and the key.
 void validate(const BoardConfig& config, const std::string& file);
 
 // Why the cameras could not follow a frame `period` (the trigger's; free running, the cameras')
@@ -175,9 +161,5 @@ std::string frame_timing_problem(hal::Nanoseconds period, hal::Nanoseconds expos
 // cameras' timeout, a ping is sent at most every half interval, so the timeout may be at most a
 // quarter of it (the other quarter for the processing after the wait).
 std::string watchdog_problem(const BoardConfig& config, hal::Nanoseconds watchdog_interval);
-
-// The data cache folder of scripts/fetch-data.sh: $EPIPOLE_DATA_DIR, else
-// ${XDG_CACHE_HOME:-$HOME/.cache}/epipole/data.
-std::filesystem::path default_data_directory();
 
 }  // namespace epipole::firmware

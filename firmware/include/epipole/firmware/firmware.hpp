@@ -18,11 +18,12 @@
 
 namespace epipole::firmware {
 
-// The calibration a board runs with: its simulated scene's, else its own; none when it names
-// none, or when its own file does not exist yet (a board fresh from its package, before
-// `epipole calibrate`): the firmware then runs uncalibrated: the images are taken as rectified,
-// nothing gets a depth, and every health message says so (protocol::kHealthNotCalibrated). A
-// file that is there but does not read, or a simulated scene's that is missing, is an Error.
+// The calibration a board runs with: the one the section of its cameras' backend names
+// (hal::BackendSettings::calibration: a scene's own), else its own; none when it names none, or
+// when its own file does not exist yet (a board fresh from its package, before `epipole
+// calibrate`): the firmware then runs uncalibrated: the images are taken as rectified, nothing gets
+// a depth, and every health message says so (protocol::kHealthNotCalibrated). A file that is there
+// but does not read, or a backend section's that is missing, is an Error.
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config);
 
 // Scheduling the board asks for (threads: affinity, SCHED_FIFO), before any thread of the
@@ -32,7 +33,8 @@ std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig
 std::vector<std::string> apply_scheduling(const BoardConfig::Threads& threads);
 
 // What `epipole-fw --check` prints: the memory report of the firmware made for `config` with its
-// cameras and trigger replaced by simulated stand-ins of the same size and its link by its
+// cameras and trigger replaced by stand-ins of the same size (hal::stand_in_for_devices) and its
+// link by its
 // queue alone, so that every buffer of the frame loop is allocated as on the board but no
 // device is opened (the snapshots' copies are sized in a temporary folder; the board's own
 // snapshot folder is not made). Throws Error as the firmware would: a calibration that does not
@@ -45,12 +47,13 @@ MemoryReport check_memory(BoardConfig config);
 class Firmware {
  public:
   explicit Firmware(BoardConfig config);
-  // A simulated board with these images instead of its scene's files (tests).
-  Firmware(BoardConfig config, SceneImages sim_images);
+  // On this board instead of the one the configuration makes (stand-ins).
+  Firmware(BoardConfig config, std::unique_ptr<Board> board);
   ~Firmware();
 
   RunSummary run(std::uint64_t max_frames, const std::atomic<bool>& stop);
-  // The memory report's part of the cameras' own frame buffers (and a simulated board's scene).
+  // The memory report's part of the cameras' own frame buffers (and what their backend holds
+  // for them: hal::BackendBoard::memory_bytes).
   static constexpr const char* kCameras = "cameras";
 
   const BoardConfig& config() const { return config_; }
@@ -60,15 +63,15 @@ class Firmware {
   FrameLoop& frame_loop() { return *loop_; }
   const std::optional<calib::StereoCalibration>& calibration() const { return calibration_; }
   // The calibration file the board names that is not there yet; empty when it names none or
-  // the calibration was loaded (a scene's calibration or a file that does not read would have
-  // stopped the constructor).
+  // the calibration was loaded (a backend section's calibration or a file that does not read
+  // would have stopped the constructor).
   std::filesystem::path missing_calibration() const {
     return calibration_ ? std::filesystem::path() : config_.calibration;
   }
   // The frame loop's buffers, part by part: every stage's, the link's queue, the loop's own,
   // the snapshots' copies, the cameras' frame buffers on the heap (a driver's mmap'ed ones are
-  // the kernel's) and a simulated board's scene images. The board's memory_budget_mb bounds the
-  // total.
+  // the kernel's) and what their backend holds for them (hal::BackendBoard). The board's
+  // memory_budget_mb bounds the total.
   MemoryReport memory_report() const;
   std::size_t working_set_bytes() const { return memory_report().total(); }
 

@@ -140,9 +140,6 @@ class FrameLoop {
   bool not_calibrated_;  // the board's calibration file does not exist yet
   bool no_cascade_;      // nor its compiled cascade, with detection on
   GrabAhead ahead_{*this};
-  // The host's time up to which the pair's compute was charged to the board's clock (a virtual
-  // clock that charges compute moves on before the next pair is looked for, as time would).
-  hal::Nanoseconds charged_until_ = 0;
   FrameObserver* observer_ = nullptr;
   std::function<void()> heartbeat_;
   RunSummary summary_;

@@ -11,8 +11,8 @@ namespace epipole::firmware {
 // Keeps the record of the board's trigger edges (hal::TriggerRecord) that the stereo pairer
 // checks pairs against and that gives every result its trigger time. On hardware a thread of
 // its own waits on the line — a master fires its pulses as it waits, a slave is told of each
-// edge by the kernel; a line that records its own edges (the simulated trigger, as its virtual
-// clock passes them: hal::TriggerLine::record_edges_to) needs no thread. An edge less than a
+// edge by the kernel; a line that records its own edges (one on a virtual clock, as the clock
+// passes them: hal::TriggerLine::record_edges_to) needs no thread. An edge less than a
 // quarter of the period after the edge before it is a bounce: the record ignores and counts it.
 // Fixed memory.
 class TriggerWatch {

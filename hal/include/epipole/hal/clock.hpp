@@ -1,7 +1,7 @@
 #pragma once
 
-#include <atomic>
 #include <cstdint>
+#include <mutex>
 
 namespace epipole::hal {
 
@@ -19,10 +19,6 @@ class Clock {
   virtual Nanoseconds now() const = 0;
   // Blocks until now() >= deadline (returns at once if it already is).
   virtual void sleep_until(Nanoseconds deadline) = 0;
-  // The firmware spent `elapsed` of the host's time computing. A real clock went on meanwhile by
-  // itself; a simulated one that charges compute time moves by it, so that a simulation sees the
-  // host's speed.
-  virtual void spend(Nanoseconds /*elapsed*/) {}
   // Which clock this is, to compare with the clock a timestamp says it was taken on.
   virtual ClockId id() const = 0;
 };
@@ -37,19 +33,25 @@ class MonotonicClock final : public Clock {
 
 // Simulated time that only moves when told to: sleep_until jumps straight to the deadline, so
 // a simulated hour of frames runs as fast as the host can compute them, deterministically.
+// Charging compute time, the host's time also passes on it between those jumps: whatever the
+// firmware does outside its waits takes as long as on the host, so a simulation sees the host's
+// speed (not deterministic then).
 class VirtualClock final : public Clock {
  public:
   explicit VirtualClock(Nanoseconds start = 0) : now_(start) {}
-  Nanoseconds now() const override { return now_.load(std::memory_order_acquire); }
+  Nanoseconds now() const override;
   void sleep_until(Nanoseconds deadline) override;
-  void spend(Nanoseconds elapsed) override;
   void advance(Nanoseconds delta);
-  // Whether spend() advances the clock (off unless asked for).
-  void charge_compute(bool on) { charge_compute_ = on; }
+  // Off unless asked for; set before the clock is shared between threads.
+  void charge_compute(bool on);
   ClockId id() const override { return ClockId::virtual_clock; }
 
  private:
-  std::atomic<Nanoseconds> now_;
+  // Adds the host's time since the last charge (when charging); mutex_ held.
+  void charge_host_time() const;
+  mutable std::mutex mutex_;
+  mutable Nanoseconds now_;
+  mutable Nanoseconds host_charged_until_ = 0;
   bool charge_compute_ = false;
 };
 

@@ -2,12 +2,9 @@
 
 #include <array>
 #include <cstddef>
-#include <cstdint>
 #include <memory>
 #include <string>
-#include <vector>
 
-#include "epipole/core/image.hpp"
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/clock.hpp"
 #include "epipole/hal/registry.hpp"
@@ -17,18 +14,6 @@
 
 namespace epipole::hal {
 
-struct SimBoard;
-
-// What the simulated board needs besides its parts' configurations. Read only when the cameras'
-// backend is simulated (BackendTraits::simulated).
-struct SimSettings {
-  std::vector<GrayImage> left, right;  // the scene (frame n shows image n % count)
-  std::uint64_t seed = 7;              // camera jitter and the random faults
-  double drop_rate = 0;                // per frame and camera, independent per side
-  double corrupt_rate = 0;
-  bool charge_compute = false;  // the frame loop's work takes virtual time (Clock::spend)
-};
-
 // A board's parts: a backend name and its configuration for each (kNoBackend: not there).
 struct HardwareConfig {
   std::string camera_backend;
@@ -37,14 +22,15 @@ struct HardwareConfig {
   TriggerConfig trigger;
   std::string serial_backend{kNoBackend};
   SerialConfig serial;
-  SimSettings sim;
+  int width = 0, height = 0;  // the cameras' image size
+  BackendSections sections;   // the board file's backend sections (the registry's)
 };
 
-// A board's devices made through a registry, and the clock they run on: the simulated board's
-// virtual clock when its cameras are simulated, else the monotonic clock. The simulation (its
-// clock, trigger master, scene and random faults) lives in here: callers see cameras, a trigger
-// line, a serial port and a clock, whatever the board. Construction throws Error naming the
-// part that cannot be made; a device that is not there yet is no error (the backends wait).
+// A board's devices made through a registry, and the clock they run on: the monotonic clock, or
+// the one of what the cameras' backend shares (the simulated board's virtual clock, made from
+// its section of the board file). Callers see cameras, a trigger line, a serial port and a
+// clock, whatever the board. Construction throws Error naming the part that cannot be made; a
+// device that is not there yet is no error (the backends wait).
 class Hardware {
  public:
   explicit Hardware(HardwareConfig config,
@@ -58,19 +44,23 @@ class Hardware {
   TriggerLine* trigger() { return trigger_.get(); }  // null: the board has none
   SerialPort* serial() { return serial_.get(); }     // null: the board has no link
   const SerialPort* serial() const { return serial_.get(); }
-  // The simulated scene's images and the memory they hold (both 0 on hardware).
-  std::size_t scene_images() const;
-  std::size_t scene_bytes() const;
-  // The simulated board, for tests that inject faults (hal/src/sim/sim.hpp); null on hardware.
-  SimBoard* sim() const { return sim_.get(); }
+  // What the cameras' backend shares (null: nothing), and the memory it holds.
+  BackendBoard* backend_board() const { return board_.get(); }
+  std::size_t backend_bytes() const { return board_ ? board_->memory_bytes() : 0; }
 
  private:
-  std::unique_ptr<SimBoard> sim_;
+  std::unique_ptr<BackendBoard> board_;
   MonotonicClock monotonic_;
   Clock* clock_ = &monotonic_;
   std::array<std::unique_ptr<CameraSource>, 2> cameras_;
   std::unique_ptr<TriggerLine> trigger_;
   std::unique_ptr<SerialPort> serial_;
 };
+
+// Replaces the board's cameras and trigger by a backend's stand-ins of the same size that open
+// nothing (SectionBackend::stand_in), to size the firmware without its devices; false when they
+// need none (the board's cameras open nothing themselves: the simulated board's).
+bool stand_in_for_devices(HardwareConfig& config,
+                          const BackendRegistry& registry = BackendRegistry::builtin());
 
 }  // namespace epipole::hal

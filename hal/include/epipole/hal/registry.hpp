@@ -2,23 +2,33 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "epipole/hal/backend_settings.hpp"
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/clock.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "epipole/hal/trigger.hpp"
 
+namespace YAML {
+class Node;
+}
+
+namespace epipole::yaml {
+class Fields;
+}
+
 namespace epipole::hal {
 
-struct SimBoard;
+struct HardwareConfig;
 
 // What a backend may need besides its configuration.
 struct BackendContext {
-  Clock* clock = nullptr;   // the board's clock (MonotonicClock on hardware)
-  SimBoard* sim = nullptr;  // the simulated board, for the "sim" backends
+  Clock* clock = nullptr;         // the board's clock (MonotonicClock on hardware)
+  BackendBoard* board = nullptr;  // what the devices of the cameras' backend share, if any
 };
 
 // The board file's word for a part the board does not have (no trigger line: free-running
@@ -29,6 +39,26 @@ inline constexpr std::string_view kNoBackend = "none";
 struct BackendTraits {
   bool simulated = false;     // part of the simulated board (its virtual clock and scenes)
   bool needs_device = false;  // its configuration must name a device node
+  // The board file's section its devices share (a SectionBackend's name); null: none.
+  const char* section = nullptr;
+};
+
+// A backend's own section of the board file (the simulated board's `sim:`): read when the
+// board file is loaded, made into what its devices share when the board's hardware is.
+struct SectionBackend {
+  std::string name;  // the board file's top-level key
+  // Reads the section (an undefined node when the file has none), with the options given for it;
+  // every error names the file and the key (yaml::Fields).
+  std::function<std::unique_ptr<BackendSettings>(
+      const YAML::Node& section, const yaml::Fields& file, std::span<const BackendOption> options)>
+      read;
+  // What the board's devices share, made before them; throws Error naming what is wrong.
+  std::function<std::unique_ptr<BackendBoard>(const BackendSettings& settings,
+                                              const HardwareConfig& board)>
+      make_board;
+  // Changes a board's configuration so that this backend's devices stand in for its own, of
+  // the same size, opening nothing (start-up checks without the devices); empty: it cannot.
+  std::function<void(HardwareConfig& board)> stand_in;
 };
 
 using CameraFactory =
@@ -48,6 +78,7 @@ class BackendRegistry {
   void add_serial(std::string name, SerialFactory factory, BackendTraits traits = {});
   void add_unavailable_camera(std::string name, std::string reason, BackendTraits traits = {});
   void add_unavailable_trigger(std::string name, std::string reason, BackendTraits traits = {});
+  void add_section(SectionBackend section);
 
   std::unique_ptr<CameraSource> create_camera(std::string_view backend, const CameraConfig& config,
                                               const BackendContext& context = {}) const;
@@ -63,6 +94,9 @@ class BackendRegistry {
   BackendTraits camera_traits(std::string_view backend) const;
   BackendTraits trigger_traits(std::string_view backend) const;
   BackendTraits serial_traits(std::string_view backend) const;
+  // The backend sections, in the order they were added; section(): null for a name of none.
+  const std::vector<SectionBackend>& sections() const { return sections_; }
+  const SectionBackend* section(std::string_view name) const;
 
   // The backends built into this binary: cameras "sim", "v4l2", "libcamera"; triggers "sim",
   // "gpiod"; serial "termios", "pty" (a pseudo-terminal: the simulated board's link).
@@ -79,6 +113,7 @@ class BackendRegistry {
   std::vector<Entry<CameraFactory>> cameras_;
   std::vector<Entry<TriggerFactory>> triggers_;
   std::vector<Entry<SerialFactory>> serials_;
+  std::vector<SectionBackend> sections_;
 };
 
 }  // namespace epipole::hal

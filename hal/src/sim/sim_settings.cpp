@@ -1,0 +1,150 @@
+// The board file's `sim:` section, read by the simulated board itself.
+#include "sim/sim_settings.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include "epipole/core/error.hpp"
+#include "epipole/core/yaml_fields.hpp"
+
+namespace epipole::hal {
+
+namespace {
+
+constexpr const char* kSection = "sim";
+
+// A number in lo..hi at `key` of the map, when it is there.
+template <typename Read>
+void optional(const yaml::Fields& f, const YAML::Node& map, const std::string& path,
+              const char* key, Read read) {
+  if (const YAML::Node n = f.optional_child(map, path, key); n.IsDefined()) {
+    read(n, yaml::Fields::join(path, key));
+  }
+}
+
+int integer_in(const yaml::Fields& f, const YAML::Node& n, const std::string& key, int lo, int hi) {
+  const int v = f.integer(n, key);
+  if (v < lo || v > hi) f.fail(key, cat(v, " is outside ", lo, "..", hi));
+  return v;
+}
+
+double number_in(const yaml::Fields& f, const YAML::Node& n, const std::string& key, double lo,
+                 double hi) {
+  const double v = f.number(n, key);
+  if (v < lo || v > hi) f.fail(key, cat(v, " is outside ", lo, "..", hi));
+  return v;
+}
+
+SimScene read_scene(const yaml::Fields& f, const std::string& name, const YAML::Node& m) {
+  SimScene s;
+  s.name = name;
+  const std::string p = cat(kSection, ".scenes.", name);
+  f.only_keys(
+      m, p,
+      {"left", "right", "side_by_side", "synthesize", "disparity", "max_frames", "calibration"});
+  optional(f, m, p, "max_frames", [&](const YAML::Node& n, const std::string& k) {
+    s.max_frames = integer_in(f, n, k, 1, 100'000);
+  });
+  if (const YAML::Node v = f.optional_child(m, p, "side_by_side"); v.IsDefined()) {
+    for (const char* other : {"left", "right", "synthesize"}) {
+      if (f.optional_child(m, p, other).IsDefined()) {
+        f.fail(p, cat("side_by_side and ", other, " are two sources: give one"));
+      }
+    }
+    s.side_by_side = f.path(v, p + ".side_by_side");
+  } else if (const YAML::Node y = f.optional_child(m, p, "synthesize"); y.IsDefined()) {
+    s.synthesize = f.path(y, p + ".synthesize");
+    s.synthesize_disparity = f.integer(f.child(m, p, "disparity"), p + ".disparity");
+    if (s.synthesize_disparity < 0 || s.synthesize_disparity > 255) {
+      f.fail(p + ".disparity", "must be in 0..255");
+    }
+  } else {
+    s.left = f.files(f.child(m, p, "left"), p + ".left");
+    s.right = f.files(f.child(m, p, "right"), p + ".right");
+    if (s.left.size() != s.right.size()) {
+      f.fail(p, cat(s.left.size(), " left images but ", s.right.size(), " right images"));
+    }
+  }
+  if (const YAML::Node v = f.optional_child(m, p, "calibration"); v.IsDefined()) {
+    s.calibration = f.path(v, p + ".calibration");
+  }
+  return s;
+}
+
+void choose_scene(const yaml::Fields& f, SimSettings& s, std::span<const BackendOption> options) {
+  for (const BackendOption& option : options) {
+    if (option.key != "scene") {
+      f.fail(kSection, cat("the simulated board takes no option '", option.key, "'"));
+    }
+    s.scene = option.value;
+  }
+  if (s.scenes.empty()) f.fail("sim.scenes", "the simulated cameras need at least one scene");
+  if (s.scene.empty()) s.scene = s.scenes.front().name;
+  std::string names;
+  for (const SimScene& scene : s.scenes) {
+    if (scene.name == s.scene) return;
+    names += (names.empty() ? "" : ", ") + scene.name;
+  }
+  f.fail("sim.scene", cat("'", s.scene, "' is not a scene of this board (", names, ")"));
+}
+
+}  // namespace
+
+std::unique_ptr<BackendSettings> read_sim_section(const YAML::Node& n, const yaml::Fields& f,
+                                                  std::span<const BackendOption> options) {
+  auto s = std::make_unique<SimSettings>();
+  if (n.IsDefined()) {
+    f.only_keys(n, kSection,
+                {"scene", "scenes", "charge_compute", "drop_rate", "corrupt_rate", "seed"});
+    optional(f, n, kSection, "scene",
+             [&](const YAML::Node& v, const std::string& k) { s->scene = f.text(v, k); });
+    optional(f, n, kSection, "charge_compute", [&](const YAML::Node& v, const std::string& k) {
+      s->charge_compute = f.boolean(v, k);
+    });
+    optional(f, n, kSection, "drop_rate", [&](const YAML::Node& v, const std::string& k) {
+      s->drop_rate = number_in(f, v, k, 0, 1);
+    });
+    optional(f, n, kSection, "corrupt_rate", [&](const YAML::Node& v, const std::string& k) {
+      s->corrupt_rate = number_in(f, v, k, 0, 1);
+    });
+    optional(f, n, kSection, "seed", [&](const YAML::Node& v, const std::string& k) {
+      s->seed = static_cast<std::uint64_t>(integer_in(f, v, k, 0, 1'000'000'000));
+    });
+    const YAML::Node scenes = f.child(n, kSection, "scenes");
+    f.require_map(scenes, "sim.scenes");
+    for (const auto& entry : scenes) {
+      s->scenes.push_back(read_scene(f, entry.first.Scalar(), entry.second));
+    }
+  }
+  choose_scene(f, *s, options);
+  return s;
+}
+
+const SimScene& SimSettings::chosen() const {
+  for (const SimScene& s : scenes) {
+    if (s.name == scene) return s;
+  }
+  throw Error(cat("the simulated board has no scene '", scene, "'"));
+}
+
+std::filesystem::path SimSettings::calibration() const {
+  for (const SimScene& s : scenes) {
+    if (s.name == scene) return s.calibration;
+  }
+  return {};
+}
+
+std::unique_ptr<BackendSettings> SimSettings::clone() const {
+  return std::make_unique<SimSettings>(*this);
+}
+
+SimSettings& sim_settings(BackendSections& sections) {
+  return const_cast<SimSettings&>(sim_settings(std::as_const(sections)));
+}
+
+const SimSettings& sim_settings(const BackendSections& sections) {
+  const auto* s = dynamic_cast<const SimSettings*>(sections.find(kSection));
+  require(s != nullptr, "the board file has no '", kSection, "' section");
+  return *s;
+}
+
+}  // namespace epipole::hal
