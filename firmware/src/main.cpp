@@ -13,6 +13,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/build_info.hpp"
+#include "epipole/firmware/cascade_file.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/pipeline.hpp"

@@ -20,6 +20,7 @@
 #include <variant>
 #include <vector>
 
+#include "epipole/firmware/cascade_file.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "error_of.hpp"

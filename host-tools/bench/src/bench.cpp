@@ -16,6 +16,7 @@
 #include "epipole/core/image_io.hpp"
 #include "epipole/core/thread_pool.hpp"
 #include "epipole/firmware/board.hpp"
+#include "epipole/firmware/cascade_file.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/tools/opencv_mat.hpp"

@@ -65,53 +65,65 @@ OpenCvPipeline::OpenCvPipeline(const firmware::BoardConfig& board,
   }
 }
 
+const OpenCvPipeline::Step* OpenCvPipeline::step_of(Stage id) {
+  static constexpr std::array<Step, 4> kSteps{{
+      {Stage::rectify, &OpenCvPipeline::rectify},
+      {Stage::corners, &OpenCvPipeline::corners},
+      {Stage::disparity, &OpenCvPipeline::disparity},
+      {Stage::detect, &OpenCvPipeline::detect},
+  }};
+  for (const Step& step : kSteps) {
+    if (step.id == id) return &step;
+  }
+  return nullptr;
+}
+
 OpenCvPipeline::Times OpenCvPipeline::process(const cv::Mat& left_raw, const cv::Mat& right_raw) {
   Times times{};
-  auto start = std::chrono::steady_clock::now();
-  const auto lap = [&](Stage s) {
-    const auto now = std::chrono::steady_clock::now();
-    times[static_cast<std::size_t>(s)] =
-        std::chrono::duration<double, std::milli>(now - start).count();
-    start = now;
-  };
-  const auto runs = [&](Stage s) { return protocol::has_stage(stages_, s); };
   // The inputs are never written: rectified images go to buffers of their own.
-  cv::Mat left = left_raw;
-  cv::Mat right = right_raw;
-  if (runs(Stage::rectify)) {
-    cv::remap(left_raw, rectified_[0], map1_[0], map2_[0], cv::INTER_LINEAR);
-    cv::remap(right_raw, rectified_[1], map1_[1], map2_[1], cv::INTER_LINEAR);
-    left = rectified_[0];
-    right = rectified_[1];
-    lap(Stage::rectify);
-  }
-  if (runs(Stage::corners)) {
-    const auto& c = corners_;
-    for (const cv::Mat* image : {&left, &right}) {
-      std::vector<cv::KeyPoint> keypoints;
-      std::vector<cv::Point2f> points;
-      if (c.detector == firmware::BoardConfig::CornerDetector::fast) {
-        cv::FAST(*image, keypoints, c.threshold, true);
-      } else {
-        cv::goodFeaturesToTrack(*image, points, c.max_corners, 0.01, 3, cv::noArray(), 3, true);
-      }
-    }
-    lap(Stage::corners);
-  }
-  if (runs(Stage::disparity)) {
-    cv::Mat disparity;
-    matcher_->compute(left, right, disparity);
-    lap(Stage::disparity);
-  }
-  if (runs(Stage::detect)) {
-    const auto& d = detector_;
-    std::vector<cv::Rect> objects;
-    const cv::Size max_size = d.max_size > 0 ? cv::Size(d.max_size, d.max_size) : cv::Size();
-    cascade_.detectMultiScale(left, objects, d.scale_factor, d.min_neighbors, 0,
-                              {d.min_size, d.min_size}, max_size);
-    lap(Stage::detect);
+  Images images{left_raw, right_raw};
+  for (const protocol::StageInfo& s : protocol::kStages) {
+    const Step* step = step_of(s.id);
+    if (step == nullptr || !protocol::has_stage(stages_, s.id)) continue;
+    const auto start = std::chrono::steady_clock::now();
+    (this->*step->run)(images);
+    times[static_cast<std::size_t>(s.id)] =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   }
   return times;
+}
+
+void OpenCvPipeline::rectify(Images& images) {
+  cv::remap(images.left, rectified_[0], map1_[0], map2_[0], cv::INTER_LINEAR);
+  cv::remap(images.right, rectified_[1], map1_[1], map2_[1], cv::INTER_LINEAR);
+  images.left = rectified_[0];
+  images.right = rectified_[1];
+}
+
+void OpenCvPipeline::corners(Images& images) {
+  const auto& c = corners_;
+  for (const cv::Mat* image : {&images.left, &images.right}) {
+    std::vector<cv::KeyPoint> keypoints;
+    std::vector<cv::Point2f> points;
+    if (c.detector == firmware::BoardConfig::CornerDetector::fast) {
+      cv::FAST(*image, keypoints, c.threshold, true);
+    } else {
+      cv::goodFeaturesToTrack(*image, points, c.max_corners, 0.01, 3, cv::noArray(), 3, true);
+    }
+  }
+}
+
+void OpenCvPipeline::disparity(Images& images) {
+  cv::Mat disparity;
+  matcher_->compute(images.left, images.right, disparity);
+}
+
+void OpenCvPipeline::detect(Images& images) {
+  const auto& d = detector_;
+  std::vector<cv::Rect> objects;
+  const cv::Size max_size = d.max_size > 0 ? cv::Size(d.max_size, d.max_size) : cv::Size();
+  cascade_.detectMultiScale(images.left, objects, d.scale_factor, d.min_neighbors, 0,
+                            {d.min_size, d.min_size}, max_size);
 }
 
 }  // namespace epipole::tools

@@ -33,10 +33,24 @@ class OpenCvPipeline {
   // The stages that run here (a subset of the board's).
   protocol::StageMask stages() const { return stages_; }
 
-  // One pair through every stage, each timed.
+  // One pair through every stage, in the order of protocol::kStages, each timed.
   Times process(const cv::Mat& left, const cv::Mat& right);
 
  private:
+  struct Images {
+    cv::Mat left, right;
+  };
+  // Each stage's OpenCV counterpart (kSteps in the .cpp; the sparse matcher has none).
+  void rectify(Images& images);
+  void corners(Images& images);
+  void disparity(Images& images);
+  void detect(Images& images);
+  struct Step {
+    protocol::Stage id;
+    void (OpenCvPipeline::*run)(Images&);
+  };
+  static const Step* step_of(protocol::Stage id);
+
   firmware::BoardConfig::Corners corners_;
   firmware::BoardConfig::Detector detector_;
   protocol::StageMask stages_ = 0;

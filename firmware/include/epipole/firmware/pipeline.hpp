@@ -31,6 +31,10 @@
 
 namespace epipole::firmware {
 
+namespace stages {
+class PipelineStage;
+}
+
 // Which stages run, one bit per protocol::Stage (protocol/stages.hpp).
 using protocol::stage_bit;
 using protocol::StageMask;
@@ -62,13 +66,6 @@ struct FrameResult {
   std::span<const DetectionDepth> detection_depths;
   StageTimes times{};
 };
-
-// OpenCV's cascade XML that `compiled` is made from: the file of the same name in the data cache
-// of scripts/fetch-data.sh (haarcascades or lbpcascades), or empty when it is not there.
-std::filesystem::path opencv_cascade_xml(const std::filesystem::path& compiled);
-// The one command that makes a missing compiled cascade (epipole cascade-compile), from
-// opencv_cascade_xml() when it is there.
-std::string cascade_compile_command(const std::filesystem::path& compiled);
 
 // Where the pipeline finds the pair after the one it is working on (pipelining across pairs):
 // the frame loop's grabber. take() returns the next pair's images when it has arrived, without
@@ -112,67 +109,37 @@ class Pipeline {
   // The next pair starts a new sequence: what filters over time (the disparity's temporal
   // filter) forgets the pairs before it. The frame loop calls it when a camera is lost; a pair
   // after one without disparity starts a new sequence by itself.
-  void reset_history() {
-    disparity_ran_last_ = false;
-    drop_pair_ahead();
-  }
+  void reset_history();
   // The pair taken ahead (NextPair) will not be processed: its buffers went back to the cameras,
   // and a later pair in the same buffers with the same number (a camera's count restarted) must
   // not be taken for it.
-  void drop_pair_ahead() { ahead_.ready = false; }
+  void drop_pair_ahead();
 
   // The stages this pipeline can run (rectification needs a calibration, and so on).
   StageMask available() const { return available_; }
   bool has_calibration() const { return triangulator_ != nullptr; }
   // The compiled cascade the board names for detection that is not there yet (detection is off
   // until it is made and the firmware restarted); empty otherwise.
-  const std::filesystem::path& missing_cascade() const { return missing_cascade_; }
+  std::filesystem::path missing_cascade() const;
   const calib::Triangulator* triangulator() const { return triangulator_.get(); }
   const ObstacleSectors* obstacle_sectors() const { return obstacles_.get(); }
   // Every stage's buffers, one part per stage (as the table of stages names them).
   void add_memory(MemoryReport& report) const;
   // Pairs rectified ahead (NextPair), and how many of them process() then used.
-  std::uint64_t pairs_rectified_ahead() const { return ahead_rectified_; }
-  std::uint64_t pairs_used_ahead() const { return ahead_used_; }
+  std::uint64_t pairs_rectified_ahead() const;
+  std::uint64_t pairs_used_ahead() const;
 
  private:
-  // The pair after the current one, rectified into the other set of images.
-  struct PairAhead {
-    NextPair::Images images;
-    int slot = 0;
-    hal::Nanoseconds rectify_ns = 0;
-    bool ready = false;
-    bool matches(GrayView left, GrayView right, std::uint32_t frame) const;
-  };
-  void rectify_band(GrayView left_raw, GrayView right_raw, int slot, int task);
-  void finish_dense(FrameResult& r);
-  void match_sparse(FrameResult& r);
-  void attach_depths(FrameResult& r);
+  void make_depth_outputs(const BoardConfig& board, const calib::StereoCalibration& calibration);
 
-  struct Stages;
-  std::unique_ptr<Stages> stages_;
   std::unique_ptr<ThreadPool> pool_;  // every stage's tasks: threads.count workers
   TaskBatch batch_;
   std::unique_ptr<calib::Triangulator> triangulator_;
   std::unique_ptr<ObstacleSectors> obstacles_;
   std::unique_ptr<DepthGrid> depth_grid_;
-  bool disparity_ran_last_ = false;  // false: the next disparity starts a new sequence
-  std::vector<SparsePoint> points_;
-  std::vector<std::uint32_t> point_order_;
-  std::vector<calib::RectifiedMatch> rectified_matches_;
-  std::unique_ptr<vision::CascadeDetector> detector_;
-  std::filesystem::path missing_cascade_;
-  std::unique_ptr<DetectionDepthEstimator> depth_estimator_;
-  std::vector<DetectionDepth> depths_;
-  calib::CalibrationHealth calibration_health_;
-  int max_points_ = 0;
+  // The stages of firmware/src/stages/stage_table.hpp, by id (null: not a pipeline stage).
+  std::array<std::unique_ptr<stages::PipelineStage>, protocol::kStageCount> stages_;
   StageMask available_ = 0;
-  // Two rectified images per camera (with a calibration): the current pair's and the one ahead.
-  std::array<GrayImage, 2> rectified_left_, rectified_right_;
-  int slot_ = 0;  // the current pair's
-  PairAhead ahead_;
-  std::uint64_t ahead_rectified_ = 0;
-  std::uint64_t ahead_used_ = 0;
   FrameResult result_;
 };
 

@@ -1,0 +1,84 @@
+#pragma once
+
+// A stage of the pipeline (firmware/src/stages/<name>.cpp): made from the board configuration
+// with all its memory, it adds its tasks to each pair's batch and writes its part of the
+// results. The stages are listed, in the order they run, in stage_table.hpp beside the
+// protocol's table (protocol/stages.hpp).
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include "epipole/calib/calibration.hpp"
+#include "epipole/calib/triangulation.hpp"
+#include "epipole/core/simd.hpp"
+#include "epipole/core/task_batch.hpp"
+#include "epipole/core/thread_pool.hpp"
+#include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/depth_grid.hpp"
+#include "epipole/firmware/obstacles.hpp"
+#include "epipole/firmware/pipeline.hpp"
+#include "epipole/vision/cascade_model.hpp"
+
+namespace epipole::firmware::stages {
+
+// What the stages of one pipeline share, made before them.
+struct StageContext {
+  const BoardConfig& board;
+  const std::optional<calib::StereoCalibration>& calibration;
+  SimdPath path;
+  const vision::CascadeModel* cascade;      // instead of the board's file (tests, the host tool)
+  ThreadPool& pool;                         // every stage's tasks
+  const calib::Triangulator* triangulator;  // null without a calibration
+  ObstacleSectors* obstacles;               // the depth's outputs: null without a calibration,
+  DepthGrid* depth_grid;                    // and the grid without the board's
+};
+
+// One pair as the stages work on it (Pipeline::process).
+struct PairWork {
+  FrameResult& result;
+  StageMask run;   // the stages that run on this pair
+  NextPair* next;  // where the pair after it is found; null: nowhere
+  TaskBatch& batch;
+  std::array<int, protocol::kStageCount> parts;  // each stage's part of the batch, or kNoPart
+};
+
+class PipelineStage {
+ public:
+  virtual ~PipelineStage() = default;
+
+  // Whether it can run at all (rectification needs a calibration, detection a cascade).
+  virtual bool available() const { return true; }
+  // A file it needs that is not there yet (a compiled cascade to make), else empty.
+  virtual std::filesystem::path missing_file() const { return {}; }
+  virtual std::size_t working_set_bytes() const = 0;
+
+  // Called in the table's order on a pair it runs on. Before the batch: what every later stage
+  // reads (the rectified images) and what may refuse the pair (throws: an image of a wrong
+  // size), before any task is queued.
+  virtual void prepare(PairWork& /*work*/) {}
+  // Its tasks, after those of the stages before it (work.parts names theirs); returns its part
+  // (TaskBatch::kNoPart: none). The callables must outlive the batch: members of the stage.
+  virtual int add_tasks(PairWork& /*work*/) { return TaskBatch::kNoPart; }
+  // Tasks that only fill the workers' last gaps, after every stage's own (on every pair, whether
+  // the stage runs on it or not).
+  virtual void fill_gaps(PairWork& /*work*/) {}
+  // After the batch, on every pair (work.run says whether it ran): the rest of its results; its
+  // time is its part's span plus what it adds.
+  virtual void finish(PairWork& /*work*/) {}
+
+  // The next pair starts a new sequence (what filters over time forgets the pairs before).
+  virtual void forget_history() {}
+  // The pair taken ahead (NextPair) will not be processed.
+  virtual void drop_pair_ahead() {}
+  // Pairs rectified ahead, and how many of them were then used.
+  struct AheadCounts {
+    std::uint64_t done = 0, used = 0;
+  };
+  virtual AheadCounts ahead() const { return {}; }
+};
+
+}  // namespace epipole::firmware::stages
