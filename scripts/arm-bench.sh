@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # ARM instruction counts without a board: a cross build's epipole-bench under qemu-user with the
-# project's instruction-counting plugin (host-tools/qemu_insn_count), each side alone (Epipole's
+# project's instruction-counting plugin (tests/arm_counts/insn_count_plugin), each side alone (Epipole's
 # stages with their NEON kernels; Debian's OpenCV for the same ISA doing the same work), one
 # thread, on the simulated board's Aloe pair, for the rows of tests/arm_counts/rows (each stage
 # alone, with some keys of the board set, and the whole pipeline). Per pair: the count of 2N
@@ -29,7 +29,7 @@ mkdir -p "$out"
 cmake --preset "$preset" >/dev/null
 cmake --build --preset "$preset" --target epipole-bench epipole_insn_count
 
-plugin=$build/host-tools/qemu_insn_count/libepipole_insn_count.so
+plugin=$build/tests/arm_counts/insn_count_plugin/libepipole_insn_count.so
 bench=$build/host-tools/bench/epipole-bench
 count_file=$(mktemp)
 trap 'rm -f "$count_file"' EXIT

@@ -32,7 +32,7 @@ mkdir -p "$out"
 cmake --preset "$preset" >/dev/null
 cmake --build --preset "$preset" --target epipole-bench epipole_insn_count >/dev/null
 
-plugin=$build/host-tools/qemu_insn_count/libepipole_insn_count.so
+plugin=$build/tests/arm_counts/insn_count_plugin/libepipole_insn_count.so
 bench=$build/host-tools/bench/epipole-bench
 objdump=aarch64-linux-gnu-objdump
 nm=aarch64-linux-gnu-nm

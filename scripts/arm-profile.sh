@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Where one pair's ARM instructions go, function by function: the aarch64 (or armhf) build's
 # epipole-bench under qemu-user with the project's counting plugin and its profile
-# (host-tools/qemu_insn_count), Epipole's side alone, one thread, on the simulated board's Aloe
+# (tests/arm_counts/insn_count_plugin), Epipole's side alone, one thread, on the simulated board's Aloe
 # pair, for N and 2N pairs; each function's count for 2N minus that for N, divided by N, largest
 # first, demangled. The place to start a NEON tuning (docs/performance.md).
 #
@@ -38,7 +38,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 for n in "$pairs" $((2 * pairs)); do
   "$build/run-on-target" \
-    -plugin "$build/host-tools/qemu_insn_count/libepipole_insn_count.so,out=$work/count-$n,profile=$work/profile-$n" \
+    -plugin "$build/tests/arm_counts/insn_count_plugin/libepipole_insn_count.so,out=$work/count-$n,profile=$work/profile-$n" \
     "$build/host-tools/bench/epipole-bench" --board board/sim --scene aloe --threads 1 --warmup 0 \
     --no-opencv -n "$n" "$@" --json >"$work/bench-$n.json"
 done
