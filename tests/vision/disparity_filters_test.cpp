@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include "disparity_filters_kernels.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "error_of.hpp"
 

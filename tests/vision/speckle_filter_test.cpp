@@ -11,6 +11,7 @@
 
 #include "epipole/vision/stereo.hpp"
 #include "error_of.hpp"
+#include "speckle_filter_kernels.hpp"
 
 namespace epipole::vision {
 namespace {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdlib>
 
+#include "disparity_filters_kernels.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "kernel_set.hpp"

@@ -3,6 +3,7 @@
 // eight-wide stores; the decision for each hole is the reference's.
 #include <algorithm>
 
+#include "disparity_filters_kernels.hpp"
 #include "epipole/core/neon.hpp"
 #include "epipole/vision/disparity_filters.hpp"
 

@@ -13,6 +13,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "kernel_set.hpp"
+#include "speckle_filter_kernels.hpp"
 
 namespace epipole::vision {
 

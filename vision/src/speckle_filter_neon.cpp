@@ -3,6 +3,7 @@
 // 0xFF/0x00 read as 16 bits and shifted by 4 keeps a nibble of each).
 #include "epipole/core/neon.hpp"
 #include "epipole/vision/speckle_filter.hpp"
+#include "speckle_filter_kernels.hpp"
 
 namespace epipole::vision::kernels {
 

@@ -609,6 +609,65 @@ template <typename V, bool kEnters, bool kLeaves>
   return v;
 }
 
+// Block matching's pixel x = 0: columns 0..R updated, its box summed into r.sums.
+template <typename V, bool kEnters, bool kLeaves, int kD, typename Wta>
+[[gnu::always_inline]] inline void bm_first_pixel(const BmRow& r, Wta& wta) {
+  const int D = kD != 0 ? kD : r.disparities;
+  const int R = r.radius;
+  const auto offset = [&](int c) { return static_cast<std::ptrdiff_t>(c) * D; };
+  const auto update = [&](int c, int d) {
+    return bm_column<V, kEnters, kLeaves>(r.columns + offset(c),
+                                          kEnters ? r.entering + offset(c) : nullptr,
+                                          kLeaves ? r.leaving + offset(c) : nullptr, d);
+  };
+  for (int c = 0; c < R; ++c) {
+    for (int d = 0; d < D; d += 16) update(c, d);
+  }
+  wta.pixel(0, r.sums, [&](int d) {
+    typename V::H acc = update(R, d);
+    for (int c = 0; c < R; ++c) acc = V::addh(acc, V::loadh(r.columns + offset(c) + d));
+    V::storeh(r.sums + d, acc);
+    return acc;
+  });
+}
+
+// Block matching's pixels from x on (after the first and the left band's), their box sums in
+// `sums`: column x + R enters (updated then) and column x - R - 1 leaves (`zero` before the first
+// column); in the last R pixels no column enters. Written out, not through bm_row_sweep's
+// band_pixel lambda: through it GCC kept the pointers on the stack (aarch64 block matching
+// 172.3 M a pair -> 180 M).
+template <typename V, bool kEnters, bool kLeaves, int kD, typename Wta>
+[[gnu::always_inline]] inline void bm_row_pixels(const BmRow& r, Wta& wta,
+                                                 const std::uint16_t* zero, int x) {
+  using H = typename V::H;
+  const int W = r.width;
+  const int D = kD != 0 ? kD : r.disparities;
+  const int R = r.radius;
+  std::uint16_t* const sums = r.sums;
+  const auto offset = [&](int c) { return static_cast<std::ptrdiff_t>(c) * D; };
+  for (; x < W - R; ++x) {
+    const std::uint16_t* leaves = x - R - 1 >= 0 ? r.columns + offset(x - R - 1) : zero;
+    std::uint16_t* column = r.columns + offset(x + R);
+    const std::uint8_t* entering = kEnters ? r.entering + offset(x + R) : nullptr;
+    const std::uint8_t* leaving = kLeaves ? r.leaving + offset(x + R) : nullptr;
+    wta.pixel(x, sums, [&](int d) {
+      const H acc = V::subh(
+          V::addh(V::loadh(sums + d), bm_column<V, kEnters, kLeaves>(column, entering, leaving, d)),
+          V::loadh(leaves + d));
+      V::storeh(sums + d, acc);
+      return acc;
+    });
+  }
+  for (x = std::max(W - R, 1); x < W; ++x) {
+    const std::uint16_t* leaves = x - R - 1 >= 0 ? r.columns + offset(x - R - 1) : zero;
+    wta.pixel(x, sums, [&](int d) {
+      const H acc = V::subh(V::loadh(sums + d), V::loadh(leaves + d));
+      V::storeh(sums + d, acc);
+      return acc;
+    });
+  }
+}
+
 // One row of block matching in one sweep: column x + r updated just before the box of x needs
 // it, the box of x from the box of x - 1, its winner.
 template <typename V, bool kEnters, bool kLeaves, int kD = 0>
@@ -622,27 +681,15 @@ void bm_row_sweep(const BmRow& r) {
   // The entering and leaving costs of column c (null when there is no such row).
   const auto entering_at = [&](int c) { return kEnters ? r.entering + offset(c) : nullptr; };
   const auto leaving_at = [&](int c) { return kLeaves ? r.leaving + offset(c) : nullptr; };
-  // Column c, updated.
-  const auto update = [&](int c, int d) {
-    return bm_column<V, kEnters, kLeaves>(r.columns + offset(c), entering_at(c), leaving_at(c), d);
-  };
   constexpr bool kSmallSums = false;  // up to 21 * 21 * 16
   WtaPixels<V, kD, kSmallSums, RightWinners::left_winners> wta(r.wta, W, D);
-  // x = 0: columns 0..R.
-  for (int c = 0; c < R; ++c) {
-    for (int d = 0; d < D; d += 16) update(c, d);
-  }
-  wta.pixel(0, sums, [&](int d) {
-    H acc = update(R, d);
-    for (int c = 0; c < R; ++c) acc = V::addh(acc, V::loadh(r.columns + offset(c) + d));
-    V::storeh(sums + d, acc);
-    return acc;
-  });
+  bm_first_pixel<V, kEnters, kLeaves, kD>(r, wta);
   // Column x + R enters, column x - R - 1 leaves (zeros before the first column).
   std::uint16_t* const zero = sums + D;
   std::fill_n(zero, D, std::uint16_t{0});
-  // The left band's pixels (below). Written out again for the others: through this lambda GCC
-  // kept their pointers on the stack (aarch64 block matching 172.3 M a pair -> 180 M).
+  // The left band's pixels (below). Written out again for the others (bm_row_pixels): through
+  // this lambda GCC kept their pointers on the stack (aarch64 block matching 172.3 M a pair ->
+  // 180 M).
   const auto band_pixel = [&](int x, int end) __attribute__((always_inline)) {
     const std::uint16_t* leaves = x - R - 1 >= 0 ? r.columns + offset(x - R - 1) : zero;
     std::uint16_t* column = r.columns + offset(x + R);
@@ -695,28 +742,7 @@ void bm_row_sweep(const BmRow& r) {
     }
   }
   count_blocks(x, D);
-  for (; x < W - R; ++x) {
-    const std::uint16_t* leaves = x - R - 1 >= 0 ? r.columns + offset(x - R - 1) : zero;
-    std::uint16_t* column = r.columns + offset(x + R);
-    const std::uint8_t* entering = entering_at(x + R);
-    const std::uint8_t* leaving = leaving_at(x + R);
-    wta.pixel(x, sums, [&](int d) {
-      const H acc = V::subh(
-          V::addh(V::loadh(sums + d), bm_column<V, kEnters, kLeaves>(column, entering, leaving, d)),
-          V::loadh(leaves + d));
-      V::storeh(sums + d, acc);
-      return acc;
-    });
-  }
-  // The last R pixels: no column enters.
-  for (x = std::max(W - R, 1); x < W; ++x) {
-    const std::uint16_t* leaves = x - R - 1 >= 0 ? r.columns + offset(x - R - 1) : zero;
-    wta.pixel(x, sums, [&](int d) {
-      const H acc = V::subh(V::loadh(sums + d), V::loadh(leaves + d));
-      V::storeh(sums + d, acc);
-      return acc;
-    });
-  }
+  bm_row_pixels<V, kEnters, kLeaves, kD>(r, wta, zero, x);
   wta.finish();
 }
 

@@ -40,28 +40,8 @@ class SpeckleFilter {
   // Union-find over all runs of the image: a root holds minus its region's size, another run
   // its parent.
   std::vector<std::int32_t> nodes_;
-  std::vector<std::uint64_t> valid_, left_, up_;  // one row's masks (kernels::SpeckleMasksRow)
+  std::vector<std::uint64_t> valid_, left_, up_;  // one row's masks (speckle_filter_kernels.hpp)
   Runs runs_[2];                                  // the row's runs and the row above's
 };
-
-namespace kernels {
-// The speckle filter's view of one row, 16 pixels a 64-bit word and 4 bits a pixel (all set or
-// all clear): pixel x in bits 4 * (x % 16) .. 4 * (x % 16) + 3 of word x / 16; the nibbles past
-// the width clear.
-//   valid[x]: row[x] >= 0;
-//   left[x]:  x > 0, row[x] and row[x - 1] valid and at most range_x16 apart (x continues the
-//             run of x - 1);
-//   up[x]:    row[x] and above[x] valid and at most range_x16 apart (all clear when above is
-//             null).
-using SpeckleMasksRow = void(const std::int16_t* row, const std::int16_t* above, int width,
-                             int range_x16, std::uint64_t* valid, std::uint64_t* left,
-                             std::uint64_t* up);
-void speckle_masks_row_ref(const std::int16_t* row, const std::int16_t* above, int width,
-                           int range_x16, std::uint64_t* valid, std::uint64_t* left,
-                           std::uint64_t* up);
-void speckle_masks_row_neon(const std::int16_t* row, const std::int16_t* above, int width,
-                            int range_x16, std::uint64_t* valid, std::uint64_t* left,
-                            std::uint64_t* up);
-}  // namespace kernels
 
 }  // namespace epipole::vision
