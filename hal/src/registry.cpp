@@ -38,12 +38,7 @@ const auto& find_entry(const Entries& entries, std::string_view kind, std::strin
 
 BackendRegistry make_builtin() {
   BackendRegistry r;
-  register_sim(r);
-  register_v4l2(r);
-  register_libcamera(r);
-  register_gpiod(r);
-  register_termios(r);
-  register_pty(r);
+  register_builtin_backends(r);
   return r;
 }
 
