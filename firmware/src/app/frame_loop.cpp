@@ -40,7 +40,7 @@ hal::PairingConfig pairing_config(const BoardConfig& config,
   if (!config.has_trigger()) {
     // Free-running cameras count their frames each on its own: pairs are matched by time, and
     // the tolerance must be below half the frame period of the faster camera.
-    p.trigger_period = hal::period_of(std::max(config.cameras.left.fps, config.cameras.right.fps));
+    p.trigger_period = config.frame_period();
   }
   if (config.pairing_edge_delay) {
     p.edge_delay = *config.pairing_edge_delay;
@@ -265,10 +265,11 @@ void FrameLoop::conclude(std::uint16_t sequence, Verdict verdict) {
   answer(sequence, verdict);
 }
 
-// The period frames come at: the trigger's, or free running the cameras'.
+// The period frames come at now: the trigger's (set_trigger_rate changes it), or free running
+// the cameras'.
 hal::Nanoseconds FrameLoop::frame_period() const {
   if (const hal::Nanoseconds p = grabber_.pairer().config().trigger_period; p > 0) return p;
-  return hal::period_of(std::max(config_.cameras.left.fps, config_.cameras.right.fps));
+  return config_.frame_period();
 }
 
 FrameLoop::Verdict FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& command) {

@@ -18,6 +18,11 @@ namespace epipole::firmware {
 
 namespace fs = std::filesystem;
 
+hal::Nanoseconds BoardConfig::frame_period() const {
+  if (has_trigger()) return pairing.trigger_period;
+  return hal::period_of(std::max({cameras.left.fps, cameras.right.fps, 1e-3}));
+}
+
 bool BoardConfig::has_trigger() const {
   return trigger.backend != hal::kNoBackend;
 }
@@ -482,12 +487,6 @@ struct Checks {
     throw Error(cat(file, ": ", key, ": ", message));
   }
 
-  // The period frames come at: the trigger's, or free running the faster camera's.
-  hal::Nanoseconds frame_period() const {
-    if (c.has_trigger()) return c.pairing.trigger_period;
-    return hal::period_of(std::max({c.cameras.left.fps, c.cameras.right.fps, 1e-3}));
-  }
-
   void backends() const {
     const hal::BackendRegistry& registry = hal::BackendRegistry::builtin();
     const auto known = [&](const char* key, const std::string& backend,
@@ -546,7 +545,7 @@ struct Checks {
                                       ? LinkProtocol::mavlink
                                       : LinkProtocol::epipole;
     if (const std::string problem =
-            link_capacity_problem(protocol, c.serial.port.baud, frame_period());
+            link_capacity_problem(protocol, c.serial.port.baud, c.frame_period());
         !problem.empty()) {
       fail("serial.baud", problem);
     }

@@ -127,6 +127,9 @@ struct BoardConfig {
   // What the HAL's registry says of the board's backends.
   bool has_trigger() const;  // trigger.backend is not "none" (else free-running cameras)
   bool has_link() const;     // serial.backend is not "none"
+  // The period frames come at as the file sets it: the trigger's, or free running the faster
+  // camera's.
+  hal::Nanoseconds frame_period() const;
 };
 
 // Reads and validates a board file; `path` is the file or its folder (then board.yaml in it).
