@@ -10,10 +10,11 @@ BackendSections::BackendSections(const BackendSections& other) {
 
 BackendSections& BackendSections::operator=(const BackendSections& other) {
   if (this == &other) return *this;
-  sections_.clear();
+  std::vector<std::pair<std::string, std::unique_ptr<BackendSettings>>> copy;
   for (const auto& [name, settings] : other.sections_) {
-    sections_.emplace_back(name, settings ? settings->clone() : nullptr);
+    copy.emplace_back(name, settings ? settings->clone() : nullptr);
   }
+  sections_ = std::move(copy);  // a clone that throws leaves this as it was
   return *this;
 }
 

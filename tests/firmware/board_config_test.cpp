@@ -166,7 +166,7 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
        "sim.scene: 'nowhere' is not a scene of this board (a)"},
       {"a simulated board without its section",
        "sim: {charge_compute: false, scenes: {test: {synthesize: unused.png, disparity: 8}}}\n", "",
-       "sim.scenes: the simulated cameras need at least one scene"},
+       "sim.scenes: the simulated board needs at least one scene"},
       {"glob without files", "synthesize: unused.png, disparity: 8",
        "left: nothing-here-*.png, right: nothing-there-*.png",
        "sim.scenes.test.left: no file matches"},
@@ -249,6 +249,13 @@ TEST(BoardConfig, CameraOptionsGoToTheCamerasBackendSection) {
               parse_board_config(v4l2, file, scene);
             }).find("cameras.backend: 'v4l2' takes no option 'scene'"),
             std::string::npos);
+  std::string unknown = v4l2;
+  unknown.replace(unknown.find("backend: v4l2"), 13, "backend: gige");
+  EXPECT_NE(test::error_of([&] {
+              parse_board_config(unknown, file, scene);
+            }).find("cameras.backend: 'gige' is not one of sim, v4l2, libcamera"),
+            std::string::npos)
+      << "an unknown backend is said as such, options or not";
 }
 
 TEST(BoardConfig, AFolderMeansItsBoardFile) {

@@ -263,5 +263,31 @@ TEST(Pipeline, TheTemporalFilterStartsAgainAfterAGap) {
   EXPECT_TRUE(same_image(process(p, 1, all).disparity, alone.disparity));
 }
 
+// A pair without disparity is a gap even when it is refused before its tasks run (here by the
+// detector: an image larger than the board's, taken unrectified without a calibration).
+TEST(Pipeline, ARefusedPairWithoutDisparityIsAGapToo) {
+  test::SimRig rig(160, 120, 8);
+  BoardConfig config = rig.parse();
+  config.stereo.temporal_percent = 25;
+  rig.add_cascade(config);
+  hal::StereoImages images = rig.images(2);
+  images.right[0] = hal::synthesize_right(images.left[0].view(), rig.disparity + 1);
+  const auto process = [&](Pipeline& p, std::size_t i, StageMask stages) -> const FrameResult& {
+    return p.process(images.left[i].view(), images.right[i].view(), static_cast<std::uint32_t>(i),
+                     0, stages);
+  };
+  const StageMask all = config.stages;
+  const StageMask no_disparity = all & ~stage_bit(protocol::Stage::disparity);
+  ASSERT_TRUE(protocol::has_stage(all, protocol::Stage::detect));
+
+  Pipeline fresh(config, std::nullopt);
+  const FrameResult& alone = process(fresh, 1, all);
+  Pipeline p(config, std::nullopt);
+  process(p, 0, all);
+  const GrayImage big(2 * rig.width, 2 * rig.height);
+  EXPECT_THROW(p.process(big.view(), big.view(), 7, 0, no_disparity), Error);
+  EXPECT_TRUE(same_image(process(p, 1, all).disparity, alone.disparity));
+}
+
 }  // namespace
 }  // namespace epipole::firmware

@@ -402,7 +402,11 @@ class BoardReader {
     const hal::BackendRegistry& registry = hal::BackendRegistry::builtin();
     const char* cameras = registry.camera_traits(c.cameras.backend).section;
     const char* trigger = registry.trigger_traits(c.trigger.backend).section;
-    if (cameras == nullptr && !camera_options_.empty()) {
+    const std::vector<std::string> known = registry.camera_backends();
+    const bool known_cameras =
+        std::find(known.begin(), known.end(), c.cameras.backend) != known.end();
+    // (An unknown backend is said by validate(), naming the known ones.)
+    if (cameras == nullptr && known_cameras && !camera_options_.empty()) {
       f_.fail("cameras.backend",
               cat("'", c.cameras.backend, "' takes no option '", camera_options_.front().key, "'"));
     }

@@ -45,10 +45,8 @@ class DisparityStage final : public PipelineStage {
     stripes_left_.store(stripes_, std::memory_order_relaxed);
     return work.batch.add(stripes_, stripe_);
   }
-  void fill_gaps(PairWork& work) override {
-    // A pair after one without disparity starts a new sequence.
-    if (!protocol::has_stage(work.run, protocol::Stage::disparity)) ran_last_ = false;
-  }
+  // A pair after one without disparity starts a new sequence.
+  void skip(PairWork& /*work*/) override { ran_last_ = false; }
   void forget_history() override { ran_last_ = false; }
 
  private:

@@ -140,6 +140,9 @@ const FrameResult& Pipeline::process(GrayView left, GrayView right, std::uint32_
     return *stages_[static_cast<std::size_t>(row.id)];
   };
   for (const stages::StageRow& row : stages::kPipelineStages) {
+    if (!runs(row)) stage(row).skip(work);
+  }
+  for (const stages::StageRow& row : stages::kPipelineStages) {
     if (runs(row)) stage(row).prepare(work);
   }
   for (const stages::StageRow& row : stages::kPipelineStages) {

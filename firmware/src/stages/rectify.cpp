@@ -44,7 +44,9 @@ class RectifyStage final : public PipelineStage {
   void prepare(PairWork& work) override {
     FrameResult& r = work.result;
     hal::Nanoseconds& time = r.times[static_cast<std::size_t>(protocol::Stage::rectify)];
-    if (ahead_.matches(r.left_raw, r.right_raw, r.frame)) {
+    const bool was_ahead = ahead_.matches(r.left_raw, r.right_raw, r.frame);
+    ahead_.ready = false;  // used now, or never
+    if (was_ahead) {
       slot_ = ahead_.slot;
       time = ahead_.rectify_ns;
       ++used_;
@@ -55,7 +57,6 @@ class RectifyStage final : public PipelineStage {
                 [&](int task, int) { rectify_band(left, right, slot_, task); });
       time = steady_now() - start;
     }
-    ahead_.ready = false;
     r.left = left_[static_cast<std::size_t>(slot_)].view();
     r.right = right_[static_cast<std::size_t>(slot_)].view();
   }
@@ -63,8 +64,9 @@ class RectifyStage final : public PipelineStage {
   // The next pair, when it is there and of the images' size (one that is not is rectified, and
   // refused, when it is processed itself), into the other slot, in as many row bands per image
   // as there are workers. It counts as rectified ahead only once the whole batch has run.
+  void skip(PairWork& /*work*/) override { ahead_.ready = false; }
+
   void fill_gaps(PairWork& work) override {
-    ahead_.ready = false;
     took_next_ = false;
     ahead_part_ = TaskBatch::kNoPart;
     if (work.next == nullptr || !protocol::has_stage(work.run, protocol::Stage::rectify)) return;

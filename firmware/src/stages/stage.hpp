@@ -60,6 +60,8 @@ class PipelineStage {
   // reads (the rectified images) and what may refuse the pair (throws: an image of a wrong
   // size), before any task is queued.
   virtual void prepare(PairWork& /*work*/) {}
+  // Called instead of prepare() on a pair it does not run on (before any stage can throw).
+  virtual void skip(PairWork& /*work*/) {}
   // Its tasks, after those of the stages before it (work.parts names theirs); returns its part
   // (TaskBatch::kNoPart: none). The callables must outlive the batch: members of the stage.
   virtual int add_tasks(PairWork& /*work*/) { return TaskBatch::kNoPart; }

@@ -7,8 +7,8 @@
 
 namespace epipole::hal {
 
-// Stereo image sets for the simulated cameras, read from files (host builds with image files:
-// the epipole_hal_simfiles library). Every failure throws Error naming the file.
+// Stereo image sets for the simulated cameras, read from files (builds with image files; in
+// the others the scene loader says so). Every failure throws Error naming the file.
 struct StereoImages {
   std::vector<GrayImage> left;
   std::vector<GrayImage> right;

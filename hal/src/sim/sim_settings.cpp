@@ -77,7 +77,7 @@ void choose_scene(const yaml::Fields& f, SimSettings& s, std::span<const Backend
     }
     s.scene = option.value;
   }
-  if (s.scenes.empty()) f.fail("sim.scenes", "the simulated cameras need at least one scene");
+  if (s.scenes.empty()) f.fail("sim.scenes", "the simulated board needs at least one scene");
   if (s.scene.empty()) s.scene = s.scenes.front().name;
   std::string names;
   for (const SimScene& scene : s.scenes) {

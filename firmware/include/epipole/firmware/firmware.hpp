@@ -34,9 +34,8 @@ std::vector<std::string> apply_scheduling(const BoardConfig::Threads& threads);
 
 // What `epipole-fw --check` prints: the memory report of the firmware made for `config` with its
 // cameras and trigger replaced by stand-ins of the same size (hal::stand_in_for_devices) and its
-// link by its
-// queue alone, so that every buffer of the frame loop is allocated as on the board but no
-// device is opened (the snapshots' copies are sized in a temporary folder; the board's own
+// link by its queue alone, so that every buffer of the frame loop is allocated as on the board
+// but no device is opened (the snapshots' copies are sized in a temporary folder; the board's own
 // snapshot folder is not made). Throws Error as the firmware would: a calibration that does not
 // fit, a compiled cascade that does not read, a total over the board's memory budget.
 MemoryReport check_memory(BoardConfig config);
