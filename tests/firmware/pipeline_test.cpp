@@ -227,66 +227,73 @@ TEST(Pipeline, PairsRectifiedAheadGiveWhatPairByPairGives) {
   EXPECT_EQ(next.calls, calls);
 }
 
+// The rig's two pairs for the temporal filter (25 %): pair 0 one pixel nearer than pair 1,
+// within the filter's largest step, so blended; the board's stages with and without disparity.
+struct TemporalPairs {
+  explicit TemporalPairs(const test::SimRig& rig) : images(rig.images(2)) {
+    images.right[0] = hal::synthesize_right(images.left[0].view(), rig.disparity + 1);
+  }
+  static BoardConfig board(const test::SimRig& rig) {
+    BoardConfig config = rig.parse();
+    config.stereo.temporal_percent = 25;
+    return config;
+  }
+  const FrameResult& process(Pipeline& p, std::size_t i, StageMask stages) const {
+    return p.process(images.left[i].view(), images.right[i].view(), static_cast<std::uint32_t>(i),
+                     0, stages);
+  }
+  static StageMask without_disparity(StageMask stages) {
+    return stages & ~stage_bit(protocol::Stage::disparity);
+  }
+  hal::StereoImages images;
+};
+
 // The temporal filter blends each disparity with the pairs before; after a gap (the frame loop
 // resets the history when a camera is lost; a pair without disparity is a gap by itself) the next
 // pair's disparity is what a pipeline that never saw the pairs before gives.
 TEST(Pipeline, TheTemporalFilterStartsAgainAfterAGap) {
   test::SimRig rig(160, 120, 8);
-  BoardConfig config = rig.parse();
-  config.stereo.temporal_percent = 25;
+  const BoardConfig config = TemporalPairs::board(rig);
   const auto calibration = load_board_calibration(config);
   ASSERT_TRUE(calibration.has_value());
-  // Pair 0 one pixel nearer than pair 1: within the filter's largest step, so blended.
-  hal::StereoImages images = rig.images(2);
-  images.right[0] = hal::synthesize_right(images.left[0].view(), rig.disparity + 1);
-  const auto process = [&](Pipeline& p, std::size_t i, StageMask stages) -> const FrameResult& {
-    return p.process(images.left[i].view(), images.right[i].view(), static_cast<std::uint32_t>(i),
-                     0, stages);
-  };
+  const TemporalPairs pairs(rig);
   const StageMask all = config.stages;
-  const StageMask no_disparity = all & ~stage_bit(protocol::Stage::disparity);
   ASSERT_TRUE(protocol::has_stage(all, protocol::Stage::disparity));
 
   Pipeline fresh(config, calibration);
-  const FrameResult& alone = process(fresh, 1, all);
+  const FrameResult& alone = pairs.process(fresh, 1, all);
   ASSERT_TRUE(protocol::has_stage(alone.stages, protocol::Stage::disparity));
 
   Pipeline p(config, calibration);
-  process(p, 0, all);
-  EXPECT_FALSE(same_image(process(p, 1, all).disparity, alone.disparity))
+  pairs.process(p, 0, all);
+  EXPECT_FALSE(same_image(pairs.process(p, 1, all).disparity, alone.disparity))
       << "pair 1 after pair 0 is blended with it";
-  process(p, 0, all);
+  pairs.process(p, 0, all);
   p.reset_history();
-  EXPECT_TRUE(same_image(process(p, 1, all).disparity, alone.disparity));
-  process(p, 0, all);
-  process(p, 0, no_disparity);
-  EXPECT_TRUE(same_image(process(p, 1, all).disparity, alone.disparity));
+  EXPECT_TRUE(same_image(pairs.process(p, 1, all).disparity, alone.disparity));
+  pairs.process(p, 0, all);
+  pairs.process(p, 0, TemporalPairs::without_disparity(all));
+  EXPECT_TRUE(same_image(pairs.process(p, 1, all).disparity, alone.disparity));
 }
 
 // A pair without disparity is a gap even when it is refused before its tasks run (here by the
 // detector: an image larger than the board's, taken unrectified without a calibration).
 TEST(Pipeline, ARefusedPairWithoutDisparityIsAGapToo) {
   test::SimRig rig(160, 120, 8);
-  BoardConfig config = rig.parse();
-  config.stereo.temporal_percent = 25;
+  BoardConfig config = TemporalPairs::board(rig);
   rig.add_cascade(config);
-  hal::StereoImages images = rig.images(2);
-  images.right[0] = hal::synthesize_right(images.left[0].view(), rig.disparity + 1);
-  const auto process = [&](Pipeline& p, std::size_t i, StageMask stages) -> const FrameResult& {
-    return p.process(images.left[i].view(), images.right[i].view(), static_cast<std::uint32_t>(i),
-                     0, stages);
-  };
+  const TemporalPairs pairs(rig);
   const StageMask all = config.stages;
-  const StageMask no_disparity = all & ~stage_bit(protocol::Stage::disparity);
   ASSERT_TRUE(protocol::has_stage(all, protocol::Stage::detect));
 
   Pipeline fresh(config, std::nullopt);
-  const FrameResult& alone = process(fresh, 1, all);
+  const FrameResult& alone = pairs.process(fresh, 1, all);
   Pipeline p(config, std::nullopt);
-  process(p, 0, all);
+  pairs.process(p, 0, all);
   const GrayImage big(2 * rig.width, 2 * rig.height);
-  EXPECT_THROW(p.process(big.view(), big.view(), 7, 0, no_disparity), Error);
-  EXPECT_TRUE(same_image(process(p, 1, all).disparity, alone.disparity));
+  EXPECT_THROW(p.process(big.view(), big.view(), 7, 0, TemporalPairs::without_disparity(all)),
+               Error);
+  EXPECT_TRUE(same_image(pairs.process(p, 1, all).disparity, alone.disparity));
 }
 
 }  // namespace
