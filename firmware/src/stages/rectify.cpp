@@ -61,11 +61,12 @@ class RectifyStage final : public PipelineStage {
     r.right = right_[static_cast<std::size_t>(slot_)].view();
   }
 
+  // A pair without rectification: the pair taken ahead will not be used.
+  void skip(PairWork& /*work*/) override { ahead_.ready = false; }
+
   // The next pair, when it is there and of the images' size (one that is not is rectified, and
   // refused, when it is processed itself), into the other slot, in as many row bands per image
   // as there are workers. It counts as rectified ahead only once the whole batch has run.
-  void skip(PairWork& /*work*/) override { ahead_.ready = false; }
-
   void fill_gaps(PairWork& work) override {
     took_next_ = false;
     ahead_part_ = TaskBatch::kNoPart;
