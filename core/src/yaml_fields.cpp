@@ -137,6 +137,19 @@ int Fields::integer(const YAML::Node& node, const std::string& key) const {
   return static_cast<int>(value);
 }
 
+double Fields::number_in(const YAML::Node& node, const std::string& key, double lo,
+                         double hi) const {
+  const double v = number(node, key);
+  if (v < lo || v > hi) fail(key, cat(v, " is outside ", lo, "..", hi));
+  return v;
+}
+
+int Fields::integer_in(const YAML::Node& node, const std::string& key, int lo, int hi) const {
+  const int v = integer(node, key);
+  if (v < lo || v > hi) fail(key, cat(v, " is outside ", lo, "..", hi));
+  return v;
+}
+
 std::string Fields::text(const YAML::Node& node, const std::string& key) const {
   if (!node.IsScalar()) fail(key, "expected a string, found " + kind(node));
   return node.Scalar();

@@ -9,10 +9,13 @@
 #include "epipole/core/error.hpp"
 #include "epipole/hal/device_missing.hpp"
 #include "epipole/hal/registry.hpp"
+#include "error_of.hpp"
 #include "libcamera/libcamera_camera.hpp"
 
 namespace epipole::hal {
 namespace {
+
+using test::error_of;
 
 constexpr Nanoseconds kMs = 1'000'000;
 
@@ -22,15 +25,6 @@ LibcameraFormatCode code_of(const char* name) {
   }
   ADD_FAILURE() << name << " is not in the table";
   return {};
-}
-
-std::string error_of(auto&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
 }
 
 TEST(LibcameraFormats, TableMapsOurFormats) {

@@ -12,11 +12,14 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/vision/fast.hpp"
+#include "error_of.hpp"
 #include "random_image.hpp"
 #include "sparse_stereo_kernels.hpp"
 
 namespace epipole::vision {
 namespace {
+
+using test::error_of;
 
 TEST(SparseStereoKernels, HammingEqualsReference) {
   std::mt19937 rng(7);
@@ -166,15 +169,6 @@ TEST(SparseStereo, BoundsAndRangeAreRespected) {
   SparseStereoMatcher matcher({.width = 160, .height = 96});
   EXPECT_TRUE(matcher.match(pair.left.view(), {}, pair.right.view(), right).empty());
   EXPECT_FALSE(matcher.truncated());
-}
-
-std::string error_of(const auto& make) {
-  try {
-    make();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
 }
 
 TEST(SparseStereo, BadInputIsAClearError) {

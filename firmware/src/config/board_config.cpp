@@ -91,24 +91,19 @@ class BoardReader {
   void optional(const YAML::Node& map, const std::string& path, const char* key, T& out,
                 Read read) {
     if (!map.IsDefined()) return;
-    const YAML::Node n = f_.optional_child(map, path, key);
-    if (n.IsDefined()) out = read(n, yaml::Fields::join(path, key));
+    f_.if_present(map, path, key,
+                  [&](const YAML::Node& n, const std::string& k) { out = read(n, k); });
   }
   void integer(const YAML::Node& map, const std::string& path, const char* key, int& out, int lo,
                int hi) {
     optional(map, path, key, out, [&](const YAML::Node& n, const std::string& k) {
-      const int v = f_.integer(n, k);
-      if (v < lo || v > hi) f_.fail(k, cat(v, " is outside ", lo, "..", hi));
-      return v;
+      return f_.integer_in(n, k, lo, hi);
     });
   }
   void number(const YAML::Node& map, const std::string& path, const char* key, double& out,
               double lo, double hi) {
-    optional(map, path, key, out, [&](const YAML::Node& n, const std::string& k) {
-      const double v = f_.number(n, k);
-      if (v < lo || v > hi) f_.fail(k, cat(v, " is outside ", lo, "..", hi));
-      return v;
-    });
+    optional(map, path, key, out,
+             [&](const YAML::Node& n, const std::string& k) { return f_.number_in(n, k, lo, hi); });
   }
   void boolean(const YAML::Node& map, const std::string& path, const char* key, bool& out) {
     optional(map, path, key, out,

@@ -12,28 +12,6 @@ namespace {
 
 constexpr const char* kSection = "sim";
 
-// A number in lo..hi at `key` of the map, when it is there.
-template <typename Read>
-void optional(const yaml::Fields& f, const YAML::Node& map, const std::string& path,
-              const char* key, Read read) {
-  if (const YAML::Node n = f.optional_child(map, path, key); n.IsDefined()) {
-    read(n, yaml::Fields::join(path, key));
-  }
-}
-
-int integer_in(const yaml::Fields& f, const YAML::Node& n, const std::string& key, int lo, int hi) {
-  const int v = f.integer(n, key);
-  if (v < lo || v > hi) f.fail(key, cat(v, " is outside ", lo, "..", hi));
-  return v;
-}
-
-double number_in(const yaml::Fields& f, const YAML::Node& n, const std::string& key, double lo,
-                 double hi) {
-  const double v = f.number(n, key);
-  if (v < lo || v > hi) f.fail(key, cat(v, " is outside ", lo, "..", hi));
-  return v;
-}
-
 SimScene read_scene(const yaml::Fields& f, const std::string& name, const YAML::Node& m) {
   SimScene s;
   s.name = name;
@@ -41,8 +19,8 @@ SimScene read_scene(const yaml::Fields& f, const std::string& name, const YAML::
   f.only_keys(
       m, p,
       {"left", "right", "side_by_side", "synthesize", "disparity", "max_frames", "calibration"});
-  optional(f, m, p, "max_frames", [&](const YAML::Node& n, const std::string& k) {
-    s.max_frames = integer_in(f, n, k, 1, 100'000);
+  f.if_present(m, p, "max_frames", [&](const YAML::Node& n, const std::string& k) {
+    s.max_frames = f.integer_in(n, k, 1, 100'000);
   });
   if (const YAML::Node v = f.optional_child(m, p, "side_by_side"); v.IsDefined()) {
     for (const char* other : {"left", "right", "synthesize"}) {
@@ -95,19 +73,19 @@ std::unique_ptr<BackendSettings> read_sim_section(const YAML::Node& n, const yam
   if (n.IsDefined()) {
     f.only_keys(n, kSection,
                 {"scene", "scenes", "charge_compute", "drop_rate", "corrupt_rate", "seed"});
-    optional(f, n, kSection, "scene",
-             [&](const YAML::Node& v, const std::string& k) { s->scene = f.text(v, k); });
-    optional(f, n, kSection, "charge_compute", [&](const YAML::Node& v, const std::string& k) {
+    f.if_present(n, kSection, "scene",
+                 [&](const YAML::Node& v, const std::string& k) { s->scene = f.text(v, k); });
+    f.if_present(n, kSection, "charge_compute", [&](const YAML::Node& v, const std::string& k) {
       s->charge_compute = f.boolean(v, k);
     });
-    optional(f, n, kSection, "drop_rate", [&](const YAML::Node& v, const std::string& k) {
-      s->drop_rate = number_in(f, v, k, 0, 1);
+    f.if_present(n, kSection, "drop_rate", [&](const YAML::Node& v, const std::string& k) {
+      s->drop_rate = f.number_in(v, k, 0, 1);
     });
-    optional(f, n, kSection, "corrupt_rate", [&](const YAML::Node& v, const std::string& k) {
-      s->corrupt_rate = number_in(f, v, k, 0, 1);
+    f.if_present(n, kSection, "corrupt_rate", [&](const YAML::Node& v, const std::string& k) {
+      s->corrupt_rate = f.number_in(v, k, 0, 1);
     });
-    optional(f, n, kSection, "seed", [&](const YAML::Node& v, const std::string& k) {
-      s->seed = static_cast<std::uint64_t>(integer_in(f, v, k, 0, 1'000'000'000));
+    f.if_present(n, kSection, "seed", [&](const YAML::Node& v, const std::string& k) {
+      s->seed = static_cast<std::uint64_t>(f.integer_in(v, k, 0, 1'000'000'000));
     });
     const YAML::Node scenes = f.child(n, kSection, "scenes");
     f.require_map(scenes, "sim.scenes");

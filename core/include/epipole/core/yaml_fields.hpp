@@ -42,6 +42,9 @@ class Fields {
 
   double number(const YAML::Node& node, const std::string& key) const;  // finite
   int integer(const YAML::Node& node, const std::string& key) const;
+  // The same within lo..hi, else Error("V is outside lo..hi").
+  double number_in(const YAML::Node& node, const std::string& key, double lo, double hi) const;
+  int integer_in(const YAML::Node& node, const std::string& key, int lo, int hi) const;
   std::string text(const YAML::Node& node, const std::string& key) const;
   // A flat sequence of finite numbers.
   std::vector<double> numbers(const YAML::Node& node, const std::string& key) const;
@@ -55,6 +58,15 @@ class Fields {
   // A file name, a glob pattern (matched in name order) or a sequence of them; a pattern that
   // matches nothing is an Error.
   std::vector<std::filesystem::path> files(const YAML::Node& node, const std::string& key) const;
+
+  // Calls read(value, "path.key") when the map at `path` has `key` (not null).
+  template <typename Read>
+  void if_present(const YAML::Node& map, const std::string& path, const char* key,
+                  Read read) const {
+    if (const YAML::Node n = optional_child(map, path, key); n.IsDefined()) {
+      read(n, join(path, key));
+    }
+  }
 
   static std::string join(const std::string& path, const std::string& key) {
     return path.empty() ? key : path + "." + key;
