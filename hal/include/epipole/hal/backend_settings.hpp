@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "epipole/core/settings_sections.hpp"
 #include "epipole/hal/clock.hpp"
 
 namespace epipole::hal {
@@ -24,23 +25,7 @@ class BackendSettings {
 };
 
 // The board file's backend sections by name; a copy copies the settings.
-class BackendSections {
- public:
-  BackendSections() = default;
-  BackendSections(const BackendSections& other);
-  BackendSections& operator=(const BackendSections& other);
-  BackendSections(BackendSections&&) = default;
-  BackendSections& operator=(BackendSections&&) = default;
-  ~BackendSections() = default;
-
-  const BackendSettings* find(std::string_view name) const;
-  BackendSettings* find(std::string_view name);
-  // Adds the section, or replaces the one of that name.
-  void set(std::string name, std::unique_ptr<BackendSettings> settings);
-
- private:
-  std::vector<std::pair<std::string, std::unique_ptr<BackendSettings>>> sections_;
-};
+using BackendSections = SettingsSections<BackendSettings>;
 
 // A setting given for a backend's section besides the board file (epipole-fw --scene NAME):
 // the backend checks it like the file's keys.
