@@ -10,8 +10,9 @@ namespace epipole::protocol {
 
 // The Epipole serial protocol (docs/protocol.md says what each version changed). Every number is
 // little-endian on the wire; sizes here are the wire sizes. A message is its struct: its type
-// byte and name (kType, kName), here, and its fields in wire order, in fields.hpp; the codec,
-// the decoder's checks and the host tool's JSON take both from there.
+// byte and name (kType, kName, a value of MessageType), its fields in wire order (the static
+// fields(io, m): protocol/fields.hpp says what `io` offers) and its place in the Message variant
+// below; the codec, the decoder's checks and the host tool's JSON take all from there.
 
 inline constexpr std::uint8_t kVersion = 5;
 
@@ -78,6 +79,34 @@ struct Health {
   // is in dropped_* too, under the trigger it was taken for).
   std::uint32_t trigger_bounces = 0;
   std::uint32_t pairs_off_trigger = 0;
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("uptime_ms", m.uptime_ms);
+    io("frames", m.frames);
+    io("dropped", m.dropped);
+    io("fps_centi", m.fps_centi);
+    io("latency_p50_us", m.latency_p50_us);
+    io("latency_p99_us", m.latency_p99_us);
+    for (const StageInfo& s : kStages) io(s.time_field, m.stage_us[static_cast<std::size_t>(s.id)]);
+    io("dropped_stale", m.dropped_stale);
+    io("dropped_one_side", m.dropped_one_side);
+    io("dropped_both_sides", m.dropped_both_sides);
+    io("dropped_corrupt", m.dropped_corrupt);
+    io("camera_timeouts", m.camera_timeouts);
+    io("camera_reopens", m.camera_reopens);
+    io("trigger_losses", m.trigger_losses);
+    io("link_reopens", m.link_reopens);
+    io("unpaired_frames", m.unpaired_frames);
+    io("bad_commands", m.bad_commands);
+    io("messages_dropped", m.messages_dropped);
+    io("snapshot_failures", m.snapshot_failures);
+    io("flags", m.flags);
+    io("wait_p50_us", m.wait_p50_us);
+    io("wait_p99_us", m.wait_p99_us);
+    io("busy_permille", m.busy_permille);
+    io("trigger_bounces", m.trigger_bounces);
+    io("pairs_off_trigger", m.pairs_off_trigger);
+  }
   friend bool operator==(const Health&, const Health&) = default;
 };
 
@@ -98,6 +127,18 @@ struct FrameSummary {
   std::uint8_t detections = 0;
   std::uint16_t points = 0;
   std::uint8_t flags = 0;  // kFrame* bits
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("frame", m.frame);
+    io("trigger_ns", m.trigger_ns);
+    io("latency_us", m.latency_us);
+    io("corners_left", m.corners_left);
+    io("corners_right", m.corners_right);
+    io("valid_disparity_permille", m.valid_disparity_permille);
+    io("detections", m.detections);
+    io("points", m.points);
+    io("flags", m.flags);
+  }
   friend bool operator==(const FrameSummary&, const FrameSummary&) = default;
 };
 
@@ -117,6 +158,18 @@ struct Detections {
   std::uint32_t frame = 0;
   std::uint8_t count = 0;
   std::array<Detection, kMaxDetections> items{};
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("frame", m.frame);
+    io.list("boxes", m.count, kMaxDetections, m.items, [](Io& item_io, auto& d) {
+      item_io("x", d.x);
+      item_io("y", d.y);
+      item_io("width", d.width);
+      item_io("height", d.height);
+      item_io("neighbors", d.neighbors);
+      item_io("depth_mm", d.depth_mm);
+    });
+  }
   friend bool operator==(const Detections&, const Detections&) = default;
 };
 
@@ -128,6 +181,13 @@ struct Obstacles {
   std::uint16_t field_of_view_centideg = 0;  // horizontal, split evenly into `count` sectors
   std::uint8_t count = 0;
   std::array<std::uint16_t, kMaxSectors> nearest_mm{};  // kUnknownDepth: nothing seen
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("frame", m.frame);
+    io("field_of_view_centideg", m.field_of_view_centideg);
+    io.list("nearest_mm", m.count, kMaxSectors, m.nearest_mm,
+            [](Io& item_io, auto& nearest) { item_io("mm", nearest); });
+  }
   friend bool operator==(const Obstacles&, const Obstacles&) = default;
 };
 
@@ -144,6 +204,15 @@ struct DepthGrid {
   std::uint8_t columns = 0;
   std::uint8_t count = 0;
   std::array<std::uint16_t, kMaxGridCells> nearest_mm{};  // kUnknownDepth: nothing seen
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("frame", m.frame);
+    io("field_of_view_centideg", m.field_of_view_centideg);
+    io("vertical_field_of_view_centideg", m.vertical_field_of_view_centideg);
+    io("columns", m.columns);
+    io.list("nearest_mm", m.count, kMaxGridCells, m.nearest_mm,
+            [](Io& item_io, auto& nearest) { item_io("mm", nearest); });
+  }
   friend bool operator==(const DepthGrid&, const DepthGrid&) = default;
 };
 
@@ -160,6 +229,17 @@ struct Points {
   std::uint32_t frame = 0;
   std::uint8_t count = 0;
   std::array<Point, kMaxPoints> items{};
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("frame", m.frame);
+    io.list("points", m.count, kMaxPoints, m.items, [](Io& item_io, auto& p) {
+      item_io("u_x16", p.u_x16);
+      item_io("v_x16", p.v_x16);
+      item_io("x_mm", p.x_mm);
+      item_io("y_mm", p.y_mm);
+      item_io("z_mm", p.z_mm);
+    });
+  }
   friend bool operator==(const Points&, const Points&) = default;
 };
 
@@ -169,6 +249,12 @@ struct CalibrationHealth {
   std::uint16_t matches = 0;
   std::uint16_t median_offset_centipx = 0;  // |vertical offset| of matches, x 100
   std::uint16_t p90_offset_centipx = 0;
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("matches", m.matches);
+    io("median_offset_centipx", m.median_offset_centipx);
+    io("p90_offset_centipx", m.p90_offset_centipx);
+  }
   friend bool operator==(const CalibrationHealth&, const CalibrationHealth&) = default;
 };
 
@@ -193,6 +279,12 @@ struct CommandAck {
   std::uint16_t command_sequence = 0;
   AckStatus status = AckStatus::ok;
   AckReason reason = AckReason::none;
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("command_sequence", m.command_sequence);
+    io("status", m.status);
+    io("reason", m.reason);
+  }
   friend bool operator==(const CommandAck&, const CommandAck&) = default;
 };
 
@@ -200,6 +292,10 @@ struct SetTriggerRate {
   static constexpr MessageType kType = MessageType::set_trigger_rate;
   static constexpr const char* kName = "set_trigger_rate";
   std::uint32_t rate_millihz = 0;
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("rate_millihz", m.rate_millihz);
+  }
   friend bool operator==(const SetTriggerRate&, const SetTriggerRate&) = default;
 };
 struct SetExposure {
@@ -207,17 +303,28 @@ struct SetExposure {
   static constexpr const char* kName = "set_exposure";
   std::uint32_t exposure_us = 0;
   std::uint16_t gain_centidb = 0;
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("exposure_us", m.exposure_us);
+    io("gain_centidb", m.gain_centidb);
+  }
   friend bool operator==(const SetExposure&, const SetExposure&) = default;
 };
 struct SetStages {
   static constexpr MessageType kType = MessageType::set_stages;
   static constexpr const char* kName = "set_stages";
   StageMask enabled_mask = 0;  // bit per Stage (capture and publish always run)
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("enabled_mask", m.enabled_mask);
+  }
   friend bool operator==(const SetStages&, const SetStages&) = default;
 };
 struct Snapshot {
   static constexpr MessageType kType = MessageType::snapshot;
   static constexpr const char* kName = "snapshot";
+  template <class Io, class Self>
+  static void fields(Io&, Self&) {}
   friend bool operator==(const Snapshot&, const Snapshot&) = default;
 };
 
