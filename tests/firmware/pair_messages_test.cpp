@@ -135,6 +135,24 @@ TEST(PairMessages, TheDepthGridIsSentAsMeasured) {
   EXPECT_EQ(*m.depth_grid, g);
 }
 
+TEST(PairMessages, AStagesOwnMessageIsSentAfterThePairsOthersInTheStagesOrder) {
+  FrameResult r = nothing_ran(12, 0);
+  for (const protocol::Message* none : pair_messages(r, 0, false).from_stages) {
+    EXPECT_EQ(none, nullptr) << "no stage left a message: none is sent";
+  }
+  protocol::Message from_disparity = protocol::Obstacles{};
+  protocol::Message from_sparse = protocol::CalibrationHealth{};
+  r.stage_messages[static_cast<std::size_t>(Stage::sparse)] = &from_sparse;
+  r.stage_messages[static_cast<std::size_t>(Stage::disparity)] = &from_disparity;
+  const PairMessages m = pair_messages(r, 0, false);
+  std::vector<const protocol::Message*> sent;
+  for (const protocol::Message* message : m.from_stages) {
+    if (message != nullptr) sent.push_back(message);
+  }
+  EXPECT_EQ(sent, (std::vector<const protocol::Message*>{&from_disparity, &from_sparse}))
+      << "the disparity runs before the sparse matching";
+}
+
 TEST(PairMessages, CalibrationHealthInHundredthsOfAPixel) {
   const protocol::CalibrationHealth c = calibration_health_message({812, 0.184, 0.4449, -0.1});
   EXPECT_EQ(c, (protocol::CalibrationHealth{812, 18, 44}));

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <set>
 
+#include "config/stage_sections.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/text_file.hpp"
 #include "epipole/core/thread_pool.hpp"
@@ -13,6 +14,7 @@
 #include "epipole/firmware/link_budget.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/hal/registry.hpp"
+#include "stages/stage_table.hpp"
 
 namespace epipole::firmware {
 
@@ -76,6 +78,7 @@ class BoardReader {
     integer(root, "", "snapshot_limit", c.snapshot_limit, 1, 1'000'000);
     number(root, "", "snapshot_min_free_mb", c.snapshot_min_free_mb, 0, 1e7);
     read_backend_sections(root, c);
+    stages::read_stage_sections(stages::kPipelineStages, root, f_, c.stage_sections);
     return c;
   }
 
@@ -439,6 +442,11 @@ class BoardReader {
                                            "snapshot_min_free_mb"};
     for (const hal::SectionBackend& section : hal::BackendRegistry::builtin().sections()) {
       known.push_back(section.name);
+    }
+    for (const stages::StageRow& row : stages::kPipelineStages) {
+      if (row.definition->read_settings != nullptr) {
+        known.push_back(protocol::stage_info(row.id).name);
+      }
     }
     f_.only_keys(root, "", known);
   }

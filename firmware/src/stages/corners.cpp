@@ -3,7 +3,7 @@
 
 #include "epipole/vision/fast.hpp"
 #include "epipole/vision/harris.hpp"
-#include "stages/stage_table.hpp"
+#include "stage_files.hpp"
 
 namespace epipole::firmware::stages {
 
@@ -87,8 +87,6 @@ class CornersStage final : public PipelineStage {
 
 }  // namespace
 
-std::unique_ptr<PipelineStage> make_corners(const StageContext& context) {
-  return std::make_unique<CornersStage>(context);
-}
+const StageDefinition corners_stage{make_stage<CornersStage>};
 
 }  // namespace epipole::firmware::stages

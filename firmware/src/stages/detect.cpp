@@ -9,7 +9,7 @@
 #include "epipole/firmware/detection_depth.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/vision/cascade.hpp"
-#include "stages/stage_table.hpp"
+#include "stage_files.hpp"
 #include "steady_time.hpp"
 
 namespace epipole::firmware::stages {
@@ -105,8 +105,6 @@ class DetectStage final : public PipelineStage {
 
 }  // namespace
 
-std::unique_ptr<PipelineStage> make_detect(const StageContext& context) {
-  return std::make_unique<DetectStage>(context);
-}
+const StageDefinition detect_stage{make_stage<DetectStage>};
 
 }  // namespace epipole::firmware::stages

@@ -3,7 +3,7 @@
 #include <atomic>
 
 #include "epipole/vision/stereo.hpp"
-#include "stages/stage_table.hpp"
+#include "stage_files.hpp"
 
 namespace epipole::firmware::stages {
 
@@ -83,8 +83,6 @@ class DisparityStage final : public PipelineStage {
 
 }  // namespace
 
-std::unique_ptr<PipelineStage> make_disparity(const StageContext& context) {
-  return std::make_unique<DisparityStage>(context);
-}
+const StageDefinition disparity_stage{make_stage<DisparityStage>};
 
 }  // namespace epipole::firmware::stages

@@ -5,7 +5,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"
-#include "stages/stage_table.hpp"
+#include "stage_files.hpp"
 #include "steady_time.hpp"
 
 namespace epipole::firmware::stages {
@@ -160,8 +160,6 @@ class RectifyStage final : public PipelineStage {
 
 }  // namespace
 
-std::unique_ptr<PipelineStage> make_rectify(const StageContext& context) {
-  return std::make_unique<RectifyStage>(context);
-}
+const StageDefinition rectify_stage{make_stage<RectifyStage>};
 
 }  // namespace epipole::firmware::stages

@@ -7,7 +7,7 @@
 #include "epipole/calib/health.hpp"
 #include "epipole/firmware/sparse_points.hpp"
 #include "epipole/vision/sparse_stereo.hpp"
-#include "stages/stage_table.hpp"
+#include "stage_files.hpp"
 
 namespace epipole::firmware::stages {
 
@@ -94,8 +94,6 @@ class SparseStage final : public PipelineStage {
 
 }  // namespace
 
-std::unique_ptr<PipelineStage> make_sparse(const StageContext& context) {
-  return std::make_unique<SparseStage>(context);
-}
+const StageDefinition sparse_stage{make_stage<SparseStage>};
 
 }  // namespace epipole::firmware::stages

@@ -1,9 +1,11 @@
 #pragma once
 
-// A stage of the pipeline (firmware/src/stages/<name>.cpp): made from the board configuration
-// with all its memory, it adds its tasks to each pair's batch and writes its part of the
-// results. The stages are listed, in the order they run, in stage_table.hpp beside the
-// protocol's table (protocol/stages.hpp).
+// A stage of the pipeline: firmware/src/stages/<name>.cpp, named after its row of the protocol's
+// table (protocol/stages.hpp), defines `const StageDefinition <name>_stage`: how to make it
+// from the board configuration with all its memory and, when it has settings of its own, how to
+// read its section of the board file. Made, it adds its tasks to each pair's batch and writes
+// its part of the results, its message among them. stage_table.hpp lists the stages in the
+// order they run.
 
 #include <array>
 #include <cstddef>
@@ -11,6 +13,8 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
+#include <string_view>
 
 #include "epipole/calib/calibration.hpp"
 #include "epipole/calib/triangulation.hpp"
@@ -22,6 +26,13 @@
 #include "epipole/firmware/obstacles.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/vision/cascade_model.hpp"
+
+namespace YAML {
+class Node;
+}
+namespace epipole::yaml {
+class Fields;
+}
 
 namespace epipole::firmware::stages {
 
@@ -36,6 +47,14 @@ struct StageContext {
   ObstacleSectors* obstacles;               // the depth's outputs: null without a calibration,
   DepthGrid* depth_grid;                    // and the grid without the board's
 };
+
+// The settings a stage read from its own section of the board file (StageDefinition::
+// read_settings): its defaults when the configuration was not read from a file (tests).
+template <class Settings>
+Settings settings_of(const StageContext& context, std::string_view stage) {
+  const auto* read = dynamic_cast<const Settings*>(context.board.stage_sections.find(stage));
+  return read != nullptr ? *read : Settings{};
+}
 
 // One pair as the stages work on it (Pipeline::process).
 struct PairWork {
@@ -81,6 +100,33 @@ class PipelineStage {
     std::uint64_t done = 0, used = 0;
   };
   virtual AheadCounts ahead() const { return {}; }
+};
+
+// What a stage's file defines (as `const StageDefinition <name>_stage`).
+struct StageDefinition {
+  std::unique_ptr<PipelineStage> (*make)(const StageContext& context);
+  // Reads its own top-level section of the board file, the key of its name (an undefined node
+  // when the file has none: its defaults), throwing Error through `fields` for a bad value; null
+  // when the stage has no settings of its own.
+  std::unique_ptr<StageSettings> (*read_settings)(const YAML::Node& section,
+                                                  const yaml::Fields& fields) = nullptr;
+};
+
+template <class Stage>
+std::unique_ptr<PipelineStage> make_stage(const StageContext& context) {
+  return std::make_unique<Stage>(context);
+}
+
+// A file of firmware/src/stages/ and what it defines (the generated stage_files.hpp).
+struct StageFile {
+  std::string_view name;
+  const StageDefinition* definition;
+};
+
+// A stage in the order they run (stage_table.hpp).
+struct StageRow {
+  protocol::Stage id;
+  const StageDefinition* definition;
 };
 
 }  // namespace epipole::firmware::stages

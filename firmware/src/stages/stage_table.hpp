@@ -1,49 +1,51 @@
 #pragma once
 
-// The pipeline's stages in the order they run, one row per switchable stage of the protocol's
-// table (protocol/stages.hpp), each made by its file in this folder. Adding a stage: its row in
-// protocol::kStages, its file here and its row below.
+// The pipeline's stages in the order they run: one row per switchable stage of the protocol's
+// table (protocol/stages.hpp), each defined by its file in this folder (stage_files.hpp,
+// generated from the folder's files). Adding a stage: its row in protocol::kStages and its file
+// here; a stage without its file, or a file without its row, does not compile.
 
 #include <array>
-#include <memory>
+#include <cstddef>
 
 #include "epipole/firmware/protocol/stages.hpp"
+#include "stage_files.hpp"
 #include "stages/stage.hpp"
 
 namespace epipole::firmware::stages {
 
-using StageFactory = std::unique_ptr<PipelineStage> (*)(const StageContext& context);
+constexpr std::size_t switchable_stage_count() {
+  std::size_t n = 0;
+  for (const protocol::StageInfo& s : protocol::kStages) {
+    n += s.kind == protocol::StageKind::switchable ? 1 : 0;
+  }
+  return n;
+}
 
-std::unique_ptr<PipelineStage> make_rectify(const StageContext& context);    // rectify.cpp
-std::unique_ptr<PipelineStage> make_corners(const StageContext& context);    // corners.cpp
-std::unique_ptr<PipelineStage> make_disparity(const StageContext& context);  // disparity.cpp
-std::unique_ptr<PipelineStage> make_sparse(const StageContext& context);     // sparse.cpp
-std::unique_ptr<PipelineStage> make_detect(const StageContext& context);     // detect.cpp
-
-struct StageRow {
-  protocol::Stage id;
-  StageFactory make;
-};
-
-inline constexpr std::array<StageRow, 5> kPipelineStages{{
-    {protocol::Stage::rectify, make_rectify},
-    {protocol::Stage::corners, make_corners},
-    {protocol::Stage::disparity, make_disparity},
-    {protocol::Stage::sparse, make_sparse},
-    {protocol::Stage::detect, make_detect},
-}};
-
-// Every switchable stage of the protocol's table has its row, in the same order.
-constexpr bool rows_follow_the_protocols_table() {
+// Each switchable stage of the protocol's table with its file's definition (null: no file).
+constexpr std::array<StageRow, switchable_stage_count()> pipeline_stages() {
+  std::array<StageRow, switchable_stage_count()> rows{};
   std::size_t row = 0;
   for (const protocol::StageInfo& s : protocol::kStages) {
     if (s.kind != protocol::StageKind::switchable) continue;
-    if (row == kPipelineStages.size() || kPipelineStages[row].id != s.id) return false;
+    rows[row] = {s.id, nullptr};
+    for (const StageFile& file : kStageFiles) {
+      if (file.name == s.name) rows[row].definition = file.definition;
+    }
     ++row;
   }
-  return row == kPipelineStages.size();
+  return rows;
 }
-static_assert(rows_follow_the_protocols_table(),
-              "one row per switchable stage of protocol::kStages, in its order");
+inline constexpr std::array<StageRow, switchable_stage_count()> kPipelineStages = pipeline_stages();
+
+constexpr bool every_stage_has_its_file() {
+  for (const StageRow& row : kPipelineStages) {
+    if (row.definition == nullptr) return false;
+  }
+  return kStageFiles.size() == kPipelineStages.size();
+}
+static_assert(every_stage_has_its_file(),
+              "each switchable stage of protocol::kStages has its file firmware/src/stages/"
+              "<name>.cpp, and each file there is the stage of a row");
 
 }  // namespace epipole::firmware::stages

@@ -2,11 +2,13 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "epipole/core/settings_sections.hpp"
 #include "epipole/firmware/protocol/stages.hpp"
 #include "epipole/hal/backend_settings.hpp"
 #include "epipole/hal/camera.hpp"
@@ -16,6 +18,15 @@
 #include "epipole/vision/stereo.hpp"
 
 namespace epipole::firmware {
+
+// A stage's own section of the board file (the top-level key of the stage's name), as the stage
+// read it (stages::StageDefinition::read_settings); opaque to everyone else.
+class StageSettings {
+ public:
+  virtual ~StageSettings() = default;
+  virtual std::unique_ptr<StageSettings> clone() const = 0;
+};
+using StageSections = SettingsSections<StageSettings>;
 
 // A board's configuration file (board.yaml, docs/boards.md): which backends and devices the
 // board has, the image size and every stage's limits. The firmware sizes all of its memory from
@@ -121,6 +132,9 @@ struct BoardConfig {
   // The board file's sections that backends read themselves (the registry's SectionBackend):
   // those present and those the chosen backends need.
   hal::BackendSections sections;
+  // The sections of the stages that read their own (every such stage has one, the file's or its
+  // defaults).
+  StageSections stage_sections;
 
   int width() const { return cameras.left.width; }
   int height() const { return cameras.left.height; }

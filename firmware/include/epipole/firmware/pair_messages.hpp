@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <optional>
 
 #include "epipole/calib/health.hpp"
@@ -18,6 +19,8 @@ struct PairMessages {
   std::optional<protocol::Obstacles> obstacles;    // with the disparity and a calibration
   std::optional<protocol::DepthGrid> depth_grid;   // the same, with the board's depth_grid
   std::optional<protocol::Points> points;          // when the pair has 3-D points to send
+  // The stages' own messages (FrameResult::stage_messages), in the order the stages run.
+  std::array<const protocol::Message*, protocol::kStageCount> from_stages{};
 };
 
 // Pure functions of their arguments: no state, no allocation.

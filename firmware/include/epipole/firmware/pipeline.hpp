@@ -65,6 +65,9 @@ struct FrameResult {
   std::span<const vision::Detection> detections;
   std::span<const DetectionDepth> detection_depths;
   StageTimes times{};
+  // The message each stage sends for the pair, by protocol::Stage (null: none), in the stage's
+  // own memory (a stage's finish() sets its own).
+  std::array<const protocol::Message*, protocol::kStageCount> stage_messages{};
 };
 
 // Where the pipeline finds the pair after the one it is working on (pipelining across pairs):

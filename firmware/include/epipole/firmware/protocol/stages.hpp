@@ -11,8 +11,8 @@ namespace epipole::protocol {
 // file's `stages`, the set_stages command, a frame's stages that ran) and its slot in health's
 // stage_us; kStages lists them in the order they run. Everything else is derived from this table:
 // the board file's keys, the masks set_stages accepts, health's field names, the pipeline's
-// order. Adding a stage: a row here (health grows: a new protocol version), its file in
-// firmware/src/stages/ and its row in stages/stage_table.hpp.
+// order. Adding a stage: a row here (health grows: a new protocol version) and its file
+// firmware/src/stages/<name>.cpp (docs/architecture.md).
 enum class Stage : std::uint8_t {
   capture = 0,
   rectify = 1,

@@ -66,7 +66,7 @@ Pipeline::Pipeline(const BoardConfig& board,
   available_ = protocol::kAlwaysOnStages;
   for (const stages::StageRow& row : stages::kPipelineStages) {
     auto& stage = stages_[static_cast<std::size_t>(row.id)];
-    stage = row.make(context);
+    stage = row.definition->make(context);
     if (stage->available()) available_ |= stage_bit(row.id);
   }
 }
