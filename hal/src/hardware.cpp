@@ -1,6 +1,7 @@
 #include "epipole/hal/hardware.hpp"
 
 #include <utility>
+#include <vector>
 
 #include "epipole/core/error.hpp"
 
@@ -8,35 +9,57 @@ namespace epipole::hal {
 
 namespace {
 
-// What the devices of the cameras' backend share, made from its section of the board file.
-std::unique_ptr<BackendBoard> make_backend_board(const HardwareConfig& config,
-                                                 const BackendRegistry& registry) {
-  const char* name = registry.camera_traits(config.camera_backend).section;
-  if (name == nullptr) return nullptr;
-  const SectionBackend* section = registry.section(name);
-  const BackendSettings* settings = config.sections.find(name);
-  require(section != nullptr && settings != nullptr, "cameras: backend '", config.camera_backend,
-          "' needs the board file's '", name, "' section");
-  return section->make_board(*settings, config);
+// What the devices of a backend with a section share (null: it has none), made once per section
+// from the board file's section and kept in `boards`; `part` names the devices in errors.
+BackendBoard* board_of(const char* part, const std::string& backend, BackendTraits traits,
+                       const HardwareConfig& config, const BackendRegistry& registry,
+                       std::vector<std::pair<std::string, std::unique_ptr<BackendBoard>>>& boards) {
+  if (traits.section == nullptr) return nullptr;
+  for (const auto& [name, board] : boards) {
+    if (name == traits.section) return board.get();
+  }
+  const SectionBackend* section = registry.section(traits.section);
+  const BackendSettings* settings = config.sections.find(traits.section);
+  require(section != nullptr && settings != nullptr, part, ": backend '", backend,
+          "' needs the board file's '", traits.section, "' section");
+  boards.emplace_back(traits.section, section->make_board(*settings, config));
+  return boards.back().second.get();
 }
 
 }  // namespace
 
-Hardware::Hardware(HardwareConfig config, const BackendRegistry& registry)
-    : board_(make_backend_board(config, registry)) {
-  if (board_ != nullptr && board_->own_clock() != nullptr) clock_ = board_->own_clock();
+// The cameras' backend's board first: its clock, when it has one, is every device's.
+Hardware::Hardware(HardwareConfig config, const BackendRegistry& registry) {
   BackendContext context;
+  context.board =
+      board_of("cameras", config.camera_backend, registry.camera_traits(config.camera_backend),
+               config, registry, boards_);
+  cameras_board_ = context.board;
+  if (cameras_board_ != nullptr && cameras_board_->own_clock() != nullptr) {
+    clock_ = cameras_board_->own_clock();
+  }
   context.clock = clock_;
-  context.board = board_.get();
   cameras_[index(Side::left)] = registry.create_camera(config.camera_backend, config.left, context);
   cameras_[index(Side::right)] =
       registry.create_camera(config.camera_backend, config.right, context);
   if (config.trigger_backend != kNoBackend) {
+    context.board =
+        board_of("trigger", config.trigger_backend, registry.trigger_traits(config.trigger_backend),
+                 config, registry, boards_);
     trigger_ = registry.create_trigger(config.trigger_backend, config.trigger, context);
   }
   if (config.serial_backend != kNoBackend) {
+    context.board =
+        board_of("serial", config.serial_backend, registry.serial_traits(config.serial_backend),
+                 config, registry, boards_);
     serial_ = registry.create_serial(config.serial_backend, config.serial, context);
   }
+}
+
+std::size_t Hardware::backend_bytes() const {
+  std::size_t bytes = 0;
+  for (const auto& board : boards_) bytes += board.second->memory_bytes();
+  return bytes;
 }
 
 Hardware::~Hardware() = default;

@@ -175,6 +175,70 @@ TEST(Hardware, ABackendsSectionMakesWhatItsDevicesShare) {
   EXPECT_EQ(hw.backend_bytes(), 4096u);
 }
 
+// A port that carries nothing: enough to stand for a serial backend's.
+class SilentPort final : public SerialPort {
+ public:
+  IoResult read(std::span<std::byte>, Nanoseconds) override { return {IoStatus::timeout, 0}; }
+  IoResult write(std::span<const std::byte> data, Nanoseconds) override {
+    return {IoStatus::ok, data.size()};
+  }
+  bool is_open() const override { return true; }
+  void reopen() override {}
+  void close() override {}
+};
+
+TEST(Hardware, EachBackendsDevicesGetWhatTheirOwnSectionMakes) {
+  BackendRegistry registry;
+  const auto gain_of = [](const BackendContext& context) {
+    return context.board != nullptr ? dynamic_cast<SharedGain&>(*context.board).gain : -1;
+  };
+  std::vector<int> cameras_saw, link_saw;
+  registry.add_camera("rig",
+                      [&](const CameraConfig& config, const BackendContext& context) {
+                        cameras_saw.push_back(gain_of(context));
+                        return std::make_unique<IdleCamera>(config);
+                      },
+                      {.section = "rig"});
+  registry.add_serial("radio",
+                      [&](const SerialConfig&, const BackendContext& context) {
+                        link_saw.push_back(gain_of(context));
+                        EXPECT_EQ(context.clock->id(), ClockId::virtual_clock)
+                            << "the cameras' board's clock is every device's";
+                        return std::make_unique<SilentPort>();
+                      },
+                      {.section = "radio"});
+  int boards_made = 0;
+  for (const char* name : {"rig", "radio"}) {
+    registry.add_section({name, nullptr,
+                          [&](const BackendSettings& s, const HardwareConfig&) {
+                            ++boards_made;
+                            return std::make_unique<SharedGain>(dynamic_cast<const Gains&>(s).gain);
+                          },
+                          nullptr});
+  }
+  HardwareConfig c = simulated(1);
+  c.camera_backend = "rig";
+  c.trigger_backend = std::string(kNoBackend);
+  c.serial_backend = "radio";
+  for (const auto& [name, gain] : {std::pair{"rig", 3}, std::pair{"radio", 7}}) {
+    auto gains = std::make_unique<Gains>();
+    gains->gain = gain;
+    c.sections.set(name, std::move(gains));
+  }
+  Hardware hw(c, registry);
+  EXPECT_EQ(cameras_saw, (std::vector<int>{3, 3})) << "both cameras share one board";
+  EXPECT_EQ(link_saw, (std::vector<int>{7}));
+  EXPECT_EQ(boards_made, 2);
+  EXPECT_EQ(dynamic_cast<SharedGain&>(*hw.backend_board()).gain, 3) << "the cameras'";
+  EXPECT_EQ(hw.backend_bytes(), 2 * 4096u) << "both boards' memory";
+
+  c.sections.set("radio", nullptr);
+  const std::string missing = test_error([&] { Hardware no_radio(c, registry); });
+  EXPECT_NE(missing.find("serial: backend 'radio' needs the board file's 'radio' section"),
+            std::string::npos)
+      << missing;
+}
+
 TEST(Hardware, StandInsReplaceARealBoardsDevicesButNotASimulatedOnes) {
   HardwareConfig sim = simulated(1);
   EXPECT_FALSE(stand_in_for_devices(sim)) << "the simulated board opens nothing";

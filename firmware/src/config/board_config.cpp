@@ -400,6 +400,7 @@ class BoardReader {
     const hal::BackendRegistry& registry = hal::BackendRegistry::builtin();
     const char* cameras = registry.camera_traits(c.cameras.backend).section;
     const char* trigger = registry.trigger_traits(c.trigger.backend).section;
+    const char* serial = registry.serial_traits(c.serial.backend).section;
     const std::vector<std::string> known = registry.camera_backends();
     const bool known_cameras =
         std::find(known.begin(), known.end(), c.cameras.backend) != known.end();
@@ -411,7 +412,8 @@ class BoardReader {
     for (const hal::SectionBackend& section : registry.sections()) {
       const YAML::Node n = f_.optional_child(root, "", section.name.c_str());
       const bool for_cameras = cameras != nullptr && section.name == cameras;
-      const bool needed = for_cameras || (trigger != nullptr && section.name == trigger);
+      const bool needed = for_cameras || (trigger != nullptr && section.name == trigger) ||
+                          (serial != nullptr && section.name == serial);
       if (!n.IsDefined() && !needed) continue;
       c.sections.set(
           section.name,

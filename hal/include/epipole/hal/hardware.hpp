@@ -4,6 +4,8 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "epipole/hal/camera.hpp"
 #include "epipole/hal/clock.hpp"
@@ -28,9 +30,10 @@ struct HardwareConfig {
 
 // A board's devices made through a registry, and the clock they run on: the monotonic clock, or
 // the one of what the cameras' backend shares (the simulated board's virtual clock, made from
-// its section of the board file). Callers see cameras, a trigger line, a serial port and a
-// clock, whatever the board. Construction throws Error naming the part that cannot be made; a
-// device that is not there yet is no error (the backends wait).
+// its section of the board file). Each device gets what its own backend's section makes (one
+// per section: devices of backends that share a section share it). Callers see cameras, a trigger
+// line, a serial port and a clock, whatever the board. Construction throws Error naming the part
+// that cannot be made; a device that is not there yet is no error (the backends wait).
 class Hardware {
  public:
   explicit Hardware(HardwareConfig config,
@@ -44,12 +47,15 @@ class Hardware {
   TriggerLine* trigger() { return trigger_.get(); }  // null: the board has none
   SerialPort* serial() { return serial_.get(); }     // null: the board has no link
   const SerialPort* serial() const { return serial_.get(); }
-  // What the cameras' backend shares (null: nothing), and the memory it holds.
-  BackendBoard* backend_board() const { return board_.get(); }
-  std::size_t backend_bytes() const { return board_ ? board_->memory_bytes() : 0; }
+  // What the cameras' backend shares (null: nothing).
+  BackendBoard* backend_board() const { return cameras_board_; }
+  // The memory held by what the board's backends share.
+  std::size_t backend_bytes() const;
 
  private:
-  std::unique_ptr<BackendBoard> board_;
+  // What each backend with a section shares, by section (the cameras' first), and theirs.
+  std::vector<std::pair<std::string, std::unique_ptr<BackendBoard>>> boards_;
+  BackendBoard* cameras_board_ = nullptr;
   MonotonicClock monotonic_;
   Clock* clock_ = &monotonic_;
   std::array<std::unique_ptr<CameraSource>, 2> cameras_;

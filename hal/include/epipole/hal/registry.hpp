@@ -28,7 +28,7 @@ struct HardwareConfig;
 // What a backend may need besides its configuration.
 struct BackendContext {
   Clock* clock = nullptr;         // the board's clock (MonotonicClock on hardware)
-  BackendBoard* board = nullptr;  // what the devices of the cameras' backend share, if any
+  BackendBoard* board = nullptr;  // what the devices of this backend share, if any
 };
 
 // The board file's word for a part the board does not have (no trigger line: free-running
