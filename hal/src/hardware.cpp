@@ -11,9 +11,10 @@ namespace {
 
 // What the devices of a backend with a section share (null: it has none), made once per section
 // from the board file's section and kept in `boards`; `part` names the devices in errors.
-BackendBoard* board_of(const char* part, const std::string& backend, BackendTraits traits,
-                       const HardwareConfig& config, const BackendRegistry& registry,
-                       std::vector<std::pair<std::string, std::unique_ptr<BackendBoard>>>& boards) {
+BackendBoard* shared_board_for(
+    const char* part, const std::string& backend, BackendTraits traits,
+    const HardwareConfig& config, const BackendRegistry& registry,
+    std::vector<std::pair<std::string, std::unique_ptr<BackendBoard>>>& boards) {
   if (traits.section == nullptr) return nullptr;
   for (const auto& [name, board] : boards) {
     if (name == traits.section) return board.get();
@@ -22,7 +23,10 @@ BackendBoard* board_of(const char* part, const std::string& backend, BackendTrai
   const BackendSettings* settings = config.sections.find(traits.section);
   require(section != nullptr && settings != nullptr, part, ": backend '", backend,
           "' needs the board file's '", traits.section, "' section");
-  boards.emplace_back(traits.section, section->make_board(*settings, config));
+  std::unique_ptr<BackendBoard> board = section->make_board(*settings, config);
+  require(board != nullptr, part, ": backend '", backend, "' made nothing of its '", traits.section,
+          "' section");
+  boards.emplace_back(traits.section, std::move(board));
   return boards.back().second.get();
 }
 
@@ -32,8 +36,8 @@ BackendBoard* board_of(const char* part, const std::string& backend, BackendTrai
 Hardware::Hardware(HardwareConfig config, const BackendRegistry& registry) {
   BackendContext context;
   context.board =
-      board_of("cameras", config.camera_backend, registry.camera_traits(config.camera_backend),
-               config, registry, boards_);
+      shared_board_for("cameras", config.camera_backend,
+                       registry.camera_traits(config.camera_backend), config, registry, boards_);
   cameras_board_ = context.board;
   if (cameras_board_ != nullptr && cameras_board_->own_clock() != nullptr) {
     clock_ = cameras_board_->own_clock();
@@ -43,17 +47,29 @@ Hardware::Hardware(HardwareConfig config, const BackendRegistry& registry) {
   cameras_[index(Side::right)] =
       registry.create_camera(config.camera_backend, config.right, context);
   if (config.trigger_backend != kNoBackend) {
-    context.board =
-        board_of("trigger", config.trigger_backend, registry.trigger_traits(config.trigger_backend),
-                 config, registry, boards_);
+    context.board = shared_board_for("trigger", config.trigger_backend,
+                                     registry.trigger_traits(config.trigger_backend), config,
+                                     registry, boards_);
+    require_cameras_clock("trigger", config.trigger_backend, context.board);
     trigger_ = registry.create_trigger(config.trigger_backend, config.trigger, context);
   }
   if (config.serial_backend != kNoBackend) {
     context.board =
-        board_of("serial", config.serial_backend, registry.serial_traits(config.serial_backend),
-                 config, registry, boards_);
+        shared_board_for("serial", config.serial_backend,
+                         registry.serial_traits(config.serial_backend), config, registry, boards_);
+    require_cameras_clock("serial", config.serial_backend, context.board);
     serial_ = registry.create_serial(config.serial_backend, config.serial, context);
   }
+}
+
+// Only the cameras' backend sets the board's clock: devices of another backend on a clock of
+// their own would time edges the cameras cannot be paired with (a simulated trigger beside real
+// cameras).
+void Hardware::require_cameras_clock(const char* part, const std::string& backend,
+                                     BackendBoard* board) const {
+  require(board == nullptr || board == cameras_board_ || board->own_clock() == nullptr, part,
+          ": backend '", backend,
+          "' runs on a clock of its own: the cameras must be of a backend that shares it");
 }
 
 std::size_t Hardware::backend_bytes() const {

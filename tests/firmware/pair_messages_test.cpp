@@ -135,9 +135,9 @@ TEST(PairMessages, TheDepthGridIsSentAsMeasured) {
   EXPECT_EQ(*m.depth_grid, g);
 }
 
-TEST(PairMessages, AStagesOwnMessageIsSentAfterThePairsOthersInTheStagesOrder) {
+TEST(PairMessages, TheStagesOwnMessagesComeWithThePairInTheStagesOrder) {
   FrameResult r = nothing_ran(12, 0);
-  for (const protocol::Message* none : pair_messages(r, 0, false).from_stages) {
+  for (const protocol::Message* none : pair_messages(r, 0, false).stage_messages) {
     EXPECT_EQ(none, nullptr) << "no stage left a message: none is sent";
   }
   protocol::Message from_disparity = protocol::Obstacles{};
@@ -146,7 +146,7 @@ TEST(PairMessages, AStagesOwnMessageIsSentAfterThePairsOthersInTheStagesOrder) {
   r.stage_messages[static_cast<std::size_t>(Stage::disparity)] = &from_disparity;
   const PairMessages m = pair_messages(r, 0, false);
   std::vector<const protocol::Message*> sent;
-  for (const protocol::Message* message : m.from_stages) {
+  for (const protocol::Message* message : m.stage_messages) {
     if (message != nullptr) sent.push_back(message);
   }
   EXPECT_EQ(sent, (std::vector<const protocol::Message*>{&from_disparity, &from_sparse}))

@@ -136,10 +136,11 @@ struct Gains final : BackendSettings {
 };
 
 struct SharedGain final : BackendBoard {
-  explicit SharedGain(int g) : gain(g) {}
+  explicit SharedGain(int g, bool clocked = true) : gain(g), has_clock(clocked) {}
   int gain;
+  bool has_clock;
   VirtualClock clock;
-  Clock* own_clock() override { return &clock; }
+  Clock* own_clock() override { return has_clock ? &clock : nullptr; }
   std::size_t memory_bytes() const override { return 4096; }
 };
 
@@ -210,9 +211,11 @@ TEST(Hardware, EachBackendsDevicesGetWhatTheirOwnSectionMakes) {
   int boards_made = 0;
   for (const char* name : {"rig", "radio"}) {
     registry.add_section({name, nullptr,
-                          [&](const BackendSettings& s, const HardwareConfig&) {
+                          [&, clocked = name == std::string("rig")](const BackendSettings& s,
+                                                                    const HardwareConfig&) {
                             ++boards_made;
-                            return std::make_unique<SharedGain>(dynamic_cast<const Gains&>(s).gain);
+                            return std::make_unique<SharedGain>(dynamic_cast<const Gains&>(s).gain,
+                                                                clocked);
                           },
                           nullptr});
   }
@@ -237,6 +240,18 @@ TEST(Hardware, EachBackendsDevicesGetWhatTheirOwnSectionMakes) {
   EXPECT_NE(missing.find("serial: backend 'radio' needs the board file's 'radio' section"),
             std::string::npos)
       << missing;
+}
+
+TEST(Hardware, ASimulatedTriggerBesideRealCamerasIsRefusedForItsOwnClock) {
+  HardwareConfig c = simulated(1);
+  c.camera_backend = "v4l2";
+  c.left.device = "/dev/video0";
+  c.left.format = PixelFormat::yuyv;
+  c.right.device = "/dev/video2";
+  c.right.format = PixelFormat::yuyv;
+  const std::string error = test_error([&] { Hardware hw(c); });
+  EXPECT_NE(error.find("trigger: backend 'sim' runs on a clock of its own"), std::string::npos)
+      << error;
 }
 
 TEST(Hardware, StandInsReplaceARealBoardsDevicesButNotASimulatedOnes) {

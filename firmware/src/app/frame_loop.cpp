@@ -380,7 +380,7 @@ void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool tri
   if (m.obstacles) send(*m.obstacles);
   if (m.depth_grid) send(*m.depth_grid);
   if (m.points) send(*m.points);
-  for (const protocol::Message* message : m.from_stages) {
+  for (const protocol::Message* message : m.stage_messages) {
     if (message != nullptr) send(*message);
   }
 }

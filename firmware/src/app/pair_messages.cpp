@@ -85,7 +85,7 @@ PairMessages pair_messages(const FrameResult& r, hal::Nanoseconds latency,
   if (r.obstacles != nullptr) m.obstacles = *r.obstacles;
   if (r.depth_grid != nullptr) m.depth_grid = *r.depth_grid;
   if (!r.best_points.empty()) m.points = points_of(r);
-  m.from_stages = r.stage_messages;
+  m.stage_messages = r.stage_messages;
   return m;
 }
 

@@ -446,9 +446,12 @@ class BoardReader {
       known.push_back(section.name);
     }
     for (const stages::StageRow& row : stages::kPipelineStages) {
-      if (row.definition->read_settings != nullptr) {
-        known.push_back(protocol::stage_info(row.id).name);
-      }
+      if (row.definition->read_settings == nullptr) continue;
+      const std::string_view name = protocol::stage_info(row.id).name;
+      // Two readers of one section would each refuse the other's keys.
+      require(std::find(known.begin(), known.end(), name) == known.end(), "stage ", name,
+              ": its section '", name, "' is already the board reader's or a backend's");
+      known.push_back(name);
     }
     f_.only_keys(root, "", known);
   }

@@ -87,6 +87,6 @@ class CornersStage final : public PipelineStage {
 
 }  // namespace
 
-const StageDefinition corners_stage{make_stage<CornersStage>};
+extern constinit const StageDefinition corners_stage{make_stage<CornersStage>};
 
 }  // namespace epipole::firmware::stages

@@ -105,6 +105,6 @@ class DetectStage final : public PipelineStage {
 
 }  // namespace
 
-const StageDefinition detect_stage{make_stage<DetectStage>};
+extern constinit const StageDefinition detect_stage{make_stage<DetectStage>};
 
 }  // namespace epipole::firmware::stages

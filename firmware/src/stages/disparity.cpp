@@ -83,6 +83,6 @@ class DisparityStage final : public PipelineStage {
 
 }  // namespace
 
-const StageDefinition disparity_stage{make_stage<DisparityStage>};
+extern constinit const StageDefinition disparity_stage{make_stage<DisparityStage>};
 
 }  // namespace epipole::firmware::stages

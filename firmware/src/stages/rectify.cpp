@@ -160,6 +160,6 @@ class RectifyStage final : public PipelineStage {
 
 }  // namespace
 
-const StageDefinition rectify_stage{make_stage<RectifyStage>};
+extern constinit const StageDefinition rectify_stage{make_stage<RectifyStage>};
 
 }  // namespace epipole::firmware::stages

@@ -94,6 +94,6 @@ class SparseStage final : public PipelineStage {
 
 }  // namespace
 
-const StageDefinition sparse_stage{make_stage<SparseStage>};
+extern constinit const StageDefinition sparse_stage{make_stage<SparseStage>};
 
 }  // namespace epipole::firmware::stages

@@ -1,7 +1,8 @@
 #pragma once
 
 // A stage of the pipeline: firmware/src/stages/<name>.cpp, named after its row of the protocol's
-// table (protocol/stages.hpp), defines `const StageDefinition <name>_stage`: how to make it
+// table (protocol/stages.hpp), defines `extern constinit const StageDefinition <name>_stage`
+// (declared by the generated stage_files.hpp, which it includes): how to make it
 // from the board configuration with all its memory and, when it has settings of its own, how to
 // read its section of the board file. Made, it adds its tasks to each pair's batch and writes
 // its part of the results, its message among them. stage_table.hpp lists the stages in the
@@ -18,6 +19,7 @@
 
 #include "epipole/calib/calibration.hpp"
 #include "epipole/calib/triangulation.hpp"
+#include "epipole/core/error.hpp"
 #include "epipole/core/simd.hpp"
 #include "epipole/core/task_batch.hpp"
 #include "epipole/core/thread_pool.hpp"
@@ -51,9 +53,13 @@ struct StageContext {
 // The settings a stage read from its own section of the board file (StageDefinition::
 // read_settings): its defaults when the configuration was not read from a file (tests).
 template <class Settings>
-Settings settings_of(const StageContext& context, std::string_view stage) {
-  const auto* read = dynamic_cast<const Settings*>(context.board.stage_sections.find(stage));
-  return read != nullptr ? *read : Settings{};
+Settings settings_of(const StageContext& context, protocol::Stage stage) {
+  const StageSettings* read = context.board.stage_sections.find(protocol::stage_info(stage).name);
+  if (read == nullptr) return Settings{};
+  const auto* settings = dynamic_cast<const Settings*>(read);
+  require(settings != nullptr, "stage ", protocol::stage_info(stage).name,
+          ": its section was read as other settings than it asks for");
+  return *settings;
 }
 
 // One pair as the stages work on it (Pipeline::process).

@@ -20,7 +20,7 @@ struct PairMessages {
   std::optional<protocol::DepthGrid> depth_grid;   // the same, with the board's depth_grid
   std::optional<protocol::Points> points;          // when the pair has 3-D points to send
   // The stages' own messages (FrameResult::stage_messages), in the order the stages run.
-  std::array<const protocol::Message*, protocol::kStageCount> from_stages{};
+  std::array<const protocol::Message*, protocol::kStageCount> stage_messages{};
 };
 
 // Pure functions of their arguments: no state, no allocation.

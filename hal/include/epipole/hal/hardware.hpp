@@ -53,6 +53,9 @@ class Hardware {
   std::size_t backend_bytes() const;
 
  private:
+  void require_cameras_clock(const char* part, const std::string& backend,
+                             BackendBoard* board) const;
+
   // What each backend with a section shares, by section (the cameras' first), and theirs.
   std::vector<std::pair<std::string, std::unique_ptr<BackendBoard>>> boards_;
   BackendBoard* cameras_board_ = nullptr;
