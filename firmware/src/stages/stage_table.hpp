@@ -22,7 +22,7 @@ constexpr std::size_t switchable_stage_count() {
   return n;
 }
 
-// Each switchable stage of the protocol's table with its file's definition (null: no file).
+// Each switchable stage of the protocol's table with its file's definition.
 constexpr std::array<StageRow, switchable_stage_count()> pipeline_stages() {
   std::array<StageRow, switchable_stage_count()> rows{};
   std::size_t row = 0;
@@ -38,11 +38,17 @@ constexpr std::array<StageRow, switchable_stage_count()> pipeline_stages() {
 }
 inline constexpr std::array<StageRow, switchable_stage_count()> kPipelineStages = pipeline_stages();
 
+// By name: comparing the definitions' addresses is no constant expression under the sanitizers.
 constexpr bool every_stage_has_its_file() {
-  for (const StageRow& row : kPipelineStages) {
-    if (row.definition == nullptr) return false;
+  std::size_t matched = 0;
+  for (const protocol::StageInfo& s : protocol::kStages) {
+    if (s.kind != protocol::StageKind::switchable) continue;
+    bool found = false;
+    for (const StageFile& file : kStageFiles) found = found || file.name == s.name;
+    if (!found) return false;
+    ++matched;
   }
-  return kStageFiles.size() == kPipelineStages.size();
+  return matched == kStageFiles.size();
 }
 static_assert(every_stage_has_its_file(),
               "each switchable stage of protocol::kStages has its file firmware/src/stages/"
