@@ -108,7 +108,7 @@ class PipelineStage {
   virtual AheadCounts ahead() const { return {}; }
 };
 
-// What a stage's file defines (as `const StageDefinition <name>_stage`).
+// What a stage's file defines, as `extern constinit const StageDefinition <name>_stage`.
 struct StageDefinition {
   std::unique_ptr<PipelineStage> (*make)(const StageContext& context);
   // Reads its own top-level section of the board file, the key of its name (an undefined node
