@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs every build and test dependency of Epipole from Debian's packages.
+# Installs every build and test dependency of Epipole from Debian's packages, and the npm
+# packages of the test clients (tests/clients, pinned by its package-lock.json).
 # Idempotent: packages already present are not fetched again. Run as root (or with sudo).
 set -euo pipefail
 
@@ -8,6 +9,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git clang-format ccache
   # host libraries
   libsimde-dev libeigen3-dev libyaml-cpp-dev libgpiod-dev libcamera-dev libpng-dev libjpeg-dev
+  libzstd-dev zlib1g-dev
   libcli11-dev nlohmann-json3-dev libpugixml-dev
   libavformat-dev libavcodec-dev libswscale-dev libavutil-dev
   # tests, benchmarks and host-only references (never linked into the firmware)
@@ -29,6 +31,21 @@ packages=(
   help2man
 )
 
+# The independent clients the tests check the outputs with run on Node.js: Debian's, unless the
+# machine has one already (a newer one from elsewhere is kept).
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then packages+=(nodejs npm); fi
+
+# The test clients' npm packages, as the lock file pins them (again only when it changed).
+install_clients() {
+  local clients
+  clients="$(dirname "$0")/../tests/clients"
+  if [[ ! -f $clients/node_modules/.package-lock.json ||
+    $clients/package-lock.json -nt $clients/node_modules/.package-lock.json ]]; then
+    echo "setup: installing the test clients' npm packages"
+    (cd "$clients" && npm ci --no-audit --no-fund --loglevel=error)
+  fi
+}
+
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
@@ -38,6 +55,7 @@ done
 
 if ((${#missing[@]} == 0)); then
   echo "setup: all ${#packages[@]} packages present"
+  install_clients
   exit 0
 fi
 
@@ -47,3 +65,4 @@ echo "setup: installing ${#missing[@]} packages: ${missing[*]}"
 $sudo apt-get update -qq
 DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 echo "setup: done"
+install_clients

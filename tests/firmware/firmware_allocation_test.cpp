@@ -47,7 +47,9 @@ TEST(FirmwareAllocations, CounterSeesAllocationsOfOtherThreads) {
 // small objects (configuration, strings, the parts' own objects) it does not list.
 TEST(FirmwareAllocations, TheMemoryReportIsTheHeapTheFirmwareHolds) {
   test::SimRig rig(320, 240, 8);
-  BoardConfig config = rig.parse("threads: {count: 2}\nsnapshot_directory: snapshots\n");
+  BoardConfig config = rig.parse(
+      "threads: {count: 2}\nsnapshot_directory: snapshots\n"
+      "outputs: {mcap: {directory: recordings}}\n");
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);
   const std::size_t before = test::live_bytes_in_all_threads();
@@ -65,9 +67,9 @@ TEST(FirmwareAllocations, TheMemoryReportIsTheHeapTheFirmwareHolds) {
     listed += p.bytes;
     names.push_back(p.name);
   }
-  EXPECT_EQ(names,
-            (std::vector<std::string>{"rectify", "corners", "disparity", "sparse", "detect", "link",
-                                      "frame loop", "snapshots", Firmware::kCameras}));
+  EXPECT_EQ(names, (std::vector<std::string>{"rectify", "corners", "disparity", "sparse", "detect",
+                                             "link", "frame loop", "snapshots", "output mcap",
+                                             Firmware::kCameras}));
   EXPECT_EQ(listed, report.total());
   std::printf("memory report %zu B, heap held %zu B\n", report.total(), held);
   EXPECT_LE(report.total(), held) << "nothing listed that was not allocated";
@@ -78,9 +80,13 @@ TEST(FirmwareAllocations, TheMemoryReportIsTheHeapTheFirmwareHolds) {
 class SteadyState : public testing::TestWithParam<BoardConfig::LinkProtocol> {};
 
 TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
-  // Small images keep a thousand frames quick under qemu too; every stage and the link run.
+  // Small images keep a thousand frames quick under qemu too; every stage, the link and every
+  // output run (the recording's thread allocates nothing per pair either, once its file is
+  // open).
   test::SimRig rig(128, 64, 6);
-  BoardConfig config = rig.parse("threads: {count: 2}\n");
+  BoardConfig config = rig.parse(
+      "threads: {count: 2}\n"
+      "outputs: {mcap: {directory: recordings, every: 1, file_mb: 64, total_mb: 64}}\n");
   config.stereo.max_disparity = 16;
   config.stereo.hole_fill = 32;  // the post-filters too
   config.stereo.temporal_percent = 40;
@@ -127,6 +133,9 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   EXPECT_GT(sampler.at_first, 0u);
   EXPECT_GT(sampler.detections, 0u);
   EXPECT_GT(sampler.points, 0u);
+  ASSERT_EQ(s.outputs.size(), 1u);
+  EXPECT_GT(s.outputs[0].delivered, 100u) << "the recording did its work";
+  EXPECT_EQ(s.outputs[0].failures, 0u);
   EXPECT_EQ(sampler.at_last - sampler.at_first, 0u)
       << "operator new calls between frames 20 and 1020";
   if (GetParam() == BoardConfig::LinkProtocol::epipole) {

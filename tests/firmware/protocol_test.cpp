@@ -347,7 +347,8 @@ TEST(Protocol, OverlongAndUnknownFramesAreCounted) {
 }
 
 // Where docs/protocol.md puts them: health's flags (u16) after its counters, then (version 4)
-// its occupancy, then (version 5) its trigger glitches; the frame's flags (u8) last.
+// its occupancy, then (version 5) its trigger glitches, then (version 6) the outputs'
+// drops and failures; the frame's flags (u8) last.
 TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays) {
   const auto payload_of = [](const Message& m) {
     const Bytes frame = frame_of(m, 0);
@@ -364,17 +365,19 @@ TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays)
   health.busy_permille = 0x03E8;
   health.trigger_bounces = 0x0C0B0A09;
   health.pairs_off_trigger = 0x100F0E0D;
+  health.outputs_dropped = 0x14131211;
+  health.output_failures = 0x18171615;
   const Bytes h = payload_of(health);
   // 3 x u32, u16, 2 x u32, 8 x u32 stage times, 4 x u32 dropped by cause, 8 x u32 counters,
-  // u16 flags, 2 x u32 waits, u16 busy, 2 x u32 trigger glitches.
-  ASSERT_EQ(h.size(), kHeaderSize + 122 + kCrcSize);
-  EXPECT_EQ(h[0], 5) << "version";
+  // u16 flags, 2 x u32 waits, u16 busy, 2 x u32 trigger glitches, 2 x u32 outputs.
+  ASSERT_EQ(h.size(), kHeaderSize + 130 + kCrcSize);
+  EXPECT_EQ(h[0], 6) << "version";
   EXPECT_EQ(h[kHeaderSize + 102], 0x01);
   EXPECT_EQ(h[kHeaderSize + 103], 0xA5);
   for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 104 + i], i + 1) << i;
   EXPECT_EQ(h[kHeaderSize + 112], 0xE8);
   EXPECT_EQ(h[kHeaderSize + 113], 0x03);
-  for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 114 + i], i + 9) << i;
+  for (int i = 0; i < 16; ++i) EXPECT_EQ(h[kHeaderSize + 114 + i], i + 9) << i;
   FrameSummary frame;
   frame.flags = kFrameTriggerFromCapture;
   const Bytes f = payload_of(frame);

@@ -89,7 +89,8 @@ void Firmware::build(std::unique_ptr<Board> board) {
   link.identity.component_id = config_.serial.mavlink_component_id;
   link.baud = config_.serial.port.baud;
   link_ = std::make_unique<Link>(board_->serial(), board_->clock(), link);
-  loop_ = std::make_unique<FrameLoop>(config_, *board_, *pipeline_, *link_);
+  outputs_ = std::make_unique<Outputs>(config_, calibration_);
+  loop_ = std::make_unique<FrameLoop>(config_, *board_, *pipeline_, *link_, outputs_.get());
   check_budget(config_.name, config_.memory_budget_bytes, working_set_bytes());
 }
 

@@ -63,11 +63,13 @@ double gain_of(const protocol::SetExposure& command) {
 
 }  // namespace
 
-FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline, Link& link)
+FrameLoop::FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline, Link& link,
+                     Outputs* outputs)
     : config_(config),
       board_(board),
       pipeline_(pipeline),
       link_(link),
+      outputs_(outputs),
       trigger_(make_trigger_watch(config, board)),
       grabber_(board.left(), board.right(), board.clock(),
                pairing_config(config, board.left().edge_delay()),
@@ -106,6 +108,7 @@ void FrameLoop::start() {
     }
   }
   link_.start();
+  if (outputs_ != nullptr) outputs_->start();
   if (link_.protocol() == LinkProtocol::mavlink) link_.publish_heartbeat(heartbeat_status());
   started_ = true;
 }
@@ -134,6 +137,7 @@ void FrameLoop::finish() {
     conclude(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::failed});
   }
   link_.stop();
+  if (outputs_ != nullptr) outputs_->stop();
 }
 
 FrameLoop::Verdict FrameLoop::request_snapshot(std::uint16_t sequence) {
@@ -191,6 +195,10 @@ FaultCounts FrameLoop::faults() {
   f.bad_commands = link.rejected_frames + rejected_commands_;
   f.messages_dropped = link.messages_dropped;
   f.snapshot_failures = snapshots_.failures();
+  if (outputs_ != nullptr) {
+    f.outputs_dropped = outputs_->dropped();
+    f.output_failures = outputs_->failures();
+  }
   return f;
 }
 
@@ -367,6 +375,7 @@ FrameLoop::Verdict FrameLoop::set_exposure(const protocol::SetExposure& command)
 
 void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool trigger_from_capture) {
   if (r.calibration_health) last_calibration_health_ = r.calibration_health;
+  if (outputs_ != nullptr) outputs_->publish(r, latency);
   if (link_.protocol() == LinkProtocol::mavlink) {
     if (r.obstacles != nullptr) {
       link_.publish_obstacle_distance(
@@ -473,13 +482,14 @@ void FrameLoop::publish_health() {
   std::optional<protocol::Health> h = health_.due(board_.clock().now(), faults());
   if (!h) return;
   ++summary_.health_messages;
+  if (not_calibrated_) h->flags |= protocol::kHealthNotCalibrated;
+  if (no_cascade_) h->flags |= protocol::kHealthNoCascade;
+  if (trigger_quiet_) h->flags |= protocol::kHealthWaitingForTrigger;
+  if (outputs_ != nullptr) outputs_->publish_health(*h);
   if (link_.protocol() == LinkProtocol::mavlink) {
     link_.publish_heartbeat(heartbeat_status());
     return;
   }
-  if (not_calibrated_) h->flags |= protocol::kHealthNotCalibrated;
-  if (no_cascade_) h->flags |= protocol::kHealthNoCascade;
-  if (trigger_quiet_) h->flags |= protocol::kHealthWaitingForTrigger;
   send(*h);
   if (last_calibration_health_ && last_calibration_health_->matches > 0) {
     send(calibration_health_message(*last_calibration_health_));
@@ -638,6 +648,7 @@ void FrameLoop::add_memory(MemoryReport& report) const {
   report.add("frame loop", sizeof(FrameLoop) + (trigger_ ? sizeof(TriggerWatch) : 0) +
                                health_.working_set_bytes());
   if (snapshots_.enabled()) report.add("snapshots", snapshots_.working_set_bytes());
+  if (outputs_ != nullptr) outputs_->add_memory(report);
 }
 
 RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& stop) {
@@ -659,6 +670,7 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
   summary_.pairing = grabber_.pairer().counters();
   summary_.faults = faults();
   summary_.link = link_.counters();
+  if (outputs_ != nullptr) summary_.outputs = outputs_->reports();
   summary_.stages = stages_;
   return summary_;
 }

@@ -89,6 +89,8 @@ std::optional<protocol::Health> HealthMonitor::due(hal::Nanoseconds now, const F
   h.snapshot_failures = wrapped(f.snapshot_failures);
   h.trigger_bounces = wrapped(f.trigger_bounces);
   h.pairs_off_trigger = wrapped(f.pairs_off_trigger);
+  h.outputs_dropped = wrapped(f.outputs_dropped);
+  h.output_failures = wrapped(f.output_failures);
   // The next window starts where this one should have ended, so windows do not drift; after a
   // long gap (a stall) it starts now.
   window_start_ = stalled ? now : window_start_ + window_;

@@ -28,6 +28,8 @@ const char* thread_name(ThreadRole role) {
       return "epipole-trigger";
     case ThreadRole::snapshot:
       return "epipole-snap";
+    case ThreadRole::output:
+      return "epipole-out";
   }
   return "epipole";
 }
@@ -38,7 +40,7 @@ void set_realtime_base(int priority) {
 
 int realtime_priority(ThreadRole role) {
   const int base = g_base.load();
-  if (base == 0 || role == ThreadRole::snapshot) return 0;
+  if (base == 0 || role == ThreadRole::snapshot || role == ThreadRole::output) return 0;
   const int above = role == ThreadRole::trigger ? 2 : role == ThreadRole::link ? 1 : 0;
   return std::min(base + above, 99);
 }

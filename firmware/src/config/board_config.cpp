@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <set>
 
+#include "config/output_sections.hpp"
 #include "config/stage_sections.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/text_file.hpp"
@@ -14,6 +15,7 @@
 #include "epipole/firmware/link_budget.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/hal/registry.hpp"
+#include "output_files.hpp"
 #include "stages/stage_table.hpp"
 
 namespace epipole::firmware {
@@ -79,6 +81,7 @@ class BoardReader {
     number(root, "", "snapshot_min_free_mb", c.snapshot_min_free_mb, 0, 1e7);
     read_backend_sections(root, c);
     stages::read_stage_sections(stages::kPipelineStages, root, f_, c.stage_sections);
+    outputs::read_output_sections(outputs::kOutputFiles, root, f_, c.outputs);
     return c;
   }
 
@@ -441,7 +444,8 @@ class BoardReader {
                                            "memory_budget_mb",
                                            "snapshot_directory",
                                            "snapshot_limit",
-                                           "snapshot_min_free_mb"};
+                                           "snapshot_min_free_mb",
+                                           "outputs"};
     for (const hal::SectionBackend& section : hal::BackendRegistry::builtin().sections()) {
       known.push_back(section.name);
     }

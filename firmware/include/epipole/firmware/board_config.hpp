@@ -28,6 +28,15 @@ class StageSettings {
 };
 using StageSections = SettingsSections<StageSettings>;
 
+// An output's own subsection of the board file's `outputs` (outputs: {<name>: {...}}), as the
+// output read it (outputs::OutputDefinition::read_settings); opaque to everyone else.
+class OutputSettings {
+ public:
+  virtual ~OutputSettings() = default;
+  virtual std::unique_ptr<OutputSettings> clone() const = 0;
+};
+using OutputSections = SettingsSections<OutputSettings>;
+
 // A board's configuration file (board.yaml, docs/boards.md): which backends and devices the
 // board has, the image size and every stage's limits. The firmware sizes all of its memory from
 // it at start-up. Loading either returns a complete, validated configuration or throws Error
@@ -135,6 +144,9 @@ struct BoardConfig {
   // The sections of the stages that read their own (every such stage has one, the file's or its
   // defaults).
   StageSections stage_sections;
+  // The outputs the file turns on (besides the serial link, which `serial` makes): a subsection
+  // of `outputs` each, by the output's name (docs/outputs.md).
+  OutputSections outputs;
 
   int width() const { return cameras.left.width; }
   int height() const { return cameras.left.height; }

@@ -59,6 +59,7 @@ class Firmware {
   Board& board() { return *board_; }
   Pipeline& pipeline() { return *pipeline_; }
   Link& link() { return *link_; }
+  Outputs& outputs() { return *outputs_; }
   FrameLoop& frame_loop() { return *loop_; }
   const std::optional<calib::StereoCalibration>& calibration() const { return calibration_; }
   // The calibration file the board names that is not there yet; empty when it names none or
@@ -68,9 +69,9 @@ class Firmware {
     return calibration_ ? std::filesystem::path() : config_.calibration;
   }
   // The frame loop's buffers, part by part: every stage's, the link's queue, the loop's own,
-  // the snapshots' copies, the cameras' frame buffers on the heap (a driver's mmap'ed ones are
-  // the kernel's) and what their backend holds for them (hal::BackendBoard). The board's
-  // memory_budget_mb bounds the total.
+  // the snapshots' copies, each output's, the cameras' frame buffers on the heap (a driver's
+  // mmap'ed ones are the kernel's) and what their backend holds for them (hal::BackendBoard). The
+  // board's memory_budget_mb bounds the total.
   MemoryReport memory_report() const;
   std::size_t working_set_bytes() const { return memory_report().total(); }
 
@@ -82,6 +83,7 @@ class Firmware {
   std::unique_ptr<Board> board_;
   std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<Link> link_;
+  std::unique_ptr<Outputs> outputs_;
   std::unique_ptr<FrameLoop> loop_;
 };
 

@@ -6,6 +6,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "epipole/firmware/board.hpp"
 #include "epipole/firmware/board_config.hpp"
@@ -14,6 +15,7 @@
 #include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/link.hpp"
 #include "epipole/firmware/memory_report.hpp"
+#include "epipole/firmware/outputs.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/snapshot.hpp"
 #include "epipole/firmware/trigger_watch.hpp"
@@ -41,6 +43,7 @@ struct RunSummary {
   std::uint64_t rectified_ahead = 0;
   std::uint64_t used_ahead = 0;
   std::uint64_t health_messages = 0;
+  std::vector<OutputReport> outputs;  // what each output did
   std::uint64_t commands = 0;
   std::uint64_t resent_commands = 0;  // resends of commands applied before: answered, not applied
   hal::PairingCounters pairing;
@@ -63,7 +66,9 @@ hal::PairingConfig pairing_config(const BoardConfig& config,
 // never allocates.
 class FrameLoop {
  public:
-  FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline, Link& link);
+  // `outputs`: where each pair goes besides the link (none: nowhere else).
+  FrameLoop(const BoardConfig& config, Board& board, Pipeline& pipeline, Link& link,
+            Outputs* outputs = nullptr);
   ~FrameLoop();
   FrameLoop(const FrameLoop&) = delete;
   FrameLoop& operator=(const FrameLoop&) = delete;
@@ -132,6 +137,7 @@ class FrameLoop {
   Board& board_;
   Pipeline& pipeline_;
   Link& link_;
+  Outputs* outputs_;
   std::unique_ptr<TriggerWatch> trigger_;  // before grabber_, which checks pairs against it
   hal::StereoGrabber grabber_;
   HealthMonitor health_;

@@ -28,6 +28,8 @@ struct FaultCounts {
   std::uint64_t snapshot_failures = 0;
   std::uint64_t trigger_bounces = 0;
   std::uint64_t pairs_off_trigger = 0;
+  std::uint64_t outputs_dropped = 0;
+  std::uint64_t output_failures = 0;
 };
 
 // Collects what the health message says: frames per second, the latency from trigger edge to

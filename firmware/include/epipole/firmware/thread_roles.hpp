@@ -14,6 +14,7 @@ enum class ThreadRole {
   link,      // the serial link: SCHED_FIFO P + 1
   trigger,   // the trigger line (a master fires its pulses from it): SCHED_FIFO P + 2
   snapshot,  // snapshot files: normal scheduling
+  output,    // an output's own work (a recording, a network): normal scheduling
 };
 
 const char* thread_name(ThreadRole role);  // "epipole-work", ... (top -H, /proc/PID/task)

@@ -14,7 +14,7 @@ namespace epipole::protocol {
 // fields(io, m): protocol/fields.hpp says what `io` offers) and its place in the Message variant
 // below; the codec, the decoder's checks and the host tool's JSON take all from there.
 
-inline constexpr std::uint8_t kVersion = 5;
+inline constexpr std::uint8_t kVersion = 6;
 
 enum class MessageType : std::uint8_t {
   // firmware -> robot
@@ -79,6 +79,10 @@ struct Health {
   // is in dropped_* too, under the trigger it was taken for).
   std::uint32_t trigger_bounces = 0;
   std::uint32_t pairs_off_trigger = 0;
+  // The outputs (version 6, docs/outputs.md): pairs they dropped because their work was behind,
+  // and their work's failures (a full disk, a network error), summed over the outputs.
+  std::uint32_t outputs_dropped = 0;
+  std::uint32_t output_failures = 0;
   template <class Io, class Self>
   static void fields(Io& io, Self& m) {
     io("uptime_ms", m.uptime_ms);
@@ -106,6 +110,8 @@ struct Health {
     io("busy_permille", m.busy_permille);
     io("trigger_bounces", m.trigger_bounces);
     io("pairs_off_trigger", m.pairs_off_trigger);
+    io("outputs_dropped", m.outputs_dropped);
+    io("output_failures", m.output_failures);
   }
   friend bool operator==(const Health&, const Health&) = default;
 };

@@ -1,0 +1,273 @@
+// The recording output: the pairs' results as ROS 2 messages in MCAP files (docs/outputs.md),
+// into a ring of files bounded by size and free space.
+//
+//   outputs:
+//     mcap: {directory: /var/lib/epipole/recordings, every: 10, file_mb: 256, total_mb: 2048,
+//            min_free_mb: 512, namespace: /epipole, frame_prefix: epipole_}
+
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "epipole/calib/triangulation.hpp"
+#include "epipole/core/yaml_fields.hpp"
+#include "epipole/firmware/build_info.hpp"
+#include "epipole/firmware/journal.hpp"
+#include "mcap/mcap_writer.hpp"
+#include "output_files.hpp"
+#include "record/recording_ring.hpp"
+#include "ros/ros_messages.hpp"
+#include "system_time.hpp"
+
+namespace epipole::firmware::outputs {
+
+namespace {
+
+struct McapSettings final : OutputSettings {
+  std::filesystem::path directory;
+  int every = 10;  // every Nth pair is recorded (health, once a second, always)
+  double file_mb = 256;
+  double total_mb = 2048;
+  double min_free_mb = 512;
+  std::string ros_namespace = "/epipole";
+  std::string frame_prefix = "epipole_";
+  std::unique_ptr<OutputSettings> clone() const override {
+    return std::make_unique<McapSettings>(*this);
+  }
+};
+
+std::unique_ptr<OutputSettings> read_settings(const YAML::Node& n, const yaml::Fields& f) {
+  auto s = std::make_unique<McapSettings>();
+  const std::string path = "outputs.mcap";
+  if (!n.IsDefined() || n.IsNull()) f.fail(path + ".directory", "is missing (where to record)");
+  f.only_keys(
+      n, path,
+      {"directory", "every", "file_mb", "total_mb", "min_free_mb", "namespace", "frame_prefix"});
+  s->directory = f.path(f.child(n, path, "directory"), path + ".directory");
+  f.if_present(n, path, "every", [&](const YAML::Node& v, const std::string& k) {
+    s->every = f.integer_in(v, k, 1, 1000);
+  });
+  f.if_present(n, path, "file_mb", [&](const YAML::Node& v, const std::string& k) {
+    s->file_mb = f.number_in(v, k, 1, 65536);
+  });
+  f.if_present(n, path, "total_mb", [&](const YAML::Node& v, const std::string& k) {
+    s->total_mb = f.number_in(v, k, 1, 1 << 24);
+  });
+  f.if_present(n, path, "min_free_mb", [&](const YAML::Node& v, const std::string& k) {
+    s->min_free_mb = f.number_in(v, k, 0, 1 << 24);
+  });
+  if (s->total_mb < s->file_mb) f.fail(path + ".total_mb", "is less than file_mb");
+  f.if_present(n, path, "namespace", [&](const YAML::Node& v, const std::string& k) {
+    s->ros_namespace = f.text(v, k);
+    if (!s->ros_namespace.starts_with('/') || s->ros_namespace.ends_with('/')) {
+      f.fail(k, "must start with / and not end with one (/epipole)");
+    }
+  });
+  f.if_present(n, path, "frame_prefix",
+               [&](const YAML::Node& v, const std::string& k) { s->frame_prefix = f.text(v, k); });
+  return s;
+}
+
+// The recorded topics, in the order of the writer's channels.
+enum Topic : std::uint16_t {
+  kLeftRect,
+  kRightRect,
+  kLeftRaw,
+  kRightRaw,
+  kLeftInfo,
+  kRightInfo,
+  kDisparity,
+  kDepth,
+  kFeatures,
+  kDiagnostics,
+  kTfStatic,
+  kTopicCount
+};
+
+struct TopicRow {
+  Topic topic;
+  const char* name;  // under the namespace; absolute when it starts with /
+  ros::MessageType (*type)();
+};
+constexpr TopicRow kTopics[] = {
+    {kLeftRect, "left/image_rect", ros::image_type},
+    {kRightRect, "right/image_rect", ros::image_type},
+    {kLeftRaw, "left/image_raw", ros::image_type},
+    {kRightRaw, "right/image_raw", ros::image_type},
+    {kLeftInfo, "left/camera_info", ros::camera_info_type},
+    {kRightInfo, "right/camera_info", ros::camera_info_type},
+    {kDisparity, "disparity", ros::disparity_image_type},
+    {kDepth, "depth", ros::image_type},
+    {kFeatures, "features", ros::point_cloud_type},
+    {kDiagnostics, "/diagnostics", ros::diagnostic_array_type},
+    {kTfStatic, "/tf_static", ros::tf_message_type},
+};
+
+// The writer's schemas (one per message type) and channels (one per topic).
+mcap::Writer make_writer(const BoardConfig& board, const McapSettings& s) {
+  std::vector<mcap::Schema> schemas;
+  std::vector<mcap::Channel> channels;
+  for (const TopicRow& row : kTopics) {
+    const ros::MessageType type = row.type();
+    std::uint16_t id = 0;
+    for (std::size_t i = 0; i < schemas.size(); ++i) {
+      if (schemas[i].name == type.name) id = static_cast<std::uint16_t>(i + 1);
+    }
+    if (id == 0) {
+      schemas.push_back({std::string(type.name), "ros2msg", std::string(type.schema)});
+      id = static_cast<std::uint16_t>(schemas.size());
+    }
+    const std::string name = row.name;
+    channels.push_back(
+        {id, name.starts_with('/') ? name : s.ros_namespace + "/" + name, "cdr", {}});
+  }
+  const std::size_t pixels = static_cast<std::size_t>(board.width()) * board.height();
+  const std::size_t largest =
+      std::max(pixels * 4, static_cast<std::size_t>(board.sparse.max_matches) * 16) + 4096;
+  return mcap::Writer(std::move(schemas), std::move(channels), 4u << 20, largest);
+}
+
+class McapOutput final : public Output {
+ public:
+  explicit McapOutput(const OutputContext& context)
+      : settings_(settings_of<McapSettings>(context, "mcap")),
+        board_(context.board),
+        calibration_(context.calibration),
+        ring_(settings_.directory, {static_cast<std::uint64_t>(settings_.file_mb * (1 << 20)),
+                                    static_cast<std::uint64_t>(settings_.total_mb * (1 << 20)),
+                                    static_cast<std::uint64_t>(settings_.min_free_mb * (1 << 20))}),
+        writer_(make_writer(context.board, settings_)),
+        left_optical_(settings_.frame_prefix + "left_optical_frame"),
+        right_optical_(settings_.frame_prefix + "right_optical_frame"),
+        left_body_(settings_.frame_prefix + "left"),
+        delivery_(
+            "mcap", context.board, kRectified | kRaw | kDisparity | kPoints,
+            [this](const PairCopy& pair) { record(pair); },
+            [this](const protocol::Health& health) { record_health(health); }) {
+    if (calibration_) {
+      const calib::Triangulator triangulator(*calibration_);
+      depth_mm_ = ros::depth_mm_by_disparity16(triangulator, board_.stereo.max_disparity);
+      left_ = ros::rectified_left(*calibration_);
+      right_ = ros::rectified_right(*calibration_);
+      const double fx = right_.p[0];
+      baseline_m_ = fx != 0 ? -right_.p[3] / fx : 0.0;
+    }
+  }
+
+  void start() override { delivery_.start(); }
+  void stop() override {
+    delivery_.stop();
+    try {
+      writer_.close();
+    } catch (const Error& e) {
+      journal(Priority::warning, "output mcap: %s", e.what());
+    }
+  }
+  void offer(const FrameResult& result, const PairStamp& stamp) override {
+    if (pairs_++ % static_cast<std::uint64_t>(settings_.every) == 0) delivery_.offer(result, stamp);
+  }
+  void offer_health(const protocol::Health& health) override { delivery_.offer_health(health); }
+  DeliveryCounters counters() const override { return delivery_.counters(); }
+  std::size_t working_set_bytes() const override {
+    return delivery_.working_set_bytes() + writer_.working_set_bytes() + depth_mm_.capacity() * 2;
+  }
+
+ private:
+  std::vector<std::uint8_t>& begin(Topic topic, std::uint64_t time) {
+    return writer_.begin_message(topic, sequences_[topic]++, time, time);
+  }
+
+  // A new file when there is none or the one open is full.
+  void open_if_needed(std::int64_t system_ns) {
+    if (writer_.is_open() && writer_.bytes() < ring_limit()) return;
+    writer_.close();
+    writer_.open(ring_.next_file(system_ns), build_info());
+    journal(Priority::info, "output mcap: recording into %s", writer_.file().c_str());
+    const auto time = static_cast<std::uint64_t>(system_ns);
+    if (calibration_) {
+      const std::string yaml = calib::format_calibration(*calibration_);
+      writer_.attach("calibration.yaml", "application/yaml",
+                     {reinterpret_cast<const std::uint8_t*>(yaml.data()), yaml.size()}, time);
+      ros::write_rig_transforms(begin(kTfStatic, time), ros::time_of(system_ns),
+                                {left_body_, left_optical_, right_optical_}, baseline_m_);
+      writer_.end_message();
+    }
+  }
+  std::uint64_t ring_limit() const {
+    return static_cast<std::uint64_t>(settings_.file_mb * (1 << 20));
+  }
+
+  void record(const PairCopy& pair) {
+    const std::int64_t ns = pair.stamp.system_ns;
+    open_if_needed(ns);
+    const auto time = static_cast<std::uint64_t>(ns);
+    const ros::Time stamp = ros::time_of(ns);
+    const auto image = [&](Topic topic, const std::string& frame, GrayView view) {
+      ros::write_image(begin(topic, time), stamp, frame, view);
+      writer_.end_message();
+    };
+    if (pair.has_rectified) {
+      image(kLeftRect, left_optical_, pair.left.view());
+      image(kRightRect, right_optical_, pair.right.view());
+    }
+    if (pair.has_raw) {
+      image(kLeftRaw, left_optical_, pair.left_raw.view());
+      image(kRightRaw, right_optical_, pair.right_raw.view());
+    }
+    if (calibration_) {
+      ros::write_camera_info(begin(kLeftInfo, time), stamp, left_optical_, left_);
+      writer_.end_message();
+      ros::write_camera_info(begin(kRightInfo, time), stamp, right_optical_, right_);
+      writer_.end_message();
+    }
+    if (pair.has_disparity) {
+      ros::write_disparity_image(begin(kDisparity, time), stamp, left_optical_,
+                                 pair.disparity.view(), static_cast<float>(left_.p[0]),
+                                 static_cast<float>(baseline_m_), board_.stereo.max_disparity);
+      writer_.end_message();
+      if (calibration_) {
+        ros::write_depth_image(begin(kDepth, time), stamp, left_optical_, pair.disparity.view(),
+                               depth_mm_);
+        writer_.end_message();
+      }
+    }
+    if (calibration_ && !pair.points.empty()) {
+      ros::write_feature_cloud(begin(kFeatures, time), stamp, left_optical_, pair.points,
+                               pair.has_rectified ? pair.left.view() : GrayView());
+      writer_.end_message();
+    }
+  }
+
+  void record_health(const protocol::Health& health) {
+    if (!writer_.is_open()) return;  // recorded with the pairs: a file is opened by a pair
+    const std::int64_t ns = detail::system_now_ns();
+    ros::write_diagnostics(begin(kDiagnostics, static_cast<std::uint64_t>(ns)), ros::time_of(ns),
+                           "epipole: health", board_.name, health);
+    writer_.end_message();
+  }
+
+  const McapSettings& settings_;
+  const BoardConfig& board_;
+  const std::optional<calib::StereoCalibration>& calibration_;
+  record::RecordingRing ring_;
+  mcap::Writer writer_;
+  std::string left_optical_, right_optical_, left_body_;
+  std::vector<std::uint16_t> depth_mm_;
+  ros::RectifiedCamera left_, right_;
+  double baseline_m_ = 0;
+  std::array<std::uint32_t, kTopicCount> sequences_{};
+  std::uint64_t pairs_ = 0;  // offered, on the frame loop's thread
+  PairDelivery delivery_;    // last: its thread stops before the rest goes
+};
+
+std::unique_ptr<Output> make(const OutputContext& context) {
+  return std::make_unique<McapOutput>(context);
+}
+
+}  // namespace
+
+extern constinit const OutputDefinition mcap_output{read_settings, make};
+
+}  // namespace epipole::firmware::outputs
