@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
 # Checks what the main job (scripts/run-demo.sh) wrote: the calibration's files, and for every
 # scene of the simulated board its frame pairs, its pictures and a serial stream that the robot's
-# end decoded without a single error. Exits non-zero naming each thing that is missing or wrong.
+# end decoded without a single error, and each recording as an independent MCAP reader and ROS 2
+# decoder read it (tests/clients/mcap-read.mjs). Exits non-zero naming each thing that is missing
+# or wrong.
 #
 #   scripts/check-demo.sh OUT_DIR
 set -euo pipefail
 
 out=${1:?usage: scripts/check-demo.sh OUT_DIR}
+reader="$(cd "$(dirname "$0")/.." && pwd)/tests/clients/mcap-read.mjs"
 problems=0
 problem() {
   echo "check-demo: $*" >&2
@@ -44,6 +47,24 @@ while read -r scene; do
   while read -r picture; do
     nonempty "$dir/$picture"
   done < <(jq -r '.pictures[]' <<<"$s")
+  # Each recording, as Foxglove's and the MCAP project's own libraries read it: every topic of
+  # every recorded pair, the calibration, health.
+  while read -r recording; do
+    [[ -n $recording ]] || continue
+    if ! read=$(node "$reader" "$recording" 2 2>&1); then
+      problem "$recording does not read: $read"
+      continue
+    fi
+    delivered=$(jq '.outputs.mcap.delivered' <<<"$s")
+    jq -e --argjson n "$delivered" '.profile == "ros2" and
+      ([.statistics.channel_message_counts | to_entries[] |
+        select(.key | startswith("/epipole/")) | .value == $n] | all and length == 9) and
+      .statistics.channel_message_counts["/tf_static"] == 1 and
+      .statistics.channel_message_counts["/diagnostics"] >= 1 and
+      ([.attachments[].name] == ["calibration.yaml"])' <<<"$read" >/dev/null ||
+      problem "$recording: not every topic of the $delivered recorded pairs, or no calibration: $(jq -c .statistics <<<"$read")"
+    echo "check-demo: $scene: $recording: $(jq -r '"\(.statistics.message_count) messages on \(.statistics.channel_count) topics in \(.statistics.chunk_count) chunks, read and decoded"' <<<"$read")"
+  done < <(jq -r '.recordings // [] | .[]' <<<"$s")
   echo "check-demo: $scene: $(jq -r --arg type "$per_frame" \
     '"\(.frames) pairs, \(.received[$type] // 0) \($type) messages decoded (\(.decoder.protocol), \(.decoder.errors) errors), \(.pictures | length) pictures"' <<<"$s")"
 done < <(jq -r '.scenes[].scene' "$summary")

@@ -7,7 +7,8 @@
 #      chessboard rig with its calibration, Middlebury Aloe, and a synthetic pair with faces at a
 #      known depth. For each scene: the rectified pair with epipolar lines, corners, colour
 #      disparity with a legend, the raw serial stream as the robot received it and its decoded
-#      messages (serial.jsonl), and a summary.
+#      messages (serial.jsonl), and a summary; the Aloe scene is also recorded, every pair, as
+#      ROS 2 messages in an MCAP file (docs/outputs.md) that Foxglove, Lichtblick and ros2 bag open.
 #
 #   scripts/run-demo.sh [OUT_DIR]      (default: out/demo)
 set -euo pipefail
@@ -33,7 +34,11 @@ echo "demo: calibrating the chessboard rig"
   --report "$out/calibration/report.json" --preview "$out/calibration/preview.png"
 
 echo "demo: the firmware on the simulated board (board/sim)"
-"$tool" sim --board board/sim --frames 60 --pictures 2 --out "$out/sim"
+"$tool" sim --board board/sim --frames 60 --pictures 2 --record aloe --out "$out/sim"
+for recording in "$out"/sim/aloe/recordings/*.mcap; do
+  echo "demo: the Aloe scene's recording: $recording"
+  echo "      open it in Foxglove or Lichtblick (Open local file), or: ros2 bag info $recording"
+done
 
 echo "demo: pictures, serial streams and summaries in $out/"
 find "$out" -type f | sort

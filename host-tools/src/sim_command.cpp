@@ -43,8 +43,14 @@ struct SimOptions {
   std::uint64_t frames = 30;
   int pictures = 1;
   std::string out = "out/sim";
-  bool json = false;  // the summary on stdout instead of a line per scene
+  bool json = false;                // the summary on stdout instead of a line per scene
+  std::vector<std::string> record;  // scenes recorded (every pair, MCAP) into <out>/<scene>/
 };
+
+// The board file's recording output turned on for a scene: every pair into `directory`.
+std::vector<std::string> recording_overrides(const fs::path& directory) {
+  return {"outputs.mcap.directory=" + fs::absolute(directory).string(), "outputs.mcap.every=1"};
+}
 
 // Reads the simulated link's far end, as the robot would, keeping the raw bytes and decoding
 // them, in the board's protocol, into JSON lines.
@@ -205,8 +211,13 @@ class FrameProgress final : public firmware::FrameObserver {
 
 nlohmann::json run_scene(const std::string& scene, const SimOptions& options) {
   const std::vector<hal::BackendOption> chosen = {{"scene", scene}};
-  firmware::BoardConfig config = firmware::load_board_config(options.board, {}, chosen);
   const fs::path directory = fs::path(options.out) / scene;
+  const bool record =
+      std::find(options.record.begin(), options.record.end(), scene) != options.record.end();
+  const fs::path recordings = directory / "recordings";
+  if (record) fs::remove_all(recordings);  // this run's recording alone
+  firmware::BoardConfig config = firmware::load_board_config(
+      options.board, record ? recording_overrides(recordings) : std::vector<std::string>(), chosen);
   fs::create_directories(directory);
   // The pty's robot end: a link in the output folder, so the firmware's link is easy to find.
   if (hal::BackendRegistry::builtin().serial_traits(config.serial.backend).simulated &&
@@ -248,6 +259,15 @@ nlohmann::json run_scene(const std::string& scene, const SimOptions& options) {
                         {"messages_dropped", s.link.messages_dropped},
                         {"calibration", fw.calibration() ? "yes" : "none"},
                         {"pictures", pictures.written()}};
+  for (const firmware::OutputReport& o : s.outputs) {
+    out["outputs"][o.name] = {
+        {"delivered", o.delivered}, {"dropped", o.dropped}, {"failures", o.failures}};
+  }
+  if (record) {
+    nlohmann::json files = nlohmann::json::array();
+    for (const auto& e : fs::directory_iterator(recordings)) files.push_back(e.path().string());
+    out["recordings"] = files;
+  }
   if (recorder) {
     out["received"] = recorder->counts();
     out["decoder"] = recorder->stats();
@@ -291,8 +311,16 @@ void run_sim(const SimOptions& options) {
   }
   fs::create_directories(options.out);
   nlohmann::json summary = {{"board", board.name}, {"scenes", nlohmann::json::array()}};
+  for (const std::string& scene : options.record) {
+    require(std::find(scenes.begin(), scenes.end(), scene) != scenes.end(), "--record ", scene,
+            ": not a scene this run runs");
+  }
   for (const std::string& scene : scenes) {
     const nlohmann::json s = run_scene(scene, options);
+    for (const auto& file : s.value("recordings", nlohmann::json::array())) {
+      if (!options.json)
+        std::cout << "sim: scene " << scene << " recorded into " << file.get<std::string>() << "\n";
+    }
     if (!options.json) print_scene(s);
     summary["scenes"].push_back(s);
   }
@@ -321,6 +349,9 @@ void add_sim_command(CLI::App& app, const GlobalOptions&) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--out,-o", options->out, "Output folder")->capture_default_str();
+  cmd->add_option("--record", options->record,
+                  "Scenes to record, every pair, into OUT/SCENE/recordings/ (MCAP: "
+                  "docs/outputs.md)");
   cmd->add_flag("--json", options->json,
                 "Print the summary (as summary.json) instead of a line per scene");
   cmd->callback([options] { run_sim(*options); });

@@ -5,6 +5,7 @@
 // camera parameters (the calibration), the sparse points, health.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -171,6 +172,38 @@ TEST(Recording, AnIndependentReaderDecodesWhatThePipelineComputed) {
   }
   EXPECT_GT(checked_depths, 0);
   EXPECT_GT(checked_points, 0);
+}
+
+// A long recording is a ring of files: each closed file is whole (summary, indexes) and the
+// oldest go when the folder's bound is reached; failures none, pairs all recorded or counted.
+TEST(Recording, ALongRecordingIsARingOfWholeFiles) {
+  ASSERT_TRUE(test::clients_installed()) << "the test clients are not installed: scripts/setup.sh";
+  test::SimRig rig(320, 240, 8);
+  const BoardConfig config = rig.parse(
+      "outputs: {mcap: {directory: recordings, every: 1, file_mb: 1, total_mb: 3, "
+      "min_free_mb: 0}}\n");
+  Firmware fw(rig.replaying(config, 3));
+  const std::atomic<bool> stop{false};
+  const RunSummary s = fw.run(60, stop);
+  const OutputReport& mcap = s.outputs.at(0);
+  EXPECT_EQ(mcap.failures, 0u);
+  EXPECT_EQ(mcap.delivered + mcap.dropped, 60u);
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(rig.dir.path() / "recordings")) {
+    files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 2u);
+  std::uint64_t bytes = 0;
+  for (const std::filesystem::path& file : files) {
+    bytes += std::filesystem::file_size(file);
+    const json r = read_recording(file);
+    EXPECT_GT(r["statistics"]["channel_message_counts"]["/epipole/left/image_rect"], 0) << file;
+    EXPECT_EQ(r["statistics"]["channel_message_counts"]["/tf_static"], 1) << "in every file";
+    EXPECT_EQ(r["attachments"].size(), 1u) << "the calibration in every file";
+  }
+  EXPECT_LE(bytes, 3u << 20) << "the ring's bound";
+  EXPECT_GT(bytes, 1u << 20) << "the oldest went only to make room";
 }
 
 }  // namespace

@@ -187,7 +187,10 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
   test::SimRig rig(320, 240, 8);
   BoardConfig config = rig.parse(
       "threads: {count: 2}\nsnapshot_directory: snapshots\n"
-      "snapshot_limit: 40\n");
+      "snapshot_limit: 40\n"
+      // The recording's thread too: flat over the run (one file: the ring's turns are
+      // Recording.ALongRecordingIsARingOfWholeFiles').
+      "outputs: {mcap: {directory: recordings, file_mb: 1024, total_mb: 1024, min_free_mb: 0}}\n");
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);
   config.serial.backend = "pty";
