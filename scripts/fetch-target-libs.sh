@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Unpacks the board-side libraries Epipole links (Debian's :arm64 and :armhf packages of
-# yaml-cpp and libgpiod, linked statically, libcamera, libpng, libjpeg and zstd with the libraries
+# yaml-cpp and libgpiod, linked statically, libcamera, CycloneDDS, libpng, libjpeg and zstd with the libraries
 # they need at run time, and for the board's epipole-bench Debian's OpenCV with the libraries it
 # loads) into a cache folder that the cross toolchain files add to their search path (and the
 # cross-built tests' library path under qemu), and writes a dpkg database of them beside
@@ -58,7 +58,7 @@ for arch in "$@"; do
       ;;
   esac
   root="$parent/target-libs-$arch"
-  stamp_name=.complete-v7
+  stamp_name=.complete-v8
   stamp="$root/$stamp_name"
   triple=$(dpkg-architecture -a"$arch" -qDEB_HOST_MULTIARCH 2>/dev/null)
   if [[ -f $stamp ]]; then
@@ -73,14 +73,17 @@ for arch in "$@"; do
     $sudo dpkg --add-architecture "$arch"
     refresh_lists
   fi
-  # libcamera-dev and everything it needs at run time (libcamera0.0.3, libudev1, gnutls, ...).
+  # libcamera-dev and cyclonedds-dev (the ROS 2 output's DDS) and everything they need at run
+  # time (libcamera0.0.3, libudev1, gnutls, libddsc0debian, iceoryx, libssl3, ...).
   closure() {
     apt-cache depends --recurse --no-recommends --no-suggests --no-conflicts --no-breaks \
-      --no-replaces --no-enhances "libcamera-dev:$arch" 2>/dev/null | sed -n "s/^\([a-z0-9][^ ]*\):$arch\$/\1/p"
+      --no-replaces --no-enhances "libcamera-dev:$arch" "cyclonedds-dev:$arch" 2>/dev/null |
+      sed -n "s/^\([a-z0-9][^ ]*\):$arch\$/\1/p" | sort -u
   }
   camera=$(closure || true)
-  [[ -n $camera ]] || { refresh_lists; camera=$(closure || true); }
-  [[ -n $camera ]] || { echo "fetch-target-libs: no libcamera-dev:$arch in the package lists" >&2; exit 1; }
+  [[ $camera == *cyclonedds-dev* ]] || { refresh_lists; camera=$(closure || true); }
+  [[ $camera == *libcamera-dev* && $camera == *cyclonedds-dev* ]] ||
+    { echo "fetch-target-libs: no libcamera-dev:$arch or cyclonedds-dev:$arch in the package lists" >&2; exit 1; }
   work=$(mktemp -d)
   (
     cd "$work"

@@ -55,14 +55,19 @@ for (const [id, channel] of reader.channelsById) {
   decoders.set(id, { topic: channel.topic, type: schema.name, reader: new MessageReader(definitions) });
 }
 
-function fnv1a(data) {
+// FNV-1a over each row's pixels (width * bytes per pixel of each step).
+function fnv1a(image, bytesPerPixel) {
   let h = 0x811c9dc5;
-  for (let i = 0; i < data.length; i++) {
-    h ^= data[i];
-    h = Math.imul(h, 0x01000193) >>> 0;
+  for (let y = 0; y < image.height; y++) {
+    const row = y * image.step;
+    for (let i = 0; i < image.width * bytesPerPixel; i++) {
+      h ^= image.data[row + i];
+      h = Math.imul(h, 0x01000193) >>> 0;
+    }
   }
   return h;
 }
+const bytesPerPixel = { mono8: 1, "16UC1": 2, "32FC1": 4 };
 
 function pixelAt(image, x, y) {
   const view = new DataView(image.data.buffer, image.data.byteOffset, image.data.byteLength);
@@ -88,7 +93,7 @@ function imageSummary(image) {
   return {
     frame_id: image.header.frame_id, width: image.width, height: image.height,
     encoding: image.encoding, step: image.step, is_bigendian: image.is_bigendian,
-    hash: fnv1a(image.data), samples,
+    hash: fnv1a(image, bytesPerPixel[image.encoding]), samples,
   };
 }
 

@@ -24,7 +24,7 @@ TEST(OutputSections, WhatIsNotAnOutputsIsAnErrorNamingTheKey) {
   const test::SimRig rig;
   EXPECT_EQ(error_of([&] { rig.parse("outputs: {mcpa: {directory: r}}\n"); }),
             (rig.dir.path() / "board.yaml").string() +
-                ": outputs.mcpa: no output of that name (the outputs: mcap)");
+                ": outputs.mcpa: no output of that name (the outputs: mcap, ros2)");
   EXPECT_NE(error_of([&] { rig.parse("outputs: [mcap]\n"); }).find("outputs"), std::string::npos);
   EXPECT_NE(error_of([&] {
               rig.parse("outputs: {mcap: {directory: r, every: 0}}\n");

@@ -13,6 +13,7 @@
 #include "epipole/calib/triangulation.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/vision/stereo.hpp"
+#include "ros_message_checks.hpp"
 #include "sim_rig.hpp"
 #include "test_clients.hpp"
 
@@ -20,34 +21,6 @@ namespace epipole::firmware {
 namespace {
 
 using nlohmann::json;
-
-std::uint32_t fnv1a(GrayView image) {
-  std::uint32_t h = 0x811c9dc5u;
-  for (int y = 0; y < image.height(); ++y) {
-    for (int x = 0; x < image.width(); ++x) {
-      h ^= image.row(y)[x];
-      h *= 0x01000193u;
-    }
-  }
-  return h;
-}
-
-// What the pipeline made of each pair, by the hash of its rectified left image.
-struct Kept final : FrameObserver {
-  struct Pair {
-    Image<std::int16_t> disparity;
-    std::vector<SparsePoint> points;
-  };
-  std::map<std::uint32_t, Pair> by_left;
-  void on_frame(const FrameResult& r) override {
-    Pair p{Image<std::int16_t>(r.disparity.width(), r.disparity.height()),
-           {r.points.begin(), r.points.end()}};
-    for (int y = 0; y < r.disparity.height(); ++y) {
-      std::copy_n(r.disparity.row(y), r.disparity.width(), p.disparity.view().row(y));
-    }
-    by_left.insert_or_assign(fnv1a(r.left), std::move(p));
-  }
-};
 
 json read_recording(const std::filesystem::path& file) {
   const test::ToolResult read = test::run_client("mcap-read.mjs", file.string() + " 6");
@@ -98,80 +71,10 @@ TEST(Recording, AnIndependentReaderDecodesWhatThePipelineComputed) {
       calib::parse_calibration(r["attachments"][0]["text"].get<std::string>(), "attached");
   const calib::StereoCalibration& rig_calibration = *fw.calibration();
   EXPECT_TRUE(attached.Q.isApprox(rig_calibration.Q));
-  const calib::Triangulator q(rig_calibration);
-
-  std::map<std::string, json> frame_of_time;  // a pair's left image_rect, by its log time
-  int checked_depths = 0, checked_points = 0;
-  for (const json& m : r["messages"]) {
-    const std::string topic = m["topic"];
-    const std::string time = m["log_time"];
-    if (topic != "/diagnostics") {
-      EXPECT_EQ(std::to_string(m["stamp"][0].get<std::int64_t>() * 1'000'000'000 +
-                               m["stamp"][1].get<std::int64_t>()),
-                time)
-          << topic << ": the header's stamp is the log time";
-    }
-    if (topic == "/epipole/left/image_rect") {
-      EXPECT_EQ(m["frame_id"], "epipole_left_optical_frame");
-      EXPECT_EQ(m["encoding"], "mono8");
-      ASSERT_TRUE(kept.by_left.count(m["hash"])) << "a left image the pipeline rectified";
-      frame_of_time[time] = m;
-    } else if (topic == "/epipole/left/camera_info" || topic == "/epipole/right/camera_info") {
-      const calib::CameraCalibration& cam =
-          topic == "/epipole/left/camera_info" ? rig_calibration.left : rig_calibration.right;
-      for (int i = 0; i < 12; ++i) {
-        EXPECT_DOUBLE_EQ(m["p"][i].get<double>(), cam.projection(i / 4, i % 4)) << topic;
-      }
-      EXPECT_DOUBLE_EQ(m["k"][0].get<double>(), cam.projection(0, 0));
-      EXPECT_EQ(m["width"], rig.width);
-    } else if (topic == "/epipole/disparity" || topic == "/epipole/depth" ||
-               topic == "/epipole/features") {
-      ASSERT_TRUE(frame_of_time.count(time)) << topic << " after its pair's left image";
-      const Kept::Pair& pair = kept.by_left.at(frame_of_time[time]["hash"]);
-      if (topic == "/epipole/features") {
-        ASSERT_EQ(m["width"], pair.points.size());
-        for (std::size_t i = 0; i < pair.points.size(); ++i) {
-          EXPECT_FLOAT_EQ(m["points"][i][2].get<float>(), pair.points[i].z);
-          ++checked_points;
-        }
-        continue;
-      }
-      const json& image = topic == "/epipole/disparity" ? m["image"] : m;
-      if (topic == "/epipole/disparity") {
-        EXPECT_FLOAT_EQ(m["f"].get<float>(),
-                        static_cast<float>(rig_calibration.left.projection(0, 0)));
-        EXPECT_NEAR(m["t"].get<double>(), test::SimRig::kBaseline, 1e-6);
-        EXPECT_EQ(image["encoding"], "32FC1");
-      } else {
-        EXPECT_EQ(image["encoding"], "16UC1");
-      }
-      for (const json& sample : image["samples"]) {
-        const int x = sample[0], y = sample[1];
-        const std::int16_t d16 = pair.disparity(x, y);
-        const bool valid = d16 != vision::kInvalidDisparity && d16 > 0;
-        if (topic == "/epipole/disparity") {
-          EXPECT_FLOAT_EQ(sample[2].get<float>(), valid ? d16 / 16.0f : -1.0f) << x << "," << y;
-        } else {
-          const double z_mm = valid ? q.point(x, y, d16 / 16.0).z() * 1000.0 : 0.0;
-          EXPECT_NEAR(sample[2].get<double>(), z_mm, 0.5) << x << "," << y;
-          checked_depths += valid;
-        }
-      }
-    } else if (topic == "/diagnostics") {
-      const json& status = m["status"][0];
-      EXPECT_EQ(status["name"], "epipole: health");
-      EXPECT_EQ(status["hardware_id"], "test-sim");
-      EXPECT_GT(std::stoi(status["values"]["frames"].get<std::string>()), 0);
-      EXPECT_TRUE(status["values"].contains("outputs_dropped"));
-    } else if (topic == "/tf_static") {
-      ASSERT_EQ(m["transforms"].size(), 2u);
-      EXPECT_EQ(m["transforms"][1]["child"], "epipole_right_optical_frame");
-      EXPECT_NEAR(m["transforms"][1]["translation"]["x"].get<double>(), test::SimRig::kBaseline,
-                  1e-9);
-    }
-  }
-  EXPECT_GT(checked_depths, 0);
-  EXPECT_GT(checked_points, 0);
+  const RosChecks checks = check_ros_messages(r["messages"], kept, rig_calibration, rig);
+  EXPECT_GT(checks.depths, 0);
+  EXPECT_GT(checks.features, 0);
+  EXPECT_EQ(checks.unmatched, 0) << "a recording holds every message of each pair";
 }
 
 // A long recording is a ring of files: each closed file is whole (summary, indexes) and the

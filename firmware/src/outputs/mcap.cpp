@@ -18,6 +18,7 @@
 #include "mcap/mcap_writer.hpp"
 #include "output_files.hpp"
 #include "record/recording_ring.hpp"
+#include "ros/rig_model.hpp"
 #include "ros/ros_messages.hpp"
 #include "system_time.hpp"
 
@@ -31,8 +32,7 @@ struct McapSettings final : OutputSettings {
   double file_mb = 256;
   double total_mb = 2048;
   double min_free_mb = 512;
-  std::string ros_namespace = "/epipole";
-  std::string frame_prefix = "epipole_";
+  ros::RosNames names;
   std::unique_ptr<OutputSettings> clone() const override {
     return std::make_unique<McapSettings>(*this);
   }
@@ -59,14 +59,7 @@ std::unique_ptr<OutputSettings> read_settings(const YAML::Node& n, const yaml::F
     s->min_free_mb = f.number_in(v, k, 0, 1 << 24);
   });
   if (s->total_mb < s->file_mb) f.fail(path + ".total_mb", "is less than file_mb");
-  f.if_present(n, path, "namespace", [&](const YAML::Node& v, const std::string& k) {
-    s->ros_namespace = f.text(v, k);
-    if (!s->ros_namespace.starts_with('/') || s->ros_namespace.ends_with('/')) {
-      f.fail(k, "must start with / and not end with one (/epipole)");
-    }
-  });
-  f.if_present(n, path, "frame_prefix",
-               [&](const YAML::Node& v, const std::string& k) { s->frame_prefix = f.text(v, k); });
+  ros::read_ros_names(n, f, path, s->names);
   return s;
 }
 
@@ -119,9 +112,7 @@ mcap::Writer make_writer(const BoardConfig& board, const McapSettings& s) {
       schemas.push_back({std::string(type.name), "ros2msg", std::string(type.schema)});
       id = static_cast<std::uint16_t>(schemas.size());
     }
-    const std::string name = row.name;
-    channels.push_back(
-        {id, name.starts_with('/') ? name : s.ros_namespace + "/" + name, "cdr", {}});
+    channels.push_back({id, s.names.topic(row.name), "cdr", {}});
   }
   const std::size_t pixels = static_cast<std::size_t>(board.width()) * board.height();
   const std::size_t largest =
@@ -139,22 +130,11 @@ class McapOutput final : public Output {
                                     static_cast<std::uint64_t>(settings_.total_mb * (1 << 20)),
                                     static_cast<std::uint64_t>(settings_.min_free_mb * (1 << 20))}),
         writer_(make_writer(context.board, settings_)),
-        left_optical_(settings_.frame_prefix + "left_optical_frame"),
-        right_optical_(settings_.frame_prefix + "right_optical_frame"),
-        left_body_(settings_.frame_prefix + "left"),
+        rig_(settings_.names, context.calibration, context.board.stereo.max_disparity),
         delivery_(
             "mcap", context.board, kRectified | kRaw | kDisparity | kPoints,
             [this](const PairCopy& pair) { record(pair); },
-            [this](const protocol::Health& health) { record_health(health); }) {
-    if (calibration_) {
-      const calib::Triangulator triangulator(*calibration_);
-      depth_mm_ = ros::depth_mm_by_disparity16(triangulator, board_.stereo.max_disparity);
-      left_ = ros::rectified_left(*calibration_);
-      right_ = ros::rectified_right(*calibration_);
-      const double fx = right_.p[0];
-      baseline_m_ = fx != 0 ? -right_.p[3] / fx : 0.0;
-    }
-  }
+            [this](const protocol::Health& health) { record_health(health); }) {}
 
   void start() override { delivery_.start(); }
   void stop() override {
@@ -171,7 +151,8 @@ class McapOutput final : public Output {
   void offer_health(const protocol::Health& health) override { delivery_.offer_health(health); }
   DeliveryCounters counters() const override { return delivery_.counters(); }
   std::size_t working_set_bytes() const override {
-    return delivery_.working_set_bytes() + writer_.working_set_bytes() + depth_mm_.capacity() * 2;
+    return delivery_.working_set_bytes() + writer_.working_set_bytes() +
+           rig_.depth_mm.capacity() * 2;
   }
 
  private:
@@ -190,8 +171,8 @@ class McapOutput final : public Output {
       const std::string yaml = calib::format_calibration(*calibration_);
       writer_.attach("calibration.yaml", "application/yaml",
                      {reinterpret_cast<const std::uint8_t*>(yaml.data()), yaml.size()}, time);
-      ros::write_rig_transforms(begin(kTfStatic, time), ros::time_of(system_ns),
-                                {left_body_, left_optical_, right_optical_}, baseline_m_);
+      ros::write_rig_transforms(begin(kTfStatic, time), ros::time_of(system_ns), rig_.frames(),
+                                rig_.baseline_m);
       writer_.end_message();
     }
   }
@@ -209,32 +190,32 @@ class McapOutput final : public Output {
       writer_.end_message();
     };
     if (pair.has_rectified) {
-      image(kLeftRect, left_optical_, pair.left.view());
-      image(kRightRect, right_optical_, pair.right.view());
+      image(kLeftRect, rig_.left_optical, pair.left.view());
+      image(kRightRect, rig_.right_optical, pair.right.view());
     }
     if (pair.has_raw) {
-      image(kLeftRaw, left_optical_, pair.left_raw.view());
-      image(kRightRaw, right_optical_, pair.right_raw.view());
+      image(kLeftRaw, rig_.left_optical, pair.left_raw.view());
+      image(kRightRaw, rig_.right_optical, pair.right_raw.view());
     }
     if (calibration_) {
-      ros::write_camera_info(begin(kLeftInfo, time), stamp, left_optical_, left_);
+      ros::write_camera_info(begin(kLeftInfo, time), stamp, rig_.left_optical, rig_.left);
       writer_.end_message();
-      ros::write_camera_info(begin(kRightInfo, time), stamp, right_optical_, right_);
+      ros::write_camera_info(begin(kRightInfo, time), stamp, rig_.right_optical, rig_.right);
       writer_.end_message();
     }
     if (pair.has_disparity) {
-      ros::write_disparity_image(begin(kDisparity, time), stamp, left_optical_,
-                                 pair.disparity.view(), static_cast<float>(left_.p[0]),
-                                 static_cast<float>(baseline_m_), board_.stereo.max_disparity);
+      ros::write_disparity_image(begin(kDisparity, time), stamp, rig_.left_optical,
+                                 pair.disparity.view(), rig_.focal_px(),
+                                 static_cast<float>(rig_.baseline_m), board_.stereo.max_disparity);
       writer_.end_message();
       if (calibration_) {
-        ros::write_depth_image(begin(kDepth, time), stamp, left_optical_, pair.disparity.view(),
-                               depth_mm_);
+        ros::write_depth_image(begin(kDepth, time), stamp, rig_.left_optical, pair.disparity.view(),
+                               rig_.depth_mm);
         writer_.end_message();
       }
     }
     if (calibration_ && !pair.points.empty()) {
-      ros::write_feature_cloud(begin(kFeatures, time), stamp, left_optical_, pair.points,
+      ros::write_feature_cloud(begin(kFeatures, time), stamp, rig_.left_optical, pair.points,
                                pair.has_rectified ? pair.left.view() : GrayView());
       writer_.end_message();
     }
@@ -253,10 +234,7 @@ class McapOutput final : public Output {
   const std::optional<calib::StereoCalibration>& calibration_;
   record::RecordingRing ring_;
   mcap::Writer writer_;
-  std::string left_optical_, right_optical_, left_body_;
-  std::vector<std::uint16_t> depth_mm_;
-  ros::RectifiedCamera left_, right_;
-  double baseline_m_ = 0;
+  ros::RigModel rig_;
   std::array<std::uint32_t, kTopicCount> sequences_{};
   std::uint64_t pairs_ = 0;  // offered, on the frame loop's thread
   PairDelivery delivery_;    // last: its thread stops before the rest goes

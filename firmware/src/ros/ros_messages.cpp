@@ -1,9 +1,12 @@
 #include "ros/ros_messages.hpp"
 
+#include <algorithm>
+#include <array>
 #include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "epipole/firmware/protocol/fields.hpp"
@@ -102,11 +105,6 @@ void point_field(CdrWriter& w, std::string_view name, std::uint32_t offset) {
   w.u32(offset);
   w.u8(7);  // FLOAT32
   w.u32(1);
-}
-
-template <typename T>
-void put_le(std::uint8_t* at, T v) {
-  std::memcpy(at, &v, sizeof v);
 }
 
 // Every health field as a key and its value, written as they are visited.
@@ -246,6 +244,66 @@ std::vector<std::uint16_t> depth_mm_by_disparity16(const calib::Triangulator& tr
   return table;
 }
 
+void disparity_pixels(ImageView<const std::int16_t> disparity16, float* out) {
+  for (int y = 0; y < disparity16.height(); ++y) {
+    const std::int16_t* row = disparity16.row(y);
+    float* to = out + static_cast<std::size_t>(y) * disparity16.width();
+    for (int x = 0; x < disparity16.width(); ++x) {
+      to[x] = row[x] == vision::kInvalidDisparity ? -1.0f : static_cast<float>(row[x]) / 16;
+    }
+  }
+}
+
+void depth_pixels(ImageView<const std::int16_t> disparity16,
+                  std::span<const std::uint16_t> depth_mm, std::uint16_t* out) {
+  for (int y = 0; y < disparity16.height(); ++y) {
+    const std::int16_t* row = disparity16.row(y);
+    std::uint16_t* to = out + static_cast<std::size_t>(y) * disparity16.width();
+    for (int x = 0; x < disparity16.width(); ++x) {
+      const int d = row[x];
+      to[x] = d > 0 && static_cast<std::size_t>(d) < depth_mm.size() ? depth_mm[d] : 0;
+    }
+  }
+}
+
+namespace {
+
+float intensity_at(GrayView left, int x, int y) {
+  const bool inside = !left.empty() && x >= 0 && y >= 0 && x < left.width() && y < left.height();
+  return inside ? static_cast<float>(left.row(y)[x]) : 0.0f;
+}
+
+}  // namespace
+
+void feature_points(std::span<const SparsePoint> points, GrayView left, float* out) {
+  for (const SparsePoint& p : points) {
+    *out++ = p.x;
+    *out++ = p.y;
+    *out++ = p.z;
+    *out++ = intensity_at(left, static_cast<int>(std::lround(p.xl)),
+                          static_cast<int>(std::lround(p.yl)));
+  }
+}
+
+void organised_points(ImageView<const std::int16_t> disparity16, GrayView left,
+                      const calib::Triangulator& triangulator, int step, float* out) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int j = 0; j < disparity16.height() / step; ++j) {
+    const int y = j * step;
+    for (int i = 0; i < disparity16.width() / step; ++i) {
+      const int x = i * step;
+      const int d = disparity16.row(y)[x];
+      Eigen::Vector3d p(nan, nan, nan);
+      if (d != vision::kInvalidDisparity && d > 0) p = triangulator.point(x, y, d / 16.0);
+      const bool finite = p.allFinite();
+      *out++ = finite ? static_cast<float>(p.x()) : nan;
+      *out++ = finite ? static_cast<float>(p.y()) : nan;
+      *out++ = finite ? static_cast<float>(p.z()) : nan;
+      *out++ = intensity_at(left, x, y);
+    }
+  }
+}
+
 void write_depth_image(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
                        ImageView<const std::int16_t> disparity16,
                        std::span<const std::uint16_t> depth_mm) {
@@ -254,14 +312,14 @@ void write_depth_image(std::vector<std::uint8_t>& out, Time stamp, std::string_v
   const int width = disparity16.width();
   image_fields(w, width, disparity16.height(), "16UC1", width * 2);
   std::uint8_t* data = w.byte_sequence(static_cast<std::size_t>(width) * disparity16.height() * 2);
+  // Row by row through an aligned row: the message may start anywhere in its buffer.
+  std::array<std::uint16_t, 4096> row{};
   for (int y = 0; y < disparity16.height(); ++y) {
-    const std::int16_t* row = disparity16.row(y);
-    std::uint8_t* to = data + static_cast<std::size_t>(y) * width * 2;
-    for (int x = 0; x < width; ++x) {
-      const int d = row[x];
-      const std::uint16_t mm =
-          d > 0 && static_cast<std::size_t>(d) < depth_mm.size() ? depth_mm[d] : 0;
-      put_le(to + 2 * x, mm);
+    for (int x0 = 0; x0 < width; x0 += static_cast<int>(row.size())) {
+      const int n = std::min(width - x0, static_cast<int>(row.size()));
+      depth_pixels(disparity16.sub(x0, y, n, 1), depth_mm, row.data());
+      std::memcpy(data + (static_cast<std::size_t>(y) * width + x0) * 2, row.data(),
+                  static_cast<std::size_t>(n) * 2);
     }
   }
 }
@@ -295,12 +353,13 @@ void write_disparity_image(std::vector<std::uint8_t>& out, Time stamp, std::stri
   const int width = disparity16.width();
   image_fields(w, width, disparity16.height(), "32FC1", width * 4);
   std::uint8_t* data = w.byte_sequence(static_cast<std::size_t>(width) * disparity16.height() * 4);
+  std::array<float, 2048> row{};  // aligned, as depth's
   for (int y = 0; y < disparity16.height(); ++y) {
-    const std::int16_t* row = disparity16.row(y);
-    std::uint8_t* to = data + static_cast<std::size_t>(y) * width * 4;
-    for (int x = 0; x < width; ++x) {
-      const float d = row[x] == vision::kInvalidDisparity ? -1.0f : static_cast<float>(row[x]) / 16;
-      put_le(to + 4 * x, d);
+    for (int x0 = 0; x0 < width; x0 += static_cast<int>(row.size())) {
+      const int n = std::min(width - x0, static_cast<int>(row.size()));
+      disparity_pixels(disparity16.sub(x0, y, n, 1), row.data());
+      std::memcpy(data + (static_cast<std::size_t>(y) * width + x0) * 4, row.data(),
+                  static_cast<std::size_t>(n) * 4);
     }
   }
   w.f32(f);
@@ -327,14 +386,9 @@ void write_feature_cloud(std::vector<std::uint8_t>& out, Time stamp, std::string
   w.u32(static_cast<std::uint32_t>(16 * points.size()));
   std::uint8_t* data = w.byte_sequence(16 * points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const SparsePoint& p = points[i];
-    const int x = static_cast<int>(std::lround(p.xl));
-    const int y = static_cast<int>(std::lround(p.yl));
-    const bool inside = !left.empty() && x >= 0 && y >= 0 && x < left.width() && y < left.height();
-    put_le(data + 16 * i, p.x);
-    put_le(data + 16 * i + 4, p.y);
-    put_le(data + 16 * i + 8, p.z);
-    put_le(data + 16 * i + 12, inside ? static_cast<float>(left.row(y)[x]) : 0.0f);
+    float point[4];
+    feature_points(points.subspan(i, 1), left, point);
+    std::memcpy(data + 16 * i, point, sizeof point);
   }
   w.boolean(true);  // every point is finite
 }

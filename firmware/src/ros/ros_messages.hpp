@@ -56,6 +56,18 @@ struct FrameNames {
   std::string_view right_optical;
 };
 
+// The pixel data of the messages, shared by every output that sends them (little endian, rows
+// without padding): written into `out`, which holds width * height values (features: 4 floats a
+// point).
+void disparity_pixels(ImageView<const std::int16_t> disparity16, float* out);  // -1: none
+void depth_pixels(ImageView<const std::int16_t> disparity16,
+                  std::span<const std::uint16_t> depth_mm, std::uint16_t* out);  // 0: unknown
+void feature_points(std::span<const SparsePoint> points, GrayView left, float* out);
+// The organised cloud of every `step`th pixel of every `step`th row: x y z (metres, NaN where
+// the disparity has none) and intensity, 4 floats a point; (width / step) x (height / step).
+void organised_points(ImageView<const std::int16_t> disparity16, GrayView left,
+                      const calib::Triangulator& triangulator, int step, float* out);
+
 void write_image(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
                  GrayView image);
 // 16UC1, millimetres along the optical axis, 0 where unknown (REP 118), from the disparity x16

@@ -1,0 +1,173 @@
+#pragma once
+
+// What the ROS 2 messages of the firmware's outputs must hold, however they were carried (a
+// recording read by the MCAP project's reader, the DDS topics a subscriber took): the messages
+// as tests/clients/mcap-read.mjs and epipole-ros2-listener print them, checked against what the
+// pipeline computed for each pair (kept by an observer, found by the hash of its left image).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "epipole/calib/triangulation.hpp"
+#include "epipole/firmware/frame_loop.hpp"
+#include "epipole/vision/stereo.hpp"
+#include "sim_rig.hpp"
+
+namespace epipole::firmware {
+
+using nlohmann::json;
+
+inline std::uint32_t fnv1a(GrayView image) {
+  std::uint32_t h = 0x811c9dc5u;
+  for (int y = 0; y < image.height(); ++y) {
+    for (int x = 0; x < image.width(); ++x) {
+      h ^= image.row(y)[x];
+      h *= 0x01000193u;
+    }
+  }
+  return h;
+}
+
+// What the pipeline made of each pair, by the hash of its rectified left image.
+struct Kept final : FrameObserver {
+  struct Pair {
+    Image<std::int16_t> disparity;
+    std::vector<SparsePoint> points;
+  };
+  std::map<std::uint32_t, Pair> by_left;
+  void on_frame(const FrameResult& r) override {
+    Pair p{Image<std::int16_t>(r.disparity.width(), r.disparity.height()),
+           {r.points.begin(), r.points.end()}};
+    for (int y = 0; y < r.disparity.height(); ++y) {
+      std::copy_n(r.disparity.row(y), r.disparity.width(), p.disparity.view().row(y));
+    }
+    by_left.insert_or_assign(fnv1a(r.left), std::move(p));
+  }
+};
+
+// What was checked, value by value.
+struct RosChecks {
+  int depths = 0;     // depth pixels with a disparity
+  int points = 0;     // points of the organised cloud with a disparity
+  int features = 0;   // sparse points
+  int unmatched = 0;  // messages of pairs whose left image is not among the messages
+};
+
+// Every message: the stamps, the frames, the values against the pipeline's.
+inline RosChecks check_ros_messages(const json& messages, const Kept& kept,
+                                    const calib::StereoCalibration& rig_calibration,
+                                    const test::SimRig& rig) {
+  const calib::Triangulator q(rig_calibration);
+
+  // Each pair's left image_rect by its time: the pair's other messages carry the same.
+  std::map<std::string, json> frame_of_time;
+  for (const json& m : messages) {
+    if (m["topic"] == "/epipole/left/image_rect" && kept.by_left.count(m["hash"])) {
+      frame_of_time[m["log_time"].get<std::string>()] = m;
+    }
+  }
+  RosChecks checks;
+  for (const json& m : messages) {
+    const std::string topic = m["topic"];
+    const std::string time = m["log_time"];
+    if (topic != "/diagnostics") {
+      EXPECT_EQ(std::to_string(m["stamp"][0].get<std::int64_t>() * 1'000'000'000 +
+                               m["stamp"][1].get<std::int64_t>()),
+                time)
+          << topic << ": the header's stamp is the log time";
+    }
+    if (topic == "/epipole/left/image_rect") {
+      EXPECT_EQ(m["frame_id"], "epipole_left_optical_frame");
+      EXPECT_EQ(m["encoding"], "mono8");
+      EXPECT_TRUE(kept.by_left.count(m["hash"])) << "a left image the pipeline rectified";
+      if (!kept.by_left.count(m["hash"])) continue;
+    } else if (topic == "/epipole/left/camera_info" || topic == "/epipole/right/camera_info") {
+      const calib::CameraCalibration& cam =
+          topic == "/epipole/left/camera_info" ? rig_calibration.left : rig_calibration.right;
+      for (int i = 0; i < 12; ++i) {
+        EXPECT_DOUBLE_EQ(m["p"][i].get<double>(), cam.projection(i / 4, i % 4)) << topic;
+      }
+      EXPECT_DOUBLE_EQ(m["k"][0].get<double>(), cam.projection(0, 0));
+      EXPECT_EQ(m["width"], rig.width);
+    } else if (topic == "/epipole/points") {
+      if (!frame_of_time.count(time)) {  // its pair's left image was not taken
+        ++checks.unmatched;
+        continue;
+      }
+      const Kept::Pair& pair = kept.by_left.at(frame_of_time[time]["hash"]);
+      const int step = rig.width / m["width"].get<int>();
+      EXPECT_EQ(m["height"], rig.height / step);
+      EXPECT_FALSE(m["is_dense"].get<bool>());
+      for (std::size_t i = 0; i < m["points"].size(); ++i) {
+        const int x = static_cast<int>(i) % m["width"].get<int>() * step;
+        const int y = static_cast<int>(i) / m["width"].get<int>() * step;
+        const std::int16_t d16 = pair.disparity(x, y);
+        const json& point = m["points"][i];
+        if (d16 == vision::kInvalidDisparity || d16 <= 0) {
+          EXPECT_TRUE(point[2].is_null()) << x << "," << y << ": no disparity, no point";
+          continue;
+        }
+        const Eigen::Vector3d expected = q.point(x, y, d16 / 16.0);
+        EXPECT_NEAR(point[0].get<double>(), expected.x(), 1e-4 * std::abs(expected.z()));
+        EXPECT_NEAR(point[2].get<double>(), expected.z(), 1e-4 * std::abs(expected.z()));
+        ++checks.points;
+      }
+    } else if (topic == "/epipole/disparity" || topic == "/epipole/depth" ||
+               topic == "/epipole/features") {
+      if (!frame_of_time.count(time)) {  // its pair's left image was not taken
+        ++checks.unmatched;
+        continue;
+      }
+      const Kept::Pair& pair = kept.by_left.at(frame_of_time[time]["hash"]);
+      if (topic == "/epipole/features") {
+        EXPECT_EQ(m["width"], pair.points.size());
+        if (m["width"] != pair.points.size()) continue;
+        for (std::size_t i = 0; i < pair.points.size(); ++i) {
+          EXPECT_FLOAT_EQ(m["points"][i][2].get<float>(), pair.points[i].z);
+          ++checks.features;
+        }
+        continue;
+      }
+      const json& image = topic == "/epipole/disparity" ? m["image"] : m;
+      if (topic == "/epipole/disparity") {
+        EXPECT_FLOAT_EQ(m["f"].get<float>(),
+                        static_cast<float>(rig_calibration.left.projection(0, 0)));
+        EXPECT_NEAR(m["t"].get<double>(), test::SimRig::kBaseline, 1e-6);
+        EXPECT_EQ(image["encoding"], "32FC1");
+      } else {
+        EXPECT_EQ(image["encoding"], "16UC1");
+      }
+      for (const json& sample : image["samples"]) {
+        const int x = sample[0], y = sample[1];
+        const std::int16_t d16 = pair.disparity(x, y);
+        const bool valid = d16 != vision::kInvalidDisparity && d16 > 0;
+        if (topic == "/epipole/disparity") {
+          EXPECT_FLOAT_EQ(sample[2].get<float>(), valid ? d16 / 16.0f : -1.0f) << x << "," << y;
+        } else {
+          const double z_mm = valid ? q.point(x, y, d16 / 16.0).z() * 1000.0 : 0.0;
+          EXPECT_NEAR(sample[2].get<double>(), z_mm, 0.5) << x << "," << y;
+          checks.depths += valid;
+        }
+      }
+    } else if (topic == "/diagnostics") {
+      const json& status = m["status"][0];
+      EXPECT_EQ(status["name"], "epipole: health");
+      EXPECT_EQ(status["hardware_id"], "test-sim");
+      EXPECT_GT(std::stoi(status["values"]["frames"].get<std::string>()), 0);
+      EXPECT_TRUE(status["values"].contains("outputs_dropped"));
+    } else if (topic == "/tf_static") {
+      EXPECT_EQ(m["transforms"].size(), 2u);
+      if (m["transforms"].size() != 2u) continue;
+      EXPECT_EQ(m["transforms"][1]["child"], "epipole_right_optical_frame");
+      EXPECT_NEAR(m["transforms"][1]["translation"]["x"].get<double>(), test::SimRig::kBaseline,
+                  1e-9);
+    }
+  }
+  return checks;
+}
+
+}  // namespace epipole::firmware
