@@ -188,9 +188,11 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
   BoardConfig config = rig.parse(
       "threads: {count: 2}\nsnapshot_directory: snapshots\n"
       "snapshot_limit: 40\n"
-      // The recording's thread too: flat over the run (one file: the ring's turns are
-      // Recording.ALongRecordingIsARingOfWholeFiles').
-      "outputs: {mcap: {directory: recordings, file_mb: 1024, total_mb: 1024, min_free_mb: 0}}\n");
+      // The outputs' threads too, flat over the run: a recording (one file: the ring's turns
+      // are Recording.ALongRecordingIsARingOfWholeFiles') and ROS 2 over DDS on loopback.
+      "outputs: {mcap: {directory: recordings, file_mb: 1024, total_mb: 1024, min_free_mb: 0},\n"
+      "          ros2: {domain: " +
+      std::to_string(100 + ::getpid() % 100) + "}}\n");
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);
   config.serial.backend = "pty";

@@ -128,6 +128,11 @@ Writer::Writer(std::vector<Schema> schemas, std::vector<Channel> channels, std::
   compressed_.reserve(ZSTD_compressBound(chunk_.capacity()));
   index_.reserve(4096);
   scratch_.reserve(compressed_.capacity() + 64 * 1024);  // a chunk's record and its indexes
+  // Touched now: the memory they hold is resident from the start, not as chunks first fill it.
+  for (std::vector<std::uint8_t>* buffer : {&chunk_, &compressed_, &scratch_}) {
+    buffer->resize(buffer->capacity());
+    buffer->clear();
+  }
 }
 
 Writer::~Writer() {
