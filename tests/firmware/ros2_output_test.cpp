@@ -32,7 +32,7 @@ TEST(Ros2Output, ASubscriberInAnotherProcessGetsEveryTopicAsThePipelineComputedI
   // A writer history deep enough for the whole run: the simulated board runs far faster than
   // its trigger, and a reliable keep-last writer drops what its history cannot hold.
   BoardConfig config = rig.parse("outputs: {ros2: {domain: " + std::to_string(domain) +
-                                 ", points_step: 4, depth: 100}}\n");
+                                 ", points_step: 4, depth: 100, every: {disparity: 1}}}\n");
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   Firmware fw(rig.replaying(config, 3));  // its writers first: the listener waits for them
   Kept kept;

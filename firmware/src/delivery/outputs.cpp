@@ -42,7 +42,7 @@ std::vector<OutputReport> Outputs::reports() const {
   std::vector<OutputReport> reports;
   for (std::size_t i = 0; i < outputs_.size(); ++i) {
     const outputs::DeliveryCounters c = outputs_[i]->counters();
-    reports.push_back({names_[i], c.delivered, c.dropped, c.failures});
+    reports.push_back({names_[i], c.delivered, c.dropped, c.failures, c.work_ns});
   }
   return reports;
 }

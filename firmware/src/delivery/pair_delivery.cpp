@@ -135,13 +135,18 @@ void PairDelivery::run() {
     slots_[next] = Slot::working;
     lock.unlock();
     bool done = false;
+    const hal::Nanoseconds started = detail::steady_now();
     do_work([&] {
       work_(copies_[next]);
       done = true;
     });
+    const hal::Nanoseconds took = detail::steady_now() - started;
     lock.lock();
     slots_[next] = Slot::free;
-    if (done) ++counters_.delivered;
+    if (done) {
+      ++counters_.delivered;
+      counters_.work_ns += static_cast<std::uint64_t>(took);
+    }
   }
 }
 

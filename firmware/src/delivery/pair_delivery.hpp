@@ -21,6 +21,7 @@ struct DeliveryCounters {
   std::uint64_t delivered = 0;  // handed to the output's work and done
   std::uint64_t dropped = 0;    // overwritten while waiting: the output's work was behind
   std::uint64_t failures = 0;   // the work threw (a full disk, a network error): counted, gone on
+  std::uint64_t work_ns = 0;    // the work's time on the delivered pairs, summed (steady clock)
 };
 
 // How the frame loop hands pairs to one output without waiting for it: a few copies of the

@@ -4,7 +4,7 @@
 //   outputs:
 //     ros2: {domain: 0, namespace: /epipole, frame_prefix: epipole_, interfaces: [lo],
 //            multicast: false, peers: [127.0.0.1], depth: 5, points_step: 4,
-//            every: {images: 1, camera_info: 1, disparity: 1, depth: 1, points: 1, features: 1}}
+//            every: {images: 1, camera_info: 1, disparity: 0, depth: 1, points: 1, features: 1}}
 
 #include <yaml-cpp/yaml.h>
 
@@ -34,7 +34,7 @@ namespace {
 struct Rates {
   int images = 1;  // left/image_rect, right/image_rect
   int camera_info = 1;
-  int disparity = 1;
+  int disparity = 0;  // the depth and the points carry it already: on when asked for
   int depth = 1;
   int points = 1;
   int features = 1;

@@ -66,7 +66,8 @@ struct SideTimes {
   std::uint64_t corners = 0, matches = 0, detections = 0;
   std::array<std::vector<double>, protocol::kStageCount> stage_ms;
   std::vector<double> pair_ms;
-  double seconds = 0;  // the measured pairs, back to back
+  double seconds = 0;                           // the measured pairs, back to back
+  std::vector<firmware::OutputReport> outputs;  // with the board's outputs on: what each did
 
   void add(const std::array<double, protocol::kStageCount>& ms, double pair) {
     for (const protocol::StageInfo& s : protocol::kStages) {
@@ -135,10 +136,13 @@ class Bench {
     for (const int threads : options_.threads) {
       nlohmann::json run = {{"threads", threads}};
       if (options_.epipole) {
-        const SideTimes ours = epipole(threads);
+        const SideTimes ours = epipole(threads, false);
         run["epipole"] = summary(ours);
         run["epipole"]["found"] = {
             {"corners", ours.corners}, {"matches", ours.matches}, {"detections", ours.detections}};
+        // The board's outputs (outputs: in its file, or --set outputs...): the same pairs again
+        // with them on, side by side.
+        if (!board_.outputs.empty()) run["epipole_outputs"] = summary(epipole(threads, true));
       }
       if (opencv_pipeline_) run["opencv"] = summary(opencv(threads));
       runs.push_back(run);
@@ -160,10 +164,17 @@ class Bench {
   }
 
  private:
-  SideTimes epipole(int threads) {
+  // `outputs`: with the board's outputs, each pair handed to them as the frame loop does (its
+  // time holds the hand-off; their work runs on their own threads, beside the pool).
+  SideTimes epipole(int threads, bool outputs) {
     firmware::BoardConfig config = board_;
     config.threads.count = threads;
     firmware::Pipeline pipeline(config, calibration_, path_);
+    std::optional<firmware::Outputs> on;
+    if (outputs) {
+      on.emplace(config, calibration_);
+      on->start();
+    }
     if (!pipeline.missing_cascade().empty() && !noted_missing_cascade_) {
       notes_.push_back("detect: off, no compiled cascade (" +
                        firmware::cascade_compile_command(pipeline.missing_cascade()) + ")");
@@ -180,8 +191,9 @@ class Bench {
           images_.left[k].view(), images_.right[k].view(),
           static_cast<std::uint32_t>(i + options_.warmup), 0, board_.stages,
           options_.rectify_ahead ? &next : nullptr);  // each pair's time holds one rectification
+      if (on) on->publish(r, 0);
       const double pair = ms_since(start);
-      show(threads, "epipole", i);
+      show(threads, outputs ? "epipole with outputs" : "epipole", i);
       if (i < 0) continue;
       std::array<double, protocol::kStageCount> ms{};
       for (std::size_t s = 0; s < ms.size(); ++s) ms[s] = static_cast<double>(r.times[s]) / 1e6;
@@ -189,6 +201,10 @@ class Bench {
       times.corners += r.corners_left.size() + r.corners_right.size();
       times.matches += r.matches.size();
       times.detections += r.detections.size();
+    }
+    if (on) {
+      on->stop();
+      times.outputs = on->reports();
     }
     return times;
   }
@@ -251,9 +267,19 @@ class Bench {
       if (!protocol::has_stage(t.stages, s.id)) continue;
       stages[std::string(s.name)] = json(summarize(t.stage_ms[static_cast<std::size_t>(s.id)]));
     }
-    return {{"stages", stages},
-            {"pair", json(summarize(t.pair_ms))},
-            {"pairs_per_second", t.pairs_per_second()}};
+    nlohmann::json out = {{"stages", stages},
+                          {"pair", json(summarize(t.pair_ms))},
+                          {"pairs_per_second", t.pairs_per_second()}};
+    for (const firmware::OutputReport& o : t.outputs) {
+      out["outputs"][o.name] = {
+          {"delivered", o.delivered},
+          {"dropped", o.dropped},
+          {"failures", o.failures},
+          {"work_ms_per_pair",
+           o.delivered > 0 ? static_cast<double>(o.work_ns) / 1e6 / static_cast<double>(o.delivered)
+                           : 0.0}};
+    }
+    return out;
   }
 
   BenchOptions options_;
@@ -316,6 +342,21 @@ void print_table(const nlohmann::json& b) {
       std::printf("  %10.1f %8s   %6.1fx", theirs, "", ours / theirs);
     }
     std::printf("\n");
+    if (all_sides.contains("epipole_outputs")) {
+      const nlohmann::json& with = all_sides["epipole_outputs"];
+      const double rate = with["pairs_per_second"].get<double>();
+      std::printf("  with outputs: pair %.2f / %.2f ms, %.1f pairs/s (%.0f %% of without)\n",
+                  with["pair"]["p50_ms"].get<double>(), with["pair"]["p99_ms"].get<double>(), rate,
+                  100.0 * rate / ours);
+      for (const auto& [name, o] : with["outputs"].items()) {
+        std::printf(
+            "    output %-6s %.2f ms of work a pair delivered, %llu delivered, %llu dropped, "
+            "%llu failures\n",
+            name.c_str(), o["work_ms_per_pair"].get<double>(),
+            o["delivered"].get<unsigned long long>(), o["dropped"].get<unsigned long long>(),
+            o["failures"].get<unsigned long long>());
+      }
+    }
   }
 }
 

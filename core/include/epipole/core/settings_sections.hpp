@@ -31,6 +31,7 @@ class SettingsSections {
   SettingsSections& operator=(SettingsSections&&) noexcept = default;
   ~SettingsSections() = default;
 
+  bool empty() const { return sections_.empty(); }
   const Settings* find(std::string_view name) const {
     const auto it = std::find_if(sections_.begin(), sections_.end(),
                                  [&](const Entry& s) { return s.first == name; });

@@ -25,6 +25,7 @@ struct OutputReport {
   std::uint64_t delivered = 0;
   std::uint64_t dropped = 0;   // its work was behind: replaced by a fresher pair before it started
   std::uint64_t failures = 0;  // its work threw (counted, said in the journal, gone on)
+  std::uint64_t work_ns = 0;   // its work's time on the delivered pairs, summed
 };
 
 // The outputs the board file turns on (`outputs:`, docs/outputs.md), each made with all its
