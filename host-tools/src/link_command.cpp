@@ -62,6 +62,15 @@ Message parse_command(const std::string& text) {
     return v;
   };
   if (name == "snapshot" && value.empty()) return Snapshot{};
+  if (name == "record" && value == "stop") return Record{RecordAction::stop, 0};
+  if (name == "record" && value.starts_with("start")) {
+    const std::string seconds = value == "start" ? "0" : value.substr(value.find(':') + 1);
+    require(value == "start" || value.starts_with("start:"), "command '", text,
+            "': record=start, record=start:SECONDS or record=stop");
+    const double s = number(seconds);
+    require(s <= 65535, "command '", text, "': at most 65535 s");
+    return Record{RecordAction::start, static_cast<std::uint16_t>(std::lround(s))};
+  }
   if (name == "trigger-rate") {
     const double hz = number(value);
     require(hz <= 1000, "command '", text, "': trigger rate above 1000 Hz");
@@ -88,7 +97,8 @@ Message parse_command(const std::string& text) {
     return SetStages{static_cast<std::uint16_t>(mask)};
   }
   throw Error(cat("unknown command '", text,
-                  "' (expected trigger-rate=HZ, exposure=US[:DB], stages=MASK or snapshot)"));
+                  "' (expected trigger-rate=HZ, exposure=US[:DB], stages=MASK, snapshot, "
+                  "record=start[:SECONDS] or record=stop)"));
 }
 
 class Printer {
@@ -213,7 +223,8 @@ void add_link_command(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("--seconds,-s", options->seconds, "Stop after this long (serial devices)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--send", options->send,
-                  "Send a command first: trigger-rate=HZ, exposure=US[:DB], stages=MASK, snapshot");
+                  "Send a command first: trigger-rate=HZ, exposure=US[:DB], stages=MASK, snapshot, "
+                  "record=start[:SECONDS], record=stop");
   cmd->callback([options] { run_link(*options); });
 }
 

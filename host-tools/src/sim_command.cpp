@@ -49,7 +49,8 @@ struct SimOptions {
 
 // The board file's recording output turned on for a scene: every pair into `directory`.
 std::vector<std::string> recording_overrides(const fs::path& directory) {
-  return {"outputs.mcap.directory=" + fs::absolute(directory).string(), "outputs.mcap.every=1"};
+  return {"outputs.mcap.directory=" + fs::absolute(directory).string(), "outputs.mcap.every=1",
+          "outputs.mcap.continuous=true"};
 }
 
 // Reads the simulated link's far end, as the robot would, keeping the raw bytes and decoding

@@ -50,7 +50,7 @@ TEST(FirmwareAllocations, TheMemoryReportIsTheHeapTheFirmwareHolds) {
   test::SimRig rig(320, 240, 8);
   BoardConfig config = rig.parse(
       "threads: {count: 2}\nsnapshot_directory: snapshots\n"
-      "outputs: {mcap: {directory: recordings}}\n");
+      "outputs: {mcap: {directory: recordings, continuous: true}}\n");
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   rig.add_cascade(config);
   const std::size_t before = test::live_bytes_in_all_threads();
@@ -89,7 +89,8 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   // (no subscriber: DDS serialises and drops every sample all the same).
   BoardConfig config = rig.parse(
       "threads: {count: 2}\n"
-      "outputs: {mcap: {directory: recordings, every: 1, file_mb: 64, total_mb: 64},\n"
+      "outputs: {mcap: {directory: recordings, continuous: true, every: 1, file_mb: 64,\n"
+      "                 total_mb: 64},\n"
       "          ros2: {domain: " +
       std::to_string(100 + ::getpid() % 100) + "}}\n");
   config.stereo.max_disparity = 16;

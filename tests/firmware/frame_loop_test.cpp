@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <optional>
 #include <set>
@@ -1126,6 +1127,52 @@ TEST(FrameLoop, ASnapshotThatWouldLeaveTooLittleFreeSpaceIsRefused) {
   const std::filesystem::path folder = linked.rig.dir.path() / "snapshots";
   ASSERT_TRUE(std::filesystem::is_directory(folder));
   EXPECT_TRUE(std::filesystem::is_empty(folder));
+}
+
+// Whether an MCAP file was closed whole: it ends with the format's magic (after its footer).
+bool ends_whole(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  in.seekg(-8, std::ios::end);
+  char magic[8] = {};
+  in.read(magic, 8);
+  return in && std::string(magic, 8) == std::string("\x89MCAP0\r\n", 8);
+}
+
+TEST(FrameLoop, TheRobotStartsAndStopsTheRecording) {
+  LinkedRig linked("outputs: {mcap: {directory: recordings, every: 1}}\n");
+  Recorder recorder;
+  send_at(recorder, linked, 10, {protocol::Record{protocol::RecordAction::start, 0}}, 300);
+  send_at(recorder, linked, 30, {protocol::Record{protocol::RecordAction::stop, 0}}, 301);
+  // One second of the board's clock: 30 pairs at its 30 Hz trigger.
+  send_at(recorder, linked, 60, {protocol::Record{protocol::RecordAction::start, 1}}, 302);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  const RunSummary s = linked.fw->run(150, stop);
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  EXPECT_EQ(statuses(acks), (std::vector<protocol::AckStatus>(3, protocol::AckStatus::ok)));
+  ASSERT_EQ(s.outputs.size(), 1u);
+  const OutputReport& mcap = s.outputs[0];
+  // Recorded: from about pair 10 to 30 and 60 to 90 (a command is applied once the link's
+  // thread has read it: a few pairs later).
+  EXPECT_GE(mcap.delivered + mcap.dropped, 40u);
+  EXPECT_LE(mcap.delivered + mcap.dropped, 60u) << "nothing before the start, after the stops";
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(linked.rig.dir.path() / "recordings")) {
+    files.push_back(e.path());
+  }
+  EXPECT_EQ(files.size(), 2u) << "a file a start";
+  for (const auto& file : files) EXPECT_TRUE(ends_whole(file)) << file << " closed whole";
+}
+
+TEST(FrameLoop, RecordIsUnsupportedWithoutARecording) {
+  LinkedRig linked;
+  Recorder recorder;
+  send_at(recorder, linked, 5, {protocol::Record{protocol::RecordAction::start, 0}}, 400);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  linked.fw->run(30, stop);
+  EXPECT_EQ(statuses(linked.acks()),
+            (std::vector<protocol::AckStatus>{protocol::AckStatus::unsupported}));
 }
 
 TEST(FrameLoop, SetExposureReachesBothCameras) {

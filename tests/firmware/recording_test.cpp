@@ -38,7 +38,8 @@ std::filesystem::path only_recording(const std::filesystem::path& folder) {
 TEST(Recording, AnIndependentReaderDecodesWhatThePipelineComputed) {
   ASSERT_TRUE(test::clients_installed()) << "the test clients are not installed: scripts/setup.sh";
   test::SimRig rig(96, 64, 6);
-  BoardConfig config = rig.parse("outputs: {mcap: {directory: recordings, every: 1}}\n");
+  BoardConfig config =
+      rig.parse("outputs: {mcap: {directory: recordings, continuous: true, every: 1}}\n");
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);
   Firmware fw(rig.replaying(config, 3));
   Kept kept;
@@ -83,7 +84,8 @@ TEST(Recording, ALongRecordingIsARingOfWholeFiles) {
   ASSERT_TRUE(test::clients_installed()) << "the test clients are not installed: scripts/setup.sh";
   test::SimRig rig(320, 240, 8);
   const BoardConfig config = rig.parse(
-      "outputs: {mcap: {directory: recordings, every: 1, file_mb: 1, total_mb: 3, "
+      "outputs: {mcap: {directory: recordings, continuous: true, every: 1, file_mb: 1, "
+      "total_mb: 3, "
       "min_free_mb: 0}}\n");
   Firmware fw(rig.replaying(config, 3));
   const std::atomic<bool> stop{false};

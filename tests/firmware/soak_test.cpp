@@ -190,7 +190,8 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
       "snapshot_limit: 40\n"
       // The outputs' threads too, flat over the run: a recording (one file: the ring's turns
       // are Recording.ALongRecordingIsARingOfWholeFiles') and ROS 2 over DDS on loopback.
-      "outputs: {mcap: {directory: recordings, file_mb: 1024, total_mb: 1024, min_free_mb: 0},\n"
+      "outputs: {mcap: {directory: recordings, continuous: true, file_mb: 1024, total_mb: 1024,\n"
+      "                 min_free_mb: 0},\n"
       "          ros2: {domain: " +
       std::to_string(100 + ::getpid() % 100) + "}}\n");
   config.stages |= protocol::stage_bit(protocol::Stage::sparse);

@@ -237,6 +237,9 @@ void FrameLoop::apply_commands() {
       v = set_trigger_rate(*t);
     } else if (const auto* e = std::get_if<protocol::SetExposure>(&c.message)) {
       v = set_exposure(*e);
+    } else if (std::holds_alternative<protocol::Record>(c.message)) {
+      v = outputs_ != nullptr ? outputs_->command(c.message, now)
+                              : Verdict{AckStatus::unsupported, AckReason::none};
     }
     const bool pending = std::holds_alternative<protocol::Snapshot>(c.message) &&
                          v.status == AckStatus::ok;  // answered once it is written

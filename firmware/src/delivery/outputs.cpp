@@ -38,6 +38,13 @@ void Outputs::publish_health(const protocol::Health& health) {
   for (const auto& o : outputs_) o->offer_health(health);
 }
 
+CommandVerdict Outputs::command(const protocol::Message& command, hal::Nanoseconds now) {
+  for (const auto& o : outputs_) {
+    if (const std::optional<CommandVerdict> v = o->command(command, now)) return *v;
+  }
+  return {protocol::AckStatus::unsupported, protocol::AckReason::none};
+}
+
 std::vector<OutputReport> Outputs::reports() const {
   std::vector<OutputReport> reports;
   for (std::size_t i = 0; i < outputs_.size(); ++i) {

@@ -120,7 +120,8 @@ void PairDelivery::run() {
       }
     }
     if (stopping_ && next == slots_.size() && !health_) return;  // what waited is done first
-    if (health_) {
+    // The pairs offered before a health message are done before it (at most two wait).
+    if (next == slots_.size() && health_) {
       health_in_work_ = *health_;
       health_.reset();
       lock.unlock();

@@ -29,7 +29,8 @@ struct DeliveryCounters {
 // does its work on them, one at a time, oldest first. A pair offered while every copy is taken
 // replaces the oldest one still waiting (the output gets the freshest pairs; the one replaced is
 // counted dropped), so offer() only ever copies. The latest health message waits beside the
-// pairs, for outputs that send it too (a newer one replaces it).
+// pairs, for outputs that send it too (a newer one replaces it), and is done after the pairs
+// waiting with it.
 //
 // The work runs on the thread started by start() and stopped by stop() (or the destructor): an
 // exception from it is counted in failures, said in the journal (a line a minute at most) and

@@ -2,12 +2,15 @@
 // into a ring of files bounded by size and free space.
 //
 //   outputs:
-//     mcap: {directory: /var/lib/epipole/recordings, every: 10, file_mb: 256, total_mb: 2048,
-//            min_free_mb: 512, namespace: /epipole, frame_prefix: epipole_}
+//     mcap: {directory: /var/lib/epipole/recordings, continuous: false, every: 10, file_mb: 256,
+//            total_mb: 2048, min_free_mb: 512, namespace: /epipole, frame_prefix: epipole_}
+//
+// Continuous, it records from start-up; else between the robot's `record` start and stop.
 
 #include <yaml-cpp/yaml.h>
 
 #include <array>
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -28,7 +31,8 @@ namespace {
 
 struct McapSettings final : OutputSettings {
   std::filesystem::path directory;
-  int every = 10;  // every Nth pair is recorded (health, once a second, always)
+  bool continuous = false;  // from start-up; else between the robot's record start and stop
+  int every = 10;           // every Nth pair is recorded (health, once a second, always)
   double file_mb = 256;
   double total_mb = 2048;
   double min_free_mb = 512;
@@ -42,10 +46,12 @@ std::unique_ptr<OutputSettings> read_settings(const YAML::Node& n, const yaml::F
   auto s = std::make_unique<McapSettings>();
   const std::string path = "outputs.mcap";
   if (!n.IsDefined() || n.IsNull()) f.fail(path + ".directory", "is missing (where to record)");
-  f.only_keys(
-      n, path,
-      {"directory", "every", "file_mb", "total_mb", "min_free_mb", "namespace", "frame_prefix"});
+  f.only_keys(n, path,
+              {"directory", "continuous", "every", "file_mb", "total_mb", "min_free_mb",
+               "namespace", "frame_prefix"});
   s->directory = f.path(f.child(n, path, "directory"), path + ".directory");
+  f.if_present(n, path, "continuous",
+               [&](const YAML::Node& v, const std::string& k) { s->continuous = f.boolean(v, k); });
   f.if_present(n, path, "every", [&](const YAML::Node& v, const std::string& k) {
     s->every = f.integer_in(v, k, 1, 1000);
   });
@@ -146,7 +152,26 @@ class McapOutput final : public Output {
     }
   }
   void offer(const FrameResult& result, const PairStamp& stamp) override {
+    if (recording_ && stop_at_ != 0 && result.trigger_ns >= stop_at_) stop_recording();
+    if (!recording_) return;
     if (pairs_++ % static_cast<std::uint64_t>(settings_.every) == 0) delivery_.offer(result, stamp);
+  }
+  std::optional<CommandVerdict> command(const protocol::Message& message,
+                                        hal::Nanoseconds now) override {
+    const auto* record = std::get_if<protocol::Record>(&message);
+    if (record == nullptr) return std::nullopt;
+    if (record->action == protocol::RecordAction::stop) {
+      stop_recording();
+    } else {
+      // A new file from the next pair on, stopped after the duration if one is given.
+      recording_ = true;
+      shared_recording_ = true;
+      ++session_;
+      pairs_ = 0;
+      stop_at_ =
+          record->duration_s > 0 ? now + hal::Nanoseconds{record->duration_s} * 1'000'000'000 : 0;
+    }
+    return CommandVerdict{};
   }
   void offer_health(const protocol::Health& health) override { delivery_.offer_health(health); }
   DeliveryCounters counters() const override { return delivery_.counters(); }
@@ -160,9 +185,19 @@ class McapOutput final : public Output {
     return writer_.begin_message(topic, sequences_[topic]++, time, time);
   }
 
-  // A new file when there is none or the one open is full.
+  // Frame loop side: no pair is offered until the next start; the file is closed on the output's
+  // thread (at its next turn: health comes once a second).
+  void stop_recording() {
+    recording_ = false;
+    shared_recording_ = false;
+    stop_at_ = 0;
+  }
+
+  // A new file when there is none, the one open is full, or a record command began a new one.
   void open_if_needed(std::int64_t system_ns) {
-    if (writer_.is_open() && writer_.bytes() < ring_limit()) return;
+    const std::uint32_t session = session_;
+    if (writer_.is_open() && writer_.bytes() < ring_limit() && session == session_seen_) return;
+    session_seen_ = session;
     writer_.close();
     writer_.open(ring_.next_file(system_ns), build_info());
     journal(Priority::info, "output mcap: recording into %s", writer_.file().c_str());
@@ -222,7 +257,8 @@ class McapOutput final : public Output {
   }
 
   void record_health(const protocol::Health& health) {
-    if (!writer_.is_open()) return;  // recorded with the pairs: a file is opened by a pair
+    if (!shared_recording_) writer_.close();  // stopped: the file is made whole
+    if (!writer_.is_open()) return;           // recorded with the pairs: a file is opened by a pair
     const std::int64_t ns = detail::system_now_ns();
     ros::write_diagnostics(begin(kDiagnostics, static_cast<std::uint64_t>(ns)), ros::time_of(ns),
                            "epipole: health", board_.name, health);
@@ -236,8 +272,16 @@ class McapOutput final : public Output {
   mcap::Writer writer_;
   ros::RigModel rig_;
   std::array<std::uint32_t, kTopicCount> sequences_{};
-  std::uint64_t pairs_ = 0;  // offered, on the frame loop's thread
-  PairDelivery delivery_;    // last: its thread stops before the rest goes
+  // The frame loop's side: whether pairs are recorded, until when (board clock; 0: until stopped),
+  // and how many were offered since the start.
+  bool recording_ = settings_.continuous;
+  hal::Nanoseconds stop_at_ = 0;
+  std::uint64_t pairs_ = 0;
+  // Told to the output's thread: recording or not, and each start's number (a new file).
+  std::atomic<bool> shared_recording_{settings_.continuous};
+  std::atomic<std::uint32_t> session_{0};
+  std::uint32_t session_seen_ = 0;  // the output's thread's
+  PairDelivery delivery_;           // last: its thread stops before the rest goes
 };
 
 std::unique_ptr<Output> make(const OutputContext& context) {

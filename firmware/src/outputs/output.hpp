@@ -17,6 +17,7 @@
 #include "epipole/calib/calibration.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/command_memory.hpp"
 #include "epipole/firmware/pipeline.hpp"
 
 namespace YAML {
@@ -53,6 +54,12 @@ class Output {
   // Frame loop side: never waits for the output's work, never allocates.
   virtual void offer(const FrameResult& result, const PairStamp& stamp) = 0;
   virtual void offer_health(const protocol::Health& /*health*/) {}
+  // A command from the robot that the output takes (the recording's `record`), on the frame
+  // loop's thread, never waiting; nothing when it is not one of its own. `now`: the board's clock.
+  virtual std::optional<CommandVerdict> command(const protocol::Message& /*command*/,
+                                                hal::Nanoseconds /*now*/) {
+    return std::nullopt;
+  }
 
   virtual DeliveryCounters counters() const = 0;
   // Every buffer it allocated for its work.

@@ -47,14 +47,11 @@ struct Reader {
   bool valid = true;
   template <class T>
   void operator()(const char*, T& value) {
-    if constexpr (std::is_same_v<T, AckStatus>) {
+    if constexpr (std::is_enum_v<T>) {
+      static_assert(sizeof(T) == 1, "a message's enums are one byte");
       const std::uint8_t raw = in.u8();
-      valid = valid && raw <= static_cast<std::uint8_t>(AckStatus::duplicate);
-      value = static_cast<AckStatus>(raw);
-    } else if constexpr (std::is_same_v<T, AckReason>) {
-      const std::uint8_t raw = in.u8();
-      valid = valid && raw <= static_cast<std::uint8_t>(AckReason::no_pairs);
-      value = static_cast<AckReason>(raw);
+      valid = valid && raw <= static_cast<std::uint8_t>(last_value(T{}));
+      value = static_cast<T>(raw);
     } else if constexpr (std::is_same_v<T, std::int32_t>) {
       value = in.i32();
     } else if constexpr (sizeof(T) == 1) {

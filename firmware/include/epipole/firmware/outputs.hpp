@@ -8,6 +8,7 @@
 
 #include "epipole/calib/calibration.hpp"
 #include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/command_memory.hpp"
 #include "epipole/firmware/memory_report.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
@@ -45,6 +46,9 @@ class Outputs {
   // (its time on the system clock is now minus that).
   void publish(const FrameResult& result, hal::Nanoseconds age);
   void publish_health(const protocol::Health& health);
+  // A command for an output (`record`): the verdict of the output that takes it, unsupported
+  // when none does. `now`: the board's clock.
+  CommandVerdict command(const protocol::Message& command, hal::Nanoseconds now);
 
   bool empty() const { return outputs_.empty(); }
   std::vector<OutputReport> reports() const;

@@ -31,6 +31,7 @@ enum class MessageType : std::uint8_t {
   set_exposure = 0x81,
   set_stages = 0x82,
   snapshot = 0x83,
+  record = 0x84,
 };
 
 // Health flags.
@@ -267,7 +268,12 @@ struct CalibrationHealth {
 // ok: applied. rejected: not applied, for `reason`. unsupported: this board cannot do it (no
 // trigger line to set the rate of). duplicate: the sequence number of a command already
 // received (the robot sent it again): not applied again.
+// A one-byte enum of a message says its largest value (the decoder rejects any above it) by an
+// overload of last_value().
 enum class AckStatus : std::uint8_t { ok = 0, rejected = 1, unsupported = 2, duplicate = 3 };
+constexpr AckStatus last_value(AckStatus) {
+  return AckStatus::duplicate;
+}
 // Why a command was rejected (none otherwise).
 enum class AckReason : std::uint8_t {
   none = 0,
@@ -279,6 +285,9 @@ enum class AckReason : std::uint8_t {
   not_a_command = 6,  // a message the firmware sends, not one it takes
   no_pairs = 7,       // no pair to take it from: a camera is gone or the trigger stopped
 };
+constexpr AckReason last_value(AckReason) {
+  return AckReason::no_pairs;
+}
 struct CommandAck {
   static constexpr MessageType kType = MessageType::command_ack;
   static constexpr const char* kName = "ack";
@@ -334,9 +343,27 @@ struct Snapshot {
   friend bool operator==(const Snapshot&, const Snapshot&) = default;
 };
 
+// Starts or stops the board's recording (the mcap output, docs/outputs.md), version 6.
+enum class RecordAction : std::uint8_t { stop = 0, start = 1 };
+constexpr RecordAction last_value(RecordAction) {
+  return RecordAction::start;
+}
+struct Record {
+  static constexpr MessageType kType = MessageType::record;
+  static constexpr const char* kName = "record";
+  RecordAction action = RecordAction::start;
+  std::uint16_t duration_s = 0;  // start: stop after this long on the board's clock; 0: until stop
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("action", m.action);
+    io("duration_s", m.duration_s);
+  }
+  friend bool operator==(const Record&, const Record&) = default;
+};
+
 using Message =
     std::variant<Health, FrameSummary, Detections, Obstacles, Points, CalibrationHealth, CommandAck,
-                 SetTriggerRate, SetExposure, SetStages, Snapshot, DepthGrid>;
+                 SetTriggerRate, SetExposure, SetStages, Snapshot, DepthGrid, Record>;
 
 MessageType type_of(const Message& message);
 const char* name_of(MessageType type);
