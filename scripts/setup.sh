@@ -14,6 +14,8 @@ packages=(
   libavformat-dev libavcodec-dev libswscale-dev libavutil-dev
   # tests, benchmarks and host-only references (never linked into the firmware)
   googletest libgtest-dev libgmock-dev libbenchmark-dev libopencv-dev
+  # another DDS vendor's subscriber for the ROS 2 output's tests (Fast DDS, ROS 2's default)
+  libfastrtps-dev
   # clang with its sanitizer and libFuzzer runtimes (the fuzz preset)
   clang libclang-rt-14-dev
   # cross compilers and the user-mode emulator that runs cross-built tests

@@ -21,6 +21,7 @@
 #include <thread>
 #include <vector>
 
+#include "listening.hpp"
 #include "ros2_types.h"
 
 namespace {
@@ -127,8 +128,7 @@ int main(int argc, char** argv) {
   const std::string ns = argv[2];
   const int seconds = std::stoi(argv[3]);
   if (argc > 4) grid = std::stoi(argv[4]);
-  using Clock = std::chrono::steady_clock;
-  const auto deadline = Clock::now() + std::chrono::seconds(seconds);
+  const auto deadline = epipole::test::ListenClock::now() + std::chrono::seconds(seconds);
   const dds_entity_t participant = dds_create_participant(domain, nullptr, nullptr);
   if (participant < 0) {
     std::fprintf(stderr, "listener: %s\n", dds_strretcode(participant));
@@ -165,115 +165,109 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  for (const Topic& t : topics) {
-    dds_subscription_matched_status_t matched{};
-    while (dds_get_subscription_matched_status(t.reader, &matched) == DDS_RETCODE_OK &&
-           matched.current_count == 0) {
-      if (Clock::now() > deadline) {
-        std::fprintf(stderr, "listener: no writer of %s\n", t.name.c_str());
-        return 4;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
+  std::vector<std::string> names;
+  for (const Topic& t : topics) names.push_back(t.name);
+  if (!epipole::test::wait_for_writers(names, deadline, [&](std::size_t i) {
+        dds_subscription_matched_status_t matched{};
+        return dds_get_subscription_matched_status(topics[i].reader, &matched) == DDS_RETCODE_OK &&
+               matched.current_count > 0;
+      })) {
+    return 4;
   }
-  std::fprintf(stderr, "ready\n");
-  std::fflush(stderr);
 
   json messages = json::array();
   int left_images = 0;
-  auto last = Clock::now();
-  while (Clock::now() < deadline &&
-         (left_images == 0 || Clock::now() - last < std::chrono::milliseconds(500))) {
-    bool any = false;
-    for (Topic& t : topics) {
-      void* samples[1] = {nullptr};
-      dds_sample_info_t info[1];
-      while (dds_take(t.reader, samples, info, 1, 1) > 0) {
-        any = true;
-        if (!info[0].valid_data) {
-          dds_return_loan(t.reader, samples, 1);
-          continue;
-        }
-        json m = {{"topic", t.name}, {"type", t.type_name}};
-        if (t.type == &sensor_msgs_msg_dds__Image__desc) {
-          const auto& s = *static_cast<sensor_msgs_msg_dds__Image_*>(samples[0]);
-          m.update(image_summary(s));
-          m["stamp"] = stamp_of(s.header);
-          m["log_time"] = log_time(s.header);
-          if (t.name == ns + "/left/image_rect") ++left_images;
-        } else if (t.type == &sensor_msgs_msg_dds__CameraInfo__desc) {
-          const auto& s = *static_cast<sensor_msgs_msg_dds__CameraInfo_*>(samples[0]);
-          m.update({{"frame_id", s.header.frame_id},
-                    {"width", s.width},
-                    {"height", s.height},
-                    {"distortion_model", s.distortion_model},
-                    {"d", std::vector<double>(s.d._buffer, s.d._buffer + s.d._length)},
-                    {"k", std::vector<double>(s.k, s.k + 9)},
-                    {"r", std::vector<double>(s.r, s.r + 9)},
-                    {"p", std::vector<double>(s.p, s.p + 12)},
-                    {"stamp", stamp_of(s.header)},
-                    {"log_time", log_time(s.header)}});
-        } else if (t.type == &stereo_msgs_msg_dds__DisparityImage__desc) {
-          const auto& s = *static_cast<stereo_msgs_msg_dds__DisparityImage_*>(samples[0]);
-          m.update({{"frame_id", s.header.frame_id},
-                    {"f", s.f},
-                    {"t", s.t},
-                    {"min_disparity", s.min_disparity},
-                    {"max_disparity", s.max_disparity},
-                    {"delta_d", s.delta_d},
-                    {"image", image_summary(s.image)},
-                    {"stamp", stamp_of(s.header)},
-                    {"log_time", log_time(s.header)}});
-        } else if (t.type == &sensor_msgs_msg_dds__PointCloud2__desc) {
-          const auto& s = *static_cast<sensor_msgs_msg_dds__PointCloud2_*>(samples[0]);
-          m.update(cloud_summary(s));
-          m["stamp"] = stamp_of(s.header);
-          m["log_time"] = log_time(s.header);
-        } else if (t.type == &diagnostic_msgs_msg_dds__DiagnosticArray__desc) {
-          const auto& s = *static_cast<diagnostic_msgs_msg_dds__DiagnosticArray_*>(samples[0]);
-          json status = json::array();
-          for (std::uint32_t i = 0; i < s.status._length; ++i) {
-            const auto& st = s.status._buffer[i];
-            json values = json::object();
-            for (std::uint32_t k = 0; k < st.values._length; ++k) {
-              values[st.values._buffer[k].key] = st.values._buffer[k].value;
+  epipole::test::take_until_quiet(
+      deadline,
+      [&] {
+        bool any = false;
+        for (Topic& t : topics) {
+          void* samples[1] = {nullptr};
+          dds_sample_info_t info[1];
+          while (dds_take(t.reader, samples, info, 1, 1) > 0) {
+            any = true;
+            if (!info[0].valid_data) {
+              dds_return_loan(t.reader, samples, 1);
+              continue;
             }
-            status.push_back({{"level", st.level},
-                              {"name", st.name},
-                              {"message", st.message},
-                              {"hardware_id", st.hardware_id},
-                              {"values", values}});
-          }
-          m["status"] = status;
-          m["log_time"] = log_time(s.header);
-        } else {
-          const auto& s = *static_cast<tf2_msgs_msg_dds__TFMessage_*>(samples[0]);
-          json transforms = json::array();
-          for (std::uint32_t i = 0; i < s.transforms._length; ++i) {
-            const auto& tr = s.transforms._buffer[i];
-            const auto& v = tr.transform.translation;
-            const auto& q = tr.transform.rotation;
-            transforms.push_back({{"parent", tr.header.frame_id},
-                                  {"child", tr.child_frame_id},
-                                  {"translation", {{"x", v.x}, {"y", v.y}, {"z", v.z}}},
-                                  {"rotation", {{"x", q.x}, {"y", q.y}, {"z", q.z}, {"w", q.w}}}});
-          }
-          m["transforms"] = transforms;
-          if (s.transforms._length > 0) {
-            m["stamp"] = stamp_of(s.transforms._buffer[0].header);
-            m["log_time"] = log_time(s.transforms._buffer[0].header);
+            json m = {{"topic", t.name}, {"type", t.type_name}};
+            if (t.type == &sensor_msgs_msg_dds__Image__desc) {
+              const auto& s = *static_cast<sensor_msgs_msg_dds__Image_*>(samples[0]);
+              m.update(image_summary(s));
+              m["stamp"] = stamp_of(s.header);
+              m["log_time"] = log_time(s.header);
+              if (t.name == ns + "/left/image_rect") ++left_images;
+            } else if (t.type == &sensor_msgs_msg_dds__CameraInfo__desc) {
+              const auto& s = *static_cast<sensor_msgs_msg_dds__CameraInfo_*>(samples[0]);
+              m.update({{"frame_id", s.header.frame_id},
+                        {"width", s.width},
+                        {"height", s.height},
+                        {"distortion_model", s.distortion_model},
+                        {"d", std::vector<double>(s.d._buffer, s.d._buffer + s.d._length)},
+                        {"k", std::vector<double>(s.k, s.k + 9)},
+                        {"r", std::vector<double>(s.r, s.r + 9)},
+                        {"p", std::vector<double>(s.p, s.p + 12)},
+                        {"stamp", stamp_of(s.header)},
+                        {"log_time", log_time(s.header)}});
+            } else if (t.type == &stereo_msgs_msg_dds__DisparityImage__desc) {
+              const auto& s = *static_cast<stereo_msgs_msg_dds__DisparityImage_*>(samples[0]);
+              m.update({{"frame_id", s.header.frame_id},
+                        {"f", s.f},
+                        {"t", s.t},
+                        {"min_disparity", s.min_disparity},
+                        {"max_disparity", s.max_disparity},
+                        {"delta_d", s.delta_d},
+                        {"image", image_summary(s.image)},
+                        {"stamp", stamp_of(s.header)},
+                        {"log_time", log_time(s.header)}});
+            } else if (t.type == &sensor_msgs_msg_dds__PointCloud2__desc) {
+              const auto& s = *static_cast<sensor_msgs_msg_dds__PointCloud2_*>(samples[0]);
+              m.update(cloud_summary(s));
+              m["stamp"] = stamp_of(s.header);
+              m["log_time"] = log_time(s.header);
+            } else if (t.type == &diagnostic_msgs_msg_dds__DiagnosticArray__desc) {
+              const auto& s = *static_cast<diagnostic_msgs_msg_dds__DiagnosticArray_*>(samples[0]);
+              json status = json::array();
+              for (std::uint32_t i = 0; i < s.status._length; ++i) {
+                const auto& st = s.status._buffer[i];
+                json values = json::object();
+                for (std::uint32_t k = 0; k < st.values._length; ++k) {
+                  values[st.values._buffer[k].key] = st.values._buffer[k].value;
+                }
+                status.push_back({{"level", st.level},
+                                  {"name", st.name},
+                                  {"message", st.message},
+                                  {"hardware_id", st.hardware_id},
+                                  {"values", values}});
+              }
+              m["status"] = status;
+              m["log_time"] = log_time(s.header);
+            } else {
+              const auto& s = *static_cast<tf2_msgs_msg_dds__TFMessage_*>(samples[0]);
+              json transforms = json::array();
+              for (std::uint32_t i = 0; i < s.transforms._length; ++i) {
+                const auto& tr = s.transforms._buffer[i];
+                const auto& v = tr.transform.translation;
+                const auto& q = tr.transform.rotation;
+                transforms.push_back(
+                    {{"parent", tr.header.frame_id},
+                     {"child", tr.child_frame_id},
+                     {"translation", {{"x", v.x}, {"y", v.y}, {"z", v.z}}},
+                     {"rotation", {{"x", q.x}, {"y", q.y}, {"z", q.z}, {"w", q.w}}}});
+              }
+              m["transforms"] = transforms;
+              if (s.transforms._length > 0) {
+                m["stamp"] = stamp_of(s.transforms._buffer[0].header);
+                m["log_time"] = log_time(s.transforms._buffer[0].header);
+              }
+            }
+            messages.push_back(m);
+            dds_return_loan(t.reader, samples, 1);
           }
         }
-        messages.push_back(m);
-        dds_return_loan(t.reader, samples, 1);
-      }
-    }
-    if (any) {
-      last = Clock::now();
-    } else {
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-  }
+        return any;
+      },
+      [&] { return left_images > 0; });
   dds_delete(participant);
   std::cout << json{{"messages", messages}}.dump() << "\n";
   return left_images > 0 ? 0 : 3;
