@@ -7,6 +7,7 @@
 
 #include <future>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "sim_rig.hpp"
@@ -106,6 +107,34 @@ TEST(PairDelivery, HealthReachesTheOutputsThatTakeIt) {
   delivery.offer_health(health);
   EXPECT_EQ(got.get_future().get(), 42u);
   delivery.stop();
+}
+
+TEST(PairDelivery, PairsAndHealthAreDoneInTheOrderTheyWereOffered) {
+  const test::SimRig rig(64, 16, 4);
+  HeldWork held;
+  std::vector<std::string> order;
+  PairDelivery delivery(
+      "test", rig.config, kRectified,
+      [&](const PairCopy& p) {
+        held(p);
+        order.push_back("pair " + std::to_string(p.frame));
+      },
+      [&](const protocol::Health& h) { order.push_back("health " + std::to_string(h.frames)); });
+  delivery.start();
+  FakePair first(64, 16, 1, 1);
+  delivery.offer(first.result, {});
+  held.taken.get_future().wait();
+  protocol::Health health;
+  health.frames = 7;
+  delivery.offer_health(health);  // behind the work, which is always behind from here on
+  for (std::uint32_t frame = 2; frame <= 4; ++frame) {
+    FakePair pair(64, 16, frame, 1);
+    delivery.offer(pair.result, {});
+  }
+  held.release.set_value();
+  delivery.stop();
+  EXPECT_EQ(order, (std::vector<std::string>{"pair 1", "health 7", "pair 4"}))
+      << "health is never starved by pairs that keep coming";
 }
 
 TEST(PairDelivery, APairCopyHoldsOnlyThePartsAskedFor) {

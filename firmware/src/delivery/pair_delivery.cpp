@@ -54,11 +54,7 @@ void PairDelivery::offer(const FrameResult& result, const PairStamp& stamp) {
       }
     }
     if (chosen == slots_.size()) {  // every copy waits or is in work: replace the oldest waiting
-      for (std::size_t i = 0; i < slots_.size(); ++i) {
-        if (slots_[i] == Slot::waiting && (chosen == slots_.size() || order_[i] < order_[chosen])) {
-          chosen = i;
-        }
-      }
+      chosen = oldest_waiting();
       if (chosen == slots_.size()) return;  // cannot be with two copies and one thread
       ++counters_.dropped;
     }
@@ -78,6 +74,7 @@ void PairDelivery::offer_health(const protocol::Health& health) {
   {
     const std::lock_guard lock(mutex_);
     health_ = health;
+    health_order_ = ++offered_;
   }
   wake_.notify_one();
 }
@@ -109,19 +106,24 @@ void PairDelivery::do_work(DoWork&& work) {
   }
 }
 
+std::size_t PairDelivery::oldest_waiting() const {
+  std::size_t oldest = slots_.size();
+  for (std::size_t i = 0; i < slots_.size(); ++i) {
+    if (slots_[i] == Slot::waiting && (oldest == slots_.size() || order_[i] < order_[oldest])) {
+      oldest = i;
+    }
+  }
+  return oldest;
+}
+
 void PairDelivery::run() {
   enter_thread_role_or_say(ThreadRole::output);
   std::unique_lock lock(mutex_);
   for (;;) {
-    std::size_t next = slots_.size();
-    for (std::size_t i = 0; i < slots_.size(); ++i) {
-      if (slots_[i] == Slot::waiting && (next == slots_.size() || order_[i] < order_[next])) {
-        next = i;
-      }
-    }
+    const std::size_t next = oldest_waiting();
     if (stopping_ && next == slots_.size() && !health_) return;  // what waited is done first
-    // The pairs offered before a health message are done before it (at most two wait).
-    if (next == slots_.size() && health_) {
+    // In the order they were offered: the pairs before a health message, then it.
+    if (health_ && (next == slots_.size() || health_order_ < order_[next])) {
       health_in_work_ = *health_;
       health_.reset();
       lock.unlock();

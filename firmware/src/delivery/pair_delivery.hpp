@@ -29,8 +29,8 @@ struct DeliveryCounters {
 // does its work on them, one at a time, oldest first. A pair offered while every copy is taken
 // replaces the oldest one still waiting (the output gets the freshest pairs; the one replaced is
 // counted dropped), so offer() only ever copies. The latest health message waits beside the
-// pairs, for outputs that send it too (a newer one replaces it), and is done after the pairs
-// waiting with it.
+// pairs, for outputs that send it too (a newer one replaces it); the work takes pairs and health
+// in the order they were offered.
 //
 // The work runs on the thread started by start() and stopped by stop() (or the destructor): an
 // exception from it is counted in failures, said in the journal (a line a minute at most) and
@@ -63,6 +63,7 @@ class PairDelivery {
  private:
   enum class Slot { free, filling, waiting, working };
   void run();
+  std::size_t oldest_waiting() const;  // slots_.size(): none
   template <class DoWork>
   void do_work(DoWork&& work);
 
@@ -74,6 +75,7 @@ class PairDelivery {
   std::vector<std::uint64_t> order_;  // when each waiting copy was offered
   std::uint64_t offered_ = 0;
   std::optional<protocol::Health> health_;
+  std::uint64_t health_order_ = 0;  // when it was offered, among the pairs
   protocol::Health health_in_work_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;

@@ -154,7 +154,14 @@ class McapOutput final : public Output {
   void offer(const FrameResult& result, const PairStamp& stamp) override {
     if (recording_ && stop_at_ != 0 && result.trigger_ns >= stop_at_) stop_recording();
     if (!recording_) return;
-    if (pairs_++ % static_cast<std::uint64_t>(settings_.every) == 0) delivery_.offer(result, stamp);
+    if (pairs_++ % static_cast<std::uint64_t>(settings_.every) != 0) return;
+    if (new_session_) {  // a start: its file begins with this pair
+      new_session_ = false;
+      session_first_frame_.store(result.frame);
+      session_.fetch_add(1);
+    }
+    last_offered_frame_ = result.frame;
+    delivery_.offer(result, stamp);
   }
   std::optional<CommandVerdict> command(const protocol::Message& message,
                                         hal::Nanoseconds now) override {
@@ -166,7 +173,7 @@ class McapOutput final : public Output {
       // A new file from the next pair on, stopped after the duration if one is given.
       recording_ = true;
       shared_recording_ = true;
-      ++session_;
+      new_session_ = true;
       pairs_ = 0;
       stop_at_ =
           record->duration_s > 0 ? now + hal::Nanoseconds{record->duration_s} * 1'000'000'000 : 0;
@@ -189,15 +196,27 @@ class McapOutput final : public Output {
   // thread (at its next turn: health comes once a second).
   void stop_recording() {
     recording_ = false;
+    stop_after_frame_.store(last_offered_frame_);
     shared_recording_ = false;
     stop_at_ = 0;
   }
 
-  // A new file when there is none, the one open is full, or a record command began a new one.
+  // Whether `pair` goes into a file: a new one when a start began with it (the file open is
+  // closed), the one open otherwise; a pair of before a stop whose file is already closed
+  // goes nowhere.
+  bool file_for(const PairCopy& pair) {
+    const std::uint32_t session = session_.load();
+    if (session != session_seen_ && pair.frame >= session_first_frame_.load()) {
+      session_seen_ = session;
+      writer_.close();
+      return true;
+    }
+    return session == session_seen_ || writer_.is_open();
+  }
+
+  // A new file when there is none or the one open is full.
   void open_if_needed(std::int64_t system_ns) {
-    const std::uint32_t session = session_;
-    if (writer_.is_open() && writer_.bytes() < ring_limit() && session == session_seen_) return;
-    session_seen_ = session;
+    if (writer_.is_open() && writer_.bytes() < ring_limit()) return;
     writer_.close();
     writer_.open(ring_.next_file(system_ns), build_info());
     journal(Priority::info, "output mcap: recording into %s", writer_.file().c_str());
@@ -217,7 +236,9 @@ class McapOutput final : public Output {
 
   void record(const PairCopy& pair) {
     const std::int64_t ns = pair.stamp.system_ns;
+    if (!file_for(pair)) return;
     open_if_needed(ns);
+    last_recorded_frame_ = pair.frame;
     const auto time = static_cast<std::uint64_t>(ns);
     const ros::Time stamp = ros::time_of(ns);
     const auto image = [&](Topic topic, const std::string& frame, GrayView view) {
@@ -257,8 +278,9 @@ class McapOutput final : public Output {
   }
 
   void record_health(const protocol::Health& health) {
-    if (!shared_recording_) writer_.close();  // stopped: the file is made whole
-    if (!writer_.is_open()) return;           // recorded with the pairs: a file is opened by a pair
+    // Stopped, and every pair offered before the stop done: the file is made whole.
+    if (!shared_recording_ && last_recorded_frame_ >= stop_after_frame_.load()) writer_.close();
+    if (!writer_.is_open()) return;  // recorded with the pairs: a file is opened by a pair
     const std::int64_t ns = detail::system_now_ns();
     ros::write_diagnostics(begin(kDiagnostics, static_cast<std::uint64_t>(ns)), ros::time_of(ns),
                            "epipole: health", board_.name, health);
@@ -277,11 +299,18 @@ class McapOutput final : public Output {
   bool recording_ = settings_.continuous;
   hal::Nanoseconds stop_at_ = 0;
   std::uint64_t pairs_ = 0;
-  // Told to the output's thread: recording or not, and each start's number (a new file).
+  bool new_session_ = false;  // a start whose first pair is still to come
+  std::uint32_t last_offered_frame_ = 0;
+  // Told to the output's thread: whether it records, and in the pairs' terms each start's number
+  // and the pair it began with, and the last pair offered before a stop.
   std::atomic<bool> shared_recording_{settings_.continuous};
   std::atomic<std::uint32_t> session_{0};
-  std::uint32_t session_seen_ = 0;  // the output's thread's
-  PairDelivery delivery_;           // last: its thread stops before the rest goes
+  std::atomic<std::uint32_t> session_first_frame_{0};
+  std::atomic<std::uint32_t> stop_after_frame_{0};
+  // The output's thread's own.
+  std::uint32_t session_seen_ = 0;
+  std::uint32_t last_recorded_frame_ = 0;
+  PairDelivery delivery_;  // last: its thread stops before the rest goes
 };
 
 std::unique_ptr<Output> make(const OutputContext& context) {

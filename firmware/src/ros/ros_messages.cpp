@@ -293,7 +293,8 @@ void organised_points(ImageView<const std::int16_t> disparity16, GrayView left,
     for (int i = 0; i < disparity16.width() / step; ++i) {
       const int x = i * step;
       const int d = disparity16.row(y)[x];
-      Eigen::Vector3d p(nan, nan, nan);
+      const double none = std::numeric_limits<double>::quiet_NaN();
+      Eigen::Vector3d p(none, none, none);
       if (d != vision::kInvalidDisparity && d > 0) p = triangulator.point(x, y, d / 16.0);
       const bool finite = p.allFinite();
       *out++ = finite ? static_cast<float>(p.x()) : nan;
