@@ -59,7 +59,25 @@ TEST(RecordingRing, NoRoomEvenWithoutRecordingsIsAnErrorNamingTheFolder) {
   const std::string error = test::error_of([&] { ring.next_file(kDec7); });
   EXPECT_NE(error.find(folder.string() + ": no room for another recording"), std::string::npos)
       << error;
-  EXPECT_EQ(ring.removed(), 1u) << "its recordings were removed first";
+  EXPECT_EQ(ring.removed(), 0u) << "no recording is removed when that would not make room";
+  EXPECT_TRUE(fs::exists(folder / "epipole-20261201T000000Z.mcap"));
+}
+
+TEST(RecordingRing, RecordingsOfOneSecondGoInTheOrderTheyWereMade) {
+  const test::TempDir dir;
+  const fs::path folder = dir.path() / "rec";
+  fs::create_directories(folder);
+  for (const char* name : {"epipole-20261201T000000Z.mcap", "epipole-20261201T000000Z-1.mcap",
+                           "epipole-20261201T000000Z-2.mcap", "epipole-20261201T000000Z-10.mcap"}) {
+    write_file(folder / name, 1000);
+  }
+  RecordingRing ring(folder, {1000, 3000, 0});
+  ring.next_file(kDec7);
+  EXPECT_EQ(ring.removed(), 2u);
+  EXPECT_FALSE(fs::exists(folder / "epipole-20261201T000000Z.mcap")) << "the first made";
+  EXPECT_FALSE(fs::exists(folder / "epipole-20261201T000000Z-1.mcap"));
+  EXPECT_TRUE(fs::exists(folder / "epipole-20261201T000000Z-2.mcap"));
+  EXPECT_TRUE(fs::exists(folder / "epipole-20261201T000000Z-10.mcap")) << "the last made";
 }
 
 TEST(RecordingRing, AFolderThatCannotBeMadeIsAnError) {

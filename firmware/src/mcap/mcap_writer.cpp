@@ -145,10 +145,23 @@ void Writer::emit(const std::vector<std::uint8_t>& bytes) {
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw Error(cat(file_.string(), ": cannot write: ", std::strerror(errno)));
+    if (n <= 0) {
+      const std::string why = n < 0 ? std::strerror(errno) : "nothing written";
+      abandon();
+      throw Error(cat(file_.string(), ": cannot write (", why, "): the file ends before it"));
+    }
     done += static_cast<std::size_t>(n);
   }
   written_ += bytes.size();
+}
+
+// A file that cannot be written is left as it is (its chunks before the failure readable) and
+// the writer starts afresh: the next message opens nothing by itself, its owner opens a file.
+void Writer::abandon() {
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+  chunk_.clear();
+  index_.clear();
 }
 
 void Writer::open(const std::filesystem::path& file, std::string_view library) {
@@ -184,6 +197,7 @@ std::vector<std::uint8_t>& Writer::begin_message(std::uint16_t channel, std::uin
                                                  std::uint64_t log_time,
                                                  std::uint64_t publish_time) {
   require(channel < channels_.size(), "mcap: no channel ", channel);
+  require(fd_ >= 0, "mcap: a message with no file open");
   if (index_.empty()) chunk_start_ = chunk_end_ = log_time;
   chunk_start_ = std::min(chunk_start_, log_time);
   chunk_end_ = std::max(chunk_end_, log_time);
@@ -214,6 +228,7 @@ void Writer::write_chunk() {
   const std::size_t size = ZSTD_compressCCtx(context, compressed_.data(), compressed_.size(),
                                              chunk_.data(), chunk_.size(), level_);
   if (ZSTD_isError(size)) {
+    abandon();
     throw Error(cat(file_.string(), ": zstd: ", ZSTD_getErrorName(size)));
   }
   compressed_.resize(size);
@@ -382,20 +397,14 @@ void Writer::write_summary() {
 
 void Writer::close() {
   if (fd_ < 0) return;
-  const int fd = fd_;
-  try {
-    write_chunk();
-    write_summary();
-    if (::fsync(fd) != 0) {
-      throw Error(cat(file_.string(), ": cannot sync: ", std::strerror(errno)));
-    }
-  } catch (...) {
-    ::close(fd);
-    fd_ = -1;
-    throw;
+  write_chunk();  // each abandons the file when it fails
+  write_summary();
+  if (::fsync(fd_) != 0) {
+    const std::string why = std::strerror(errno);
+    abandon();
+    throw Error(cat(file_.string(), ": cannot sync: ", why));
   }
-  ::close(fd);
-  fd_ = -1;
+  abandon();  // closed; nothing left of it
 }
 
 }  // namespace epipole::firmware::mcap

@@ -36,9 +36,9 @@ struct Schema {
 
 // One file at a time: open(), messages, close(). Its buffers are allocated by the constructor
 // (a chunk of `chunk_bytes` plus the largest message, its compressed copy, the index of 1024
-// chunks), so a message that fits allocates nothing; a file of more chunks grows the index. Every
-// write that fails throws Error naming the file; the file is then left as it is (close() again, or
-// open() a new one).
+// chunks), so a message that fits allocates nothing; a file of more chunks grows the index. A
+// write that fails throws Error naming the file, which is then left as it is (every chunk written
+// before it readable) and closed: the owner opens another.
 class Writer {
  public:
   static constexpr std::size_t kMaxChannels = 32;
@@ -88,6 +88,7 @@ class Writer {
   void write_chunk();
   void write_summary();
   void emit(const std::vector<std::uint8_t>& bytes);
+  void abandon();
 
   std::vector<Schema> schemas_;
   std::vector<Channel> channels_;
