@@ -2,7 +2,10 @@
 // name that is no output's, or a bad value, is an error naming the file and the key.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/firmware.hpp"
 #include "error_of.hpp"
 #include "sim_rig.hpp"
 
@@ -45,6 +48,15 @@ TEST(OutputSections, WhatIsNotAnOutputsIsAnErrorNamingTheKey) {
               rig.parse("outputs: {mcap: {directory: r, namespace: epipole}}\n");
             }).find("outputs.mcap.namespace"),
             std::string::npos);
+}
+
+TEST(OutputSections, ARecordingFolderThatCannotBeMadeStopsTheStart) {
+  const test::SimRig rig;
+  std::ofstream(rig.dir.path() / "file") << "not a folder";
+  const BoardConfig config = rig.parse("outputs: {mcap: {directory: file/recordings}}\n");
+  const std::string error = error_of([&] { const Firmware fw(rig.replaying(config)); });
+  EXPECT_NE(error.find("outputs.mcap.directory"), std::string::npos) << error;
+  EXPECT_NE(error.find("cannot be made in"), std::string::npos) << error;
 }
 
 }  // namespace

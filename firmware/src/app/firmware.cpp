@@ -71,13 +71,14 @@ Firmware::Firmware(BoardConfig config) : config_(std::move(config)) {
   build(std::make_unique<Board>(config_));
 }
 
-Firmware::Firmware(BoardConfig config, std::unique_ptr<Board> board) : config_(std::move(config)) {
-  build(std::move(board));
+Firmware::Firmware(BoardConfig config, std::unique_ptr<Board> board, bool offline)
+    : config_(std::move(config)) {
+  build(std::move(board), offline);
 }
 
 Firmware::~Firmware() = default;
 
-void Firmware::build(std::unique_ptr<Board> board) {
+void Firmware::build(std::unique_ptr<Board> board, bool offline) {
   calibration_ = load_board_calibration(config_);
   board_ = std::move(board);
   pipeline_ = std::make_unique<Pipeline>(config_, calibration_);
@@ -89,7 +90,7 @@ void Firmware::build(std::unique_ptr<Board> board) {
   link.identity.component_id = config_.serial.mavlink_component_id;
   link.baud = config_.serial.port.baud;
   link_ = std::make_unique<Link>(board_->serial(), board_->clock(), link);
-  outputs_ = std::make_unique<Outputs>(config_, calibration_);
+  outputs_ = std::make_unique<Outputs>(config_, calibration_, offline);
   loop_ = std::make_unique<FrameLoop>(config_, *board_, *pipeline_, *link_, outputs_.get());
   check_budget(config_.name, config_.memory_budget_bytes, working_set_bytes());
 }
@@ -117,7 +118,8 @@ MemoryReport check_memory(BoardConfig config) {
   hal::HardwareConfig hardware = hardware_config(config);
   const bool stand_in = hal::stand_in_for_devices(hardware);
   MemoryReport report =
-      Firmware(std::move(config), std::make_unique<Board>(std::move(hardware))).memory_report();
+      Firmware(std::move(config), std::make_unique<Board>(std::move(hardware)), true)
+          .memory_report();
   if (stand_in) {
     std::erase_if(report.parts(),
                   [](const MemoryReport::Part& p) { return p.name == Firmware::kCameras; });

@@ -378,7 +378,13 @@ FrameLoop::Verdict FrameLoop::set_exposure(const protocol::SetExposure& command)
 
 void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool trigger_from_capture) {
   if (r.calibration_health) last_calibration_health_ = r.calibration_health;
+  publish_link(r, latency, trigger_from_capture);
+  // After the link's messages: the outputs' copies never delay what the robot steers by.
   if (outputs_ != nullptr) outputs_->publish(r, latency);
+}
+
+void FrameLoop::publish_link(const FrameResult& r, hal::Nanoseconds latency,
+                             bool trigger_from_capture) {
   if (link_.protocol() == LinkProtocol::mavlink) {
     if (r.obstacles != nullptr) {
       link_.publish_obstacle_distance(

@@ -7,8 +7,8 @@
 namespace epipole::firmware {
 
 Outputs::Outputs(const BoardConfig& config,
-                 const std::optional<calib::StereoCalibration>& calibration) {
-  const outputs::OutputContext context{config, calibration};
+                 const std::optional<calib::StereoCalibration>& calibration, bool offline) {
+  const outputs::OutputContext context{config, calibration, offline};
   for (const outputs::OutputFile& file : outputs::kOutputFiles) {
     if (config.outputs.find(file.name) == nullptr) continue;
     names_.emplace_back(file.name);

@@ -7,6 +7,7 @@
 //
 // Continuous, it records from start-up; else between the robot's `record` start and stop.
 
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <array>
@@ -126,6 +127,20 @@ mcap::Writer make_writer(const BoardConfig& board, const McapSettings& s) {
   return mcap::Writer(std::move(schemas), std::move(channels), 4u << 20, largest);
 }
 
+// A folder the recording can write in, or make (its nearest existing parent writable): else the
+// firmware does not start, rather than find out at the first pair.
+void check_folder(const std::filesystem::path& directory) {
+  std::filesystem::path p = directory;
+  std::error_code ec;
+  while (!std::filesystem::exists(p, ec) && p.has_parent_path() && p != p.parent_path()) {
+    p = p.parent_path();
+  }
+  require(std::filesystem::is_directory(p, ec) && ::access(p.c_str(), W_OK | X_OK) == 0,
+          "outputs.mcap.directory: ", directory.string(), ": ",
+          p == directory ? "not a folder this firmware may write in"
+                         : cat("cannot be made in ", p.string()));
+}
+
 class McapOutput final : public Output {
  public:
   explicit McapOutput(const OutputContext& context)
@@ -140,7 +155,9 @@ class McapOutput final : public Output {
         delivery_(
             "mcap", context.board, kRectified | kRaw | kDisparity | kPoints,
             [this](const PairCopy& pair) { record(pair); },
-            [this](const protocol::Health& health) { record_health(health); }) {}
+            [this](const protocol::Health& health) { record_health(health); }) {
+    check_folder(settings_.directory);
+  }
 
   void start() override { delivery_.start(); }
   void stop() override {
@@ -283,7 +300,8 @@ class McapOutput final : public Output {
     if (!writer_.is_open()) return;  // recorded with the pairs: a file is opened by a pair
     const std::int64_t ns = detail::system_now_ns();
     ros::write_diagnostics(begin(kDiagnostics, static_cast<std::uint64_t>(ns)), ros::time_of(ns),
-                           "epipole: health", board_.name, health);
+                           "epipole: health", board_.name, health, dropped_before_);
+    dropped_before_ = health.dropped;
     writer_.end_message();
   }
 
@@ -310,7 +328,8 @@ class McapOutput final : public Output {
   // The output's thread's own.
   std::uint32_t session_seen_ = 0;
   std::uint32_t last_recorded_frame_ = 0;
-  PairDelivery delivery_;  // last: its thread stops before the rest goes
+  std::uint32_t dropped_before_ = 0;  // health's `dropped` in the message before
+  PairDelivery delivery_;             // last: its thread stops before the rest goes
 };
 
 std::unique_ptr<Output> make(const OutputContext& context) {

@@ -33,6 +33,9 @@ namespace epipole::firmware::outputs {
 struct OutputContext {
   const BoardConfig& board;
   const std::optional<calib::StereoCalibration>& calibration;  // none: uncalibrated
+  // Made to be measured only (epipole-fw --check): buffers allocated, nothing joined or opened
+  // that others would see (a network).
+  bool offline = false;
 };
 
 // The settings an output read from its subsection (OutputDefinition::read_settings).

@@ -180,46 +180,20 @@ class Ros2Output final : public Output {
       : settings_(settings_of<Ros2Settings>(context, "ros2")),
         board_(context.board),
         calibration_(context.calibration),
-        participant_(domain_of(settings_), ros2::cyclonedds_config(settings_.network)),
         rig_(settings_.names, context.calibration, context.board.stereo.max_disparity),
         fields_(point_fields()),
         delivery_(
             "ros2", context.board, kRectified | kDisparity | kPoints,
             [this](const PairCopy& pair) { publish(pair); },
             [this](const protocol::Health& health) { publish_health(health); }) {
-    if (participant_.configured_by_environment()) {
-      journal(Priority::info, "output ros2: DDS configured by CYCLONEDDS_URI");
-    }
     const std::size_t pixels = static_cast<std::size_t>(board_.width()) * board_.height();
     disparity_.resize(pixels);
-    const int depth = settings_.depth;
-    const auto topic = [&](const char* name) { return "rt" + settings_.names.topic(name); };
-    left_rect_ =
-        participant_.writer(topic("left/image_rect"), &sensor_msgs_msg_dds__Image__desc, depth);
-    right_rect_ =
-        participant_.writer(topic("right/image_rect"), &sensor_msgs_msg_dds__Image__desc, depth);
-    disparity_writer_ =
-        participant_.writer(topic("disparity"), &stereo_msgs_msg_dds__DisparityImage__desc, depth);
-    diagnostics_ = participant_.writer(topic("/diagnostics"),
-                                       &diagnostic_msgs_msg_dds__DiagnosticArray__desc, depth);
     if (calibration_) {
       triangulator_.emplace(*calibration_);
       depth_.resize(pixels);
       const int step = settings_.points_step;
       cloud_.resize(static_cast<std::size_t>(board_.width() / step) * (board_.height() / step) * 4);
       features_.resize(static_cast<std::size_t>(board_.sparse.max_matches) * 4);
-      left_info_ = participant_.writer(topic("left/camera_info"),
-                                       &sensor_msgs_msg_dds__CameraInfo__desc, depth);
-      right_info_ = participant_.writer(topic("right/camera_info"),
-                                        &sensor_msgs_msg_dds__CameraInfo__desc, depth);
-      depth_writer_ = participant_.writer(topic("depth"), &sensor_msgs_msg_dds__Image__desc, depth);
-      points_ =
-          participant_.writer(topic("points"), &sensor_msgs_msg_dds__PointCloud2__desc, depth);
-      features_writer_ =
-          participant_.writer(topic("features"), &sensor_msgs_msg_dds__PointCloud2__desc, depth);
-      tf_static_ = participant_.writer(topic("/tf_static"), &tf2_msgs_msg_dds__TFMessage__desc, 1,
-                                       ros2::Durability::transient_local);
-      publish_rig_transforms();
     }
     health_keys_.reserve(64);
     HealthKeys keys{health_keys_};
@@ -227,6 +201,7 @@ class Ros2Output final : public Output {
     protocol::fields(keys, fields);
     health_values_.resize(health_keys_.size());
     key_values_.resize(health_keys_.size());
+    if (!context.offline) join_graph();
   }
 
   void start() override { delivery_.start(); }
@@ -268,6 +243,32 @@ class Ros2Output final : public Output {
     void list(A&&...) {}
   };
 
+  // The participant and its writers (and the rig's transforms, latched).
+  void join_graph() {
+    participant_.emplace(domain_of(settings_), ros2::cyclonedds_config(settings_.network));
+    if (participant_->configured_by_environment()) {
+      journal(Priority::info, "output ros2: DDS configured by CYCLONEDDS_URI");
+    }
+    const int depth = settings_.depth;
+    const auto writer = [&](const char* name, const dds_topic_descriptor_t* type) {
+      return participant_->writer("rt" + settings_.names.topic(name), type, depth);
+    };
+    left_rect_ = writer("left/image_rect", &sensor_msgs_msg_dds__Image__desc);
+    right_rect_ = writer("right/image_rect", &sensor_msgs_msg_dds__Image__desc);
+    disparity_writer_ = writer("disparity", &stereo_msgs_msg_dds__DisparityImage__desc);
+    diagnostics_ = writer("/diagnostics", &diagnostic_msgs_msg_dds__DiagnosticArray__desc);
+    if (!calibration_) return;
+    left_info_ = writer("left/camera_info", &sensor_msgs_msg_dds__CameraInfo__desc);
+    right_info_ = writer("right/camera_info", &sensor_msgs_msg_dds__CameraInfo__desc);
+    depth_writer_ = writer("depth", &sensor_msgs_msg_dds__Image__desc);
+    points_ = writer("points", &sensor_msgs_msg_dds__PointCloud2__desc);
+    features_writer_ = writer("features", &sensor_msgs_msg_dds__PointCloud2__desc);
+    tf_static_ = participant_->writer("rt" + settings_.names.topic("/tf_static"),
+                                      &tf2_msgs_msg_dds__TFMessage__desc, 1,
+                                      ros2::Durability::transient_local);
+    publish_rig_transforms();
+  }
+
   void write(dds_entity_t writer, const void* sample) {
     if (const dds_return_t rc = dds_write(writer, sample); rc < 0) {
       throw Error(cat("ros2: write: ", dds_strretcode(rc)));
@@ -279,7 +280,8 @@ class Ros2Output final : public Output {
     std::array<geometry_msgs_msg_dds__TransformStamped_, 2> transforms{};
     set_header(transforms[0].header, t, rig_.left_body);
     transforms[0].child_frame_id = text(rig_.left_optical);
-    transforms[0].transform.rotation = {-0.5, 0.5, -0.5, 0.5};
+    const auto& q = ros::kBodyToOptical;
+    transforms[0].transform.rotation = {q[0], q[1], q[2], q[3]};
     set_header(transforms[1].header, t, rig_.left_optical);
     transforms[1].child_frame_id = text(rig_.right_optical);
     transforms[1].transform.translation.x = rig_.baseline_m;
@@ -298,12 +300,11 @@ class Ros2Output final : public Output {
     m.width = static_cast<std::uint32_t>(camera.width);
     m.distortion_model = text("plumb_bob");
     borrow(m.d, no_distortion, 5);
-    const auto& p = camera.p;
-    const double k[9] = {p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]};
-    std::memcpy(m.k, k, sizeof k);
+    const std::array<double, 9> k = ros::camera_k(camera);
+    std::memcpy(m.k, k.data(), sizeof m.k);
     const double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
     std::memcpy(m.r, r, sizeof r);
-    std::memcpy(m.p, p.data(), sizeof m.p);
+    std::memcpy(m.p, camera.p.data(), sizeof m.p);
     write(writer, &m);
   }
 
@@ -385,16 +386,17 @@ class Ros2Output final : public Output {
       key_values_[i].value = health_values_[i].data();
     }
     diagnostic_msgs_msg_dds__DiagnosticStatus_ status{};
-    const bool warn = health.flags != 0 || health.dropped != 0;
-    status.level = warn ? 1 : 0;
+    const ros::HealthStatus level = ros::health_status(health, dropped_before_);
+    dropped_before_ = health.dropped;
+    status.level = level.level;
     status.name = text("epipole: health");
-    status.message = text(health.flags != 0     ? "see flags"
-                          : health.dropped != 0 ? "pairs dropped"
-                                                : "running");
+    status.message = text(level.message);
     status.hardware_id = text(board_.name);
     borrow(status.values, key_values_.data(), key_values_.size());
     diagnostic_msgs_msg_dds__DiagnosticArray_ m{};
-    set_header(m.header, ros::time_of(detail::system_now_ns()), std::string());
+    const ros::Time t = ros::time_of(detail::system_now_ns());
+    m.header.stamp.sec = t.sec;
+    m.header.stamp.nanosec = t.nanosec;
     m.header.frame_id = text("");
     borrow(m.status, &status, 1);
     write(diagnostics_, &m);
@@ -403,7 +405,7 @@ class Ros2Output final : public Output {
   const Ros2Settings& settings_;
   const BoardConfig& board_;
   const std::optional<calib::StereoCalibration>& calibration_;
-  ros2::DdsParticipant participant_;
+  std::optional<ros2::DdsParticipant> participant_;  // none when made offline (--check)
   ros::RigModel rig_;
   std::array<sensor_msgs_msg_dds__PointField_, 4> fields_;
   std::optional<calib::Triangulator> triangulator_;
@@ -416,7 +418,8 @@ class Ros2Output final : public Output {
   dds_entity_t left_rect_ = 0, right_rect_ = 0, left_info_ = 0, right_info_ = 0;
   dds_entity_t disparity_writer_ = 0, depth_writer_ = 0, points_ = 0, features_writer_ = 0;
   dds_entity_t tf_static_ = 0, diagnostics_ = 0;
-  PairDelivery delivery_;  // last: its thread stops before the rest goes
+  std::uint32_t dropped_before_ = 0;  // health's `dropped` in the message before
+  PairDelivery delivery_;             // last: its thread stops before the rest goes
 };
 
 std::unique_ptr<Output> make(const OutputContext& context) {

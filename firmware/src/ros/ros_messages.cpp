@@ -220,6 +220,17 @@ RectifiedCamera rectified_right(const calib::StereoCalibration& c) {
   return rectified(c, c.right);
 }
 
+std::array<double, 9> camera_k(const RectifiedCamera& camera) {
+  const auto& p = camera.p;
+  return {p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]};
+}
+
+HealthStatus health_status(const protocol::Health& health, std::uint32_t dropped_before) {
+  if (health.flags != 0) return {1, "see flags"};
+  if (health.dropped != dropped_before) return {1, "pairs dropped"};  // counts wrap: not <
+  return {0, "running"};
+}
+
 void write_image(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
                  GrayView image) {
   CdrWriter w(out);
@@ -334,9 +345,7 @@ void write_camera_info(std::vector<std::uint8_t>& out, Time stamp, std::string_v
   w.string("plumb_bob");
   w.u32(5);  // d: no distortion left in rectified images
   for (int i = 0; i < 5; ++i) w.f64(0.0);
-  const std::array<double, 9> k = {camera.p[0], camera.p[1], camera.p[2], camera.p[4], camera.p[5],
-                                   camera.p[6], camera.p[8], camera.p[9], camera.p[10]};
-  w.f64s(k);
+  w.f64s(camera_k(camera));
   const std::array<double, 9> r = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   w.f64s(r);
   w.f64s(camera.p);
@@ -401,7 +410,8 @@ void write_rig_transforms(std::vector<std::uint8_t>& out, Time stamp, const Fram
   // The body frame to the optical frame: z forward, x right, y down (REP 103).
   header(w, stamp, frames.left_body);
   w.string(frames.left_optical);
-  for (const double v : {0.0, 0.0, 0.0, -0.5, 0.5, -0.5, 0.5}) w.f64(v);
+  for (int i = 0; i < 3; ++i) w.f64(0.0);
+  w.f64s(kBodyToOptical);
   // The left optical frame to the right one, rectified: parallel, the baseline along x.
   header(w, stamp, frames.left_optical);
   w.string(frames.right_optical);
@@ -409,14 +419,15 @@ void write_rig_transforms(std::vector<std::uint8_t>& out, Time stamp, const Fram
 }
 
 void write_diagnostics(std::vector<std::uint8_t>& out, Time stamp, std::string_view name,
-                       std::string_view hardware_id, const protocol::Health& health) {
+                       std::string_view hardware_id, const protocol::Health& health,
+                       std::uint32_t dropped_before) {
   CdrWriter w(out);
   header(w, stamp, "");
   w.u32(1);
-  const bool warn = health.flags != 0 || health.dropped != 0;
-  w.u8(warn ? 1 : 0);
+  const HealthStatus status = health_status(health, dropped_before);
+  w.u8(status.level);
   w.string(name);
-  w.string(health.flags != 0 ? "see flags" : health.dropped != 0 ? "pairs dropped" : "running");
+  w.string(status.message);
   w.string(hardware_id);
   HealthCount count;
   protocol::fields(count, health);

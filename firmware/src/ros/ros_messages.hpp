@@ -47,6 +47,20 @@ struct RectifiedCamera {
 };
 RectifiedCamera rectified_left(const calib::StereoCalibration& calibration);
 RectifiedCamera rectified_right(const calib::StereoCalibration& calibration);
+// K: the left 3x3 of P, row-major.
+std::array<double, 9> camera_k(const RectifiedCamera& camera);
+
+// The rotation of a body frame (x forward, y left, z up) to its optical frame (z forward, x
+// right, y down), REP 103, as x y z w.
+inline constexpr std::array<double, 4> kBodyToOptical = {-0.5, 0.5, -0.5, 0.5};
+
+// Health as a diagnostic status: WARN when a flag is set or pairs were dropped since the health
+// message before (whose `dropped` was `dropped_before`), else OK.
+struct HealthStatus {
+  std::uint8_t level = 0;  // diagnostic_msgs/DiagnosticStatus: OK 0, WARN 1
+  const char* message = "running";
+};
+HealthStatus health_status(const protocol::Health& health, std::uint32_t dropped_before);
 
 // The rig's fixed transforms: <prefix>left (x forward, y left, z up) to its optical frame (z
 // forward, x right, y down), and the left optical frame to the right one (the baseline along x).
@@ -92,9 +106,10 @@ void write_feature_cloud(std::vector<std::uint8_t>& out, Time stamp, std::string
                          std::span<const SparsePoint> points, GrayView left);
 void write_rig_transforms(std::vector<std::uint8_t>& out, Time stamp, const FrameNames& frames,
                           double baseline_m);
-// diagnostic_msgs/DiagnosticArray: one status named `name`, OK or WARN (a health flag set, or
-// pairs dropped in the second), every field of the health message as a key and value.
+// diagnostic_msgs/DiagnosticArray: one status named `name`, OK or WARN (health_status()), every
+// field of the health message as a key and value.
 void write_diagnostics(std::vector<std::uint8_t>& out, Time stamp, std::string_view name,
-                       std::string_view hardware_id, const protocol::Health& health);
+                       std::string_view hardware_id, const protocol::Health& health,
+                       std::uint32_t dropped_before);
 
 }  // namespace epipole::firmware::ros

@@ -46,8 +46,9 @@ MemoryReport check_memory(BoardConfig config);
 class Firmware {
  public:
   explicit Firmware(BoardConfig config);
-  // On this board instead of the one the configuration makes (stand-ins).
-  Firmware(BoardConfig config, std::unique_ptr<Board> board);
+  // On this board instead of the one the configuration makes (stand-ins); `offline`: its
+  // outputs made to be measured only (check_memory()).
+  Firmware(BoardConfig config, std::unique_ptr<Board> board, bool offline = false);
   ~Firmware();
 
   RunSummary run(std::uint64_t max_frames, const std::atomic<bool>& stop);
@@ -76,7 +77,7 @@ class Firmware {
   std::size_t working_set_bytes() const { return memory_report().total(); }
 
  private:
-  void build(std::unique_ptr<Board> board);
+  void build(std::unique_ptr<Board> board, bool offline = false);
 
   BoardConfig config_;
   std::optional<calib::StereoCalibration> calibration_;

@@ -99,6 +99,7 @@ class FrameLoop {
   hal::Nanoseconds frame_period() const;
   // trigger_from_capture: result.trigger_ns is the left frame's time, not a trigger edge's.
   void publish(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
+  void publish_link(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
   void send(const protocol::Message& message);
   // The steps of run().
   void tick();

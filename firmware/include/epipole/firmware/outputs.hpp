@@ -35,7 +35,9 @@ struct OutputReport {
 // every health message; publish() copies what each keeps and never waits for their work.
 class Outputs {
  public:
-  Outputs(const BoardConfig& config, const std::optional<calib::StereoCalibration>& calibration);
+  // `offline`: made to be measured only (epipole-fw --check): nothing joins a network.
+  Outputs(const BoardConfig& config, const std::optional<calib::StereoCalibration>& calibration,
+          bool offline = false);
   ~Outputs();
   Outputs(const Outputs&) = delete;
   Outputs& operator=(const Outputs&) = delete;
