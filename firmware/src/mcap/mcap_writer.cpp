@@ -111,6 +111,60 @@ void write_channel(Out& out, std::uint16_t id, const Channel& c) {
   out.end(r);
 }
 
+void write_statistics(Out& out, std::uint64_t messages, std::size_t schemas, std::size_t channels,
+                      std::size_t attachments, std::size_t chunks, std::uint64_t first_time,
+                      std::uint64_t last_time, const std::vector<std::uint64_t>& counts) {
+  const std::size_t r = out.begin(kStatistics);
+  out.u64(messages);
+  out.u16(static_cast<std::uint16_t>(schemas));
+  out.u32(static_cast<std::uint32_t>(channels));
+  out.u32(static_cast<std::uint32_t>(attachments));
+  out.u32(0);  // metadata
+  out.u32(static_cast<std::uint32_t>(chunks));
+  out.u64(first_time);
+  out.u64(last_time);
+  const std::size_t map = out.begin_length();
+  for (std::uint16_t c = 0; c < counts.size(); ++c) {
+    out.u16(c);
+    out.u64(counts[c]);
+  }
+  out.end_length(map);
+  out.end(r);
+}
+
+// (`auto`: the writer's own record of the chunk or attachment.)
+void write_chunk_index(Out& out, const auto& ci) {
+  const std::size_t r = out.begin(kChunkIndex);
+  out.u64(ci.start_time);
+  out.u64(ci.end_time);
+  out.u64(ci.offset);
+  out.u64(ci.length);
+  const std::size_t map = out.begin_length();
+  for (std::size_t i = 0; i < ci.indexed_channels; ++i) {
+    const auto& [channel, offset] = ci.index_offsets[i];
+    out.u16(channel);
+    out.u64(offset);
+  }
+  out.end_length(map);
+  out.u64(ci.index_length);
+  out.string("zstd");
+  out.u64(ci.compressed);
+  out.u64(ci.uncompressed);
+  out.end(r);
+}
+
+void write_attachment_index(Out& out, const auto& a) {
+  const std::size_t r = out.begin(kAttachmentIndex);
+  out.u64(a.offset);
+  out.u64(a.length);
+  out.u64(a.log_time);
+  out.u64(a.log_time);  // create time
+  out.u64(a.data_size);
+  out.string(a.name);
+  out.string(a.media_type);
+  out.end(r);
+}
+
 }  // namespace
 
 Writer::Writer(std::vector<Schema> schemas, std::vector<Channel> channels, std::size_t chunk_bytes,
@@ -326,56 +380,14 @@ void Writer::write_summary() {
     }
   });
   group(kStatistics, [&] {
-    const std::size_t r = out.begin(kStatistics);
-    out.u64(messages_);
-    out.u16(static_cast<std::uint16_t>(schemas_.size()));
-    out.u32(static_cast<std::uint32_t>(channels_.size()));
-    out.u32(static_cast<std::uint32_t>(attachments_.size()));
-    out.u32(0);  // metadata
-    out.u32(static_cast<std::uint32_t>(chunks_.size()));
-    out.u64(first_time_);
-    out.u64(last_time_);
-    const std::size_t map = out.begin_length();
-    for (std::uint16_t c = 0; c < message_counts_.size(); ++c) {
-      out.u16(c);
-      out.u64(message_counts_[c]);
-    }
-    out.end_length(map);
-    out.end(r);
+    write_statistics(out, messages_, schemas_.size(), channels_.size(), attachments_.size(),
+                     chunks_.size(), first_time_, last_time_, message_counts_);
   });
   group(kChunkIndex, [&] {
-    for (const ChunkIndex& ci : chunks_) {
-      const std::size_t r = out.begin(kChunkIndex);
-      out.u64(ci.start_time);
-      out.u64(ci.end_time);
-      out.u64(ci.offset);
-      out.u64(ci.length);
-      const std::size_t map = out.begin_length();
-      for (std::size_t i = 0; i < ci.indexed_channels; ++i) {
-        const auto& [channel, offset] = ci.index_offsets[i];
-        out.u16(channel);
-        out.u64(offset);
-      }
-      out.end_length(map);
-      out.u64(ci.index_length);
-      out.string("zstd");
-      out.u64(ci.compressed);
-      out.u64(ci.uncompressed);
-      out.end(r);
-    }
+    for (const ChunkIndex& ci : chunks_) write_chunk_index(out, ci);
   });
   group(kAttachmentIndex, [&] {
-    for (const AttachmentIndex& a : attachments_) {
-      const std::size_t r = out.begin(kAttachmentIndex);
-      out.u64(a.offset);
-      out.u64(a.length);
-      out.u64(a.log_time);
-      out.u64(a.log_time);
-      out.u64(a.data_size);
-      out.string(a.name);
-      out.string(a.media_type);
-      out.end(r);
-    }
+    for (const AttachmentIndex& a : attachments_) write_attachment_index(out, a);
   });
   const std::uint64_t offsets_start = summary_start + scratch_.size();
   for (const Group& g : groups) {
