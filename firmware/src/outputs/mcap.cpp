@@ -233,7 +233,7 @@ class McapOutput final : public Output {
 
   // A new file when there is none or the one open is full.
   void open_if_needed(std::int64_t system_ns) {
-    if (writer_.is_open() && writer_.bytes() < ring_limit()) return;
+    if (writer_.is_open() && writer_.bytes() < ring_.limits().file_bytes) return;
     writer_.close();
     writer_.open(ring_.next_file(system_ns), build_info());
     journal(Priority::info, "output mcap: recording into %s", writer_.file().c_str());
@@ -246,9 +246,6 @@ class McapOutput final : public Output {
                                 rig_.baseline_m);
       writer_.end_message();
     }
-  }
-  std::uint64_t ring_limit() const {
-    return static_cast<std::uint64_t>(settings_.file_mb * (1 << 20));
   }
 
   void record(const PairCopy& pair) {

@@ -18,7 +18,6 @@
 #include "epipole/calib/triangulation.hpp"
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/journal.hpp"
-#include "epipole/firmware/protocol/fields.hpp"
 #include "output_files.hpp"
 #include "ros/rig_model.hpp"
 #include "ros/ros_messages.hpp"
@@ -195,12 +194,6 @@ class Ros2Output final : public Output {
       cloud_.resize(static_cast<std::size_t>(board_.width() / step) * (board_.height() / step) * 4);
       features_.resize(static_cast<std::size_t>(board_.sparse.max_matches) * 4);
     }
-    health_keys_.reserve(64);
-    HealthKeys keys{health_keys_};
-    const protocol::Health fields{};
-    protocol::fields(keys, fields);
-    health_values_.resize(health_keys_.size());
-    key_values_.resize(health_keys_.size());
     if (!context.offline) join_graph();
   }
 
@@ -222,27 +215,6 @@ class Ros2Output final : public Output {
   }
 
  private:
-  // Health's field names, as its fields() visits them.
-  struct HealthKeys {
-    std::vector<const char*>& keys;
-    template <typename T>
-    void operator()(const char* name, const T&) {
-      keys.push_back(name);
-    }
-    template <typename... A>
-    void list(A&&...) {}
-  };
-  struct HealthValues {
-    std::vector<std::array<char, 24>>& values;
-    std::size_t i = 0;
-    template <typename T>
-    void operator()(const char*, const T& value) {
-      std::snprintf(values[i++].data(), 24, "%llu", static_cast<unsigned long long>(value));
-    }
-    template <typename... A>
-    void list(A&&...) {}
-  };
-
   // The participant and its writers (and the rig's transforms, latched).
   void join_graph() {
     participant_.emplace(domain_of(settings_), ros2::cyclonedds_config(settings_.network));
@@ -379,11 +351,10 @@ class Ros2Output final : public Output {
   }
 
   void publish_health(const protocol::Health& health) {
-    HealthValues values{health_values_};
-    protocol::fields(values, health);
-    for (std::size_t i = 0; i < key_values_.size(); ++i) {
-      key_values_[i].key = text(health_keys_[i]);
-      key_values_[i].value = health_values_[i].data();
+    const std::size_t n = ros::health_fields(health, health_fields_);
+    for (std::size_t i = 0; i < n; ++i) {
+      key_values_[i].key = text(health_fields_[i].key);
+      key_values_[i].value = health_fields_[i].value.data();
     }
     diagnostic_msgs_msg_dds__DiagnosticStatus_ status{};
     const ros::HealthStatus level = ros::health_status(health, dropped_before_);
@@ -392,7 +363,7 @@ class Ros2Output final : public Output {
     status.name = text("epipole: health");
     status.message = text(level.message);
     status.hardware_id = text(board_.name);
-    borrow(status.values, key_values_.data(), key_values_.size());
+    borrow(status.values, key_values_.data(), n);
     diagnostic_msgs_msg_dds__DiagnosticArray_ m{};
     const ros::Time t = ros::time_of(detail::system_now_ns());
     m.header.stamp.sec = t.sec;
@@ -412,9 +383,8 @@ class Ros2Output final : public Output {
   std::vector<float> disparity_;
   std::vector<std::uint16_t> depth_;
   std::vector<float> cloud_, features_;
-  std::vector<const char*> health_keys_;
-  std::vector<std::array<char, 24>> health_values_;
-  std::vector<diagnostic_msgs_msg_dds__KeyValue_> key_values_;
+  std::array<ros::HealthField, ros::kMaxHealthFields> health_fields_;
+  std::array<diagnostic_msgs_msg_dds__KeyValue_, ros::kMaxHealthFields> key_values_{};
   dds_entity_t left_rect_ = 0, right_rect_ = 0, left_info_ = 0, right_info_ = 0;
   dds_entity_t disparity_writer_ = 0, depth_writer_ = 0, points_ = 0, features_writer_ = 0;
   dds_entity_t tf_static_ = 0, diagnostics_ = 0;

@@ -29,6 +29,7 @@ class RecordingRing {
   // Recordings removed to make room, since the start.
   std::uint64_t removed() const { return removed_; }
   const std::filesystem::path& directory() const { return directory_; }
+  const RingLimits& limits() const { return limits_; }
 
  private:
   std::filesystem::path directory_;

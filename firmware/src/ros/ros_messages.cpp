@@ -9,6 +9,7 @@
 #include <limits>
 #include <string>
 
+#include "epipole/core/error.hpp"
 #include "epipole/firmware/protocol/fields.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "ros/cdr_writer.hpp"
@@ -107,28 +108,21 @@ void point_field(CdrWriter& w, std::string_view name, std::uint32_t offset) {
   w.u32(1);
 }
 
-// Every health field as a key and its value, written as they are visited.
-struct HealthValues {
-  CdrWriter& w;
+// Every health field as a key and its value, in the order visited.
+struct HealthTexts {
+  std::array<HealthField, kMaxHealthFields>& out;
+  std::size_t n = 0;
   template <typename T>
-  void operator()(std::string_view name, const T& value) {
-    char text[24];
-    const auto [end, ec] = std::to_chars(text, text + sizeof text, +value);
-    w.string(name);
-    w.string(ec == std::errc() ? std::string_view(text, static_cast<std::size_t>(end - text))
-                               : std::string_view("?"));
+  void operator()(const char* name, const T& value) {
+    require(n < out.size(), "health has more than ", out.size(), " fields");
+    HealthField& f = out[n++];
+    f.key = name;
+    const auto [end, ec] =
+        std::to_chars(f.value.data(), f.value.data() + f.value.size() - 1, +value);
+    *(ec == std::errc() ? end : f.value.data()) = '\0';
   }
   template <typename... A>
   void list(A&&...) {}  // health has no lists
-};
-struct HealthCount {
-  std::uint32_t n = 0;
-  template <typename T>
-  void operator()(std::string_view, const T&) {
-    ++n;
-  }
-  template <typename... A>
-  void list(A&&...) {}
 };
 
 }  // namespace
@@ -223,6 +217,13 @@ RectifiedCamera rectified_right(const calib::StereoCalibration& c) {
 std::array<double, 9> camera_k(const RectifiedCamera& camera) {
   const auto& p = camera.p;
   return {p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]};
+}
+
+std::size_t health_fields(const protocol::Health& health,
+                          std::array<HealthField, kMaxHealthFields>& out) {
+  HealthTexts texts{out};
+  protocol::fields(texts, health);
+  return texts.n;
 }
 
 HealthStatus health_status(const protocol::Health& health, std::uint32_t dropped_before) {
@@ -429,11 +430,13 @@ void write_diagnostics(std::vector<std::uint8_t>& out, Time stamp, std::string_v
   w.string(name);
   w.string(status.message);
   w.string(hardware_id);
-  HealthCount count;
-  protocol::fields(count, health);
-  w.u32(count.n);
-  HealthValues values{w};
-  protocol::fields(values, health);
+  std::array<HealthField, kMaxHealthFields> fields;
+  const std::size_t n = health_fields(health, fields);
+  w.u32(static_cast<std::uint32_t>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    w.string(fields[i].key);
+    w.string(fields[i].value.data());
+  }
 }
 
 }  // namespace epipole::firmware::ros

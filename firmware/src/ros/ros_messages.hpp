@@ -62,6 +62,17 @@ struct HealthStatus {
 };
 HealthStatus health_status(const protocol::Health& health, std::uint32_t dropped_before);
 
+// A health field as a diagnostic key and value: its name in the protocol, its value in decimal.
+struct HealthField {
+  const char* key = "";
+  std::array<char, 24> value{};
+};
+inline constexpr std::size_t kMaxHealthFields = 64;
+// Every field of `health` in the protocol's order, into `out`; returns how many (never
+// allocates).
+std::size_t health_fields(const protocol::Health& health,
+                          std::array<HealthField, kMaxHealthFields>& out);
+
 // The rig's fixed transforms: <prefix>left (x forward, y left, z up) to its optical frame (z
 // forward, x right, y down), and the left optical frame to the right one (the baseline along x).
 struct FrameNames {
