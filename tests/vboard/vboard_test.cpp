@@ -223,7 +223,20 @@ TEST(EPIPOLE_VBOARD_SUITE, TriggerStopsAndRestarts) {
 
   const std::vector<Health> health = run.all<Health>();
   ASSERT_GE(health.size(), 4u) << context(run);
-  EXPECT_EQ(health.front().trigger_losses, 0);
+  const std::vector<FrameSummary> frames = run.all<FrameSummary>();
+  const auto after_pause = [&](const FrameSummary& f) {
+    return static_cast<std::int64_t>(f.trigger_ns) > run.pauses.front();
+  };
+  // No loss before the line first stops: health sent while pairs of before the first pause were
+  // still to come. (A loaded host may start the firmware so late that its first health comes
+  // after that pause; the order of the messages on the link tells.)
+  const auto before_pause = static_cast<std::uint32_t>(std::count_if(
+      frames.begin(), frames.end(), [&](const FrameSummary& f) { return !after_pause(f); }));
+  for (const Health& h : health) {
+    if (h.frames < before_pause) {
+      EXPECT_EQ(h.trigger_losses, 0) << context(run);
+    }
+  }
   EXPECT_GE(health.back().trigger_losses, 2) << context(run);
   EXPECT_LE(health.back().trigger_losses, static_cast<int>(run.pauses.size()));
   for (std::size_t i = 1; i < health.size(); ++i) {
@@ -231,17 +244,10 @@ TEST(EPIPOLE_VBOARD_SUITE, TriggerStopsAndRestarts) {
     EXPECT_GE(health[i].frames, health[i - 1].frames);
   }
 
-  const std::vector<FrameSummary> frames = run.all<FrameSummary>();
   expect_frames_carry_their_edges(run, 0, frames.size());
   // Pairs before the first pause, and after it.
-  const auto after_pause = [&](const FrameSummary& f) {
-    return static_cast<std::int64_t>(f.trigger_ns) > run.pauses.front();
-  };
   EXPECT_GT(std::count_if(frames.begin(), frames.end(), after_pause), 0) << context(run);
-  EXPECT_GT(std::count_if(frames.begin(), frames.end(),
-                          [&](const FrameSummary& f) { return !after_pause(f); }),
-            0)
-      << context(run);
+  EXPECT_GT(before_pause, 0u) << context(run);
   expect_triggers_accounted(run);
 }
 // How much later than usual the driver made edge `n`: the usual lead of an edge over its frame's
