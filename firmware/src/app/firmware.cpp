@@ -13,9 +13,11 @@
 #include <vector>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/mcap_reader.hpp"
 #include "epipole/core/temporary_folder.hpp"
 #include "epipole/firmware/thread_roles.hpp"
 #include "epipole/hal/registry.hpp"
+#include "record/recorded_calibration.hpp"
 
 namespace epipole::firmware {
 
@@ -27,7 +29,8 @@ void check_budget(const std::string& board, std::optional<std::size_t> budget, s
           needed / 1024, " KiB but the budget is ", *budget / 1024, " KiB");
 }
 
-// The calibration file the section of the cameras' backend names, if any.
+// The calibration file (or recording, whose calibration rides in it) the section of the cameras'
+// backend names, if any.
 std::filesystem::path backend_calibration(const BoardConfig& config) {
   const char* section =
       hal::BackendRegistry::builtin().camera_traits(config.cameras.backend).section;
@@ -45,6 +48,7 @@ bool not_there(const std::filesystem::path& file) {
 
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config) {
   if (const std::filesystem::path file = backend_calibration(config); !file.empty()) {
+    if (mcap::is_mcap_file(file)) return record::recorded_calibration(file);
     return calib::load_calibration(file);
   }
   if (config.calibration.empty() || not_there(config.calibration)) return std::nullopt;

@@ -16,11 +16,12 @@
 #include <vector>
 
 #include "epipole/calib/triangulation.hpp"
+#include "epipole/core/mcap_writer.hpp"
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/build_info.hpp"
 #include "epipole/firmware/journal.hpp"
-#include "mcap/mcap_writer.hpp"
 #include "output_files.hpp"
+#include "record/recorded_calibration.hpp"
 #include "record/recording_ring.hpp"
 #include "ros/rig_model.hpp"
 #include "ros/ros_messages.hpp"
@@ -240,7 +241,7 @@ class McapOutput final : public Output {
     const auto time = static_cast<std::uint64_t>(system_ns);
     if (calibration_) {
       const std::string yaml = calib::format_calibration(*calibration_);
-      writer_.attach("calibration.yaml", "application/yaml",
+      writer_.attach(firmware::record::kCalibrationAttachment, "application/yaml",
                      {reinterpret_cast<const std::uint8_t*>(yaml.data()), yaml.size()}, time);
       ros::write_rig_transforms(begin(kTfStatic, time), ros::time_of(system_ns), rig_.frames(),
                                 rig_.baseline_m);
@@ -305,7 +306,7 @@ class McapOutput final : public Output {
   const McapSettings& settings_;
   const BoardConfig& board_;
   const std::optional<calib::StereoCalibration>& calibration_;
-  record::RecordingRing ring_;
+  firmware::record::RecordingRing ring_;
   mcap::Writer writer_;
   ros::RigModel rig_;
   std::array<std::uint32_t, kTopicCount> sequences_{};

@@ -9,12 +9,14 @@
 #include <limits>
 #include <string>
 
+#include "epipole/core/cdr_writer.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/protocol/fields.hpp"
 #include "epipole/vision/stereo.hpp"
-#include "ros/cdr_writer.hpp"
 
 namespace epipole::firmware::ros {
+
+using cdr::CdrWriter;
 
 static_assert(std::endian::native == std::endian::little, "CDR is written as little endian");
 

@@ -1,9 +1,9 @@
 #pragma once
 
-// ROS 2 messages of a pair's results, in CDR (cdr_writer.hpp), with their `ros2msg` schemas: what
-// the recordings hold and what the graph and the live view carry. Each write_*() appends one
-// whole message (its encapsulation header first) to a buffer the caller owns; none allocates
-// when the buffer's capacity holds it.
+// ROS 2 messages of a pair's results, in CDR (epipole/core/cdr_writer.hpp), with their `ros2msg`
+// schemas: what the recordings hold and what the graph and the live view carry. Each write_*()
+// appends one whole message (its encapsulation header first) to a buffer the caller owns; none
+// allocates when the buffer's capacity holds it.
 
 #include <array>
 #include <cstdint>

@@ -58,6 +58,13 @@ StereoImages load_scene(const SimScene& scene, int w, int h) {
                       [&] { return load_side_by_side_video(scene.side_by_side, video); });
   }
   if (!scene.synthesize.empty()) return synthesized(scene, key, w, h, video);
+  if (!scene.recording.empty()) {
+    try {
+      return load_recording(scene.recording, video);
+    } catch (const Error& e) {
+      throw Error(cat(key, ".recording: ", e.what()));
+    }
+  }
   if (any_video(scene.left) || any_video(scene.right)) {
     require(scene.left.size() == 1 && scene.right.size() == 1 &&
                 is_video_file(scene.left.front()) && is_video_file(scene.right.front()),

@@ -56,6 +56,11 @@ StereoImages load_stereo_videos(const std::filesystem::path& left_file,
 StereoImages load_side_by_side_video(const std::filesystem::path& file,
                                      const VideoOptions& options = {});
 
+// The raw pairs of an MCAP recording (recording_scene.cpp): the sensor_msgs/Image messages of its
+// topics .../left/image_raw and .../right/image_raw (mono8, rgb8 or bgr8), paired by stamp, in
+// the order recorded; at most `max_frames` of each side. Errors name the file and the message.
+StereoImages load_recording(const std::filesystem::path& file, const VideoOptions& options = {});
+
 // Each frame of a video as the left view, the right view synthesised at a constant disparity.
 StereoImages synthesize_stereo_video(const std::filesystem::path& file, int disparity,
                                      const VideoOptions& options = {});

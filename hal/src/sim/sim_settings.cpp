@@ -16,19 +16,25 @@ SimScene read_scene(const yaml::Fields& f, const std::string& name, const YAML::
   SimScene s;
   s.name = name;
   const std::string p = cat(kSection, ".scenes.", name);
-  f.only_keys(
-      m, p,
-      {"left", "right", "side_by_side", "synthesize", "disparity", "max_frames", "calibration"});
+  f.only_keys(m, p,
+              {"left", "right", "side_by_side", "synthesize", "disparity", "recording",
+               "max_frames", "calibration"});
   f.if_present(m, p, "max_frames", [&](const YAML::Node& n, const std::string& k) {
     s.max_frames = f.integer_in(n, k, 1, 100'000);
   });
-  if (const YAML::Node v = f.optional_child(m, p, "side_by_side"); v.IsDefined()) {
-    for (const char* other : {"left", "right", "synthesize"}) {
-      if (f.optional_child(m, p, other).IsDefined()) {
-        f.fail(p, cat("side_by_side and ", other, " are two sources: give one"));
-      }
+  std::string given;  // the scene's source: one of these
+  for (const std::string source : {"side_by_side", "synthesize", "recording", "left", "right"}) {
+    if (!f.optional_child(m, p, source.c_str()).IsDefined() ||
+        (source == "right" && given == "left")) {
+      continue;
     }
+    if (!given.empty()) f.fail(p, cat(given, " and ", source, " are two sources: give one"));
+    given = source;
+  }
+  if (const YAML::Node v = f.optional_child(m, p, "side_by_side"); v.IsDefined()) {
     s.side_by_side = f.path(v, p + ".side_by_side");
+  } else if (const YAML::Node r = f.optional_child(m, p, "recording"); r.IsDefined()) {
+    s.recording = f.path(r, p + ".recording");
   } else if (const YAML::Node y = f.optional_child(m, p, "synthesize"); y.IsDefined()) {
     s.synthesize = f.path(y, p + ".synthesize");
     s.synthesize_disparity = f.integer(f.child(m, p, "disparity"), p + ".disparity");
@@ -106,7 +112,7 @@ const SimScene& SimSettings::chosen() const {
 
 std::filesystem::path SimSettings::calibration() const {
   for (const SimScene& s : scenes) {
-    if (s.name == scene) return s.calibration;
+    if (s.name == scene) return s.calibration.empty() ? s.recording : s.calibration;
   }
   return {};
 }

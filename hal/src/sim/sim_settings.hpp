@@ -20,8 +20,10 @@ struct SimScene {
   std::filesystem::path side_by_side;        // or: one video, the left view in its left half
   std::filesystem::path synthesize;          // or: one image or video, the right view made
   int synthesize_disparity = 0;              // from it at this disparity (pixels)
-  int max_frames = 300;                      // a video of more frames is refused
-  std::filesystem::path calibration;         // the rig's, overriding the board's
+  std::filesystem::path recording;           // or: an MCAP recording's raw pairs
+  int max_frames = 300;                      // a video or recording of more frames is refused
+  std::filesystem::path calibration;         // the rig's, overriding the board's (a
+                                             // recording's own when it is replayed)
 };
 
 // The board file's `sim:` section (docs/boards.md): what the simulated board replays and how.

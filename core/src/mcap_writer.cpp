@@ -1,4 +1,4 @@
-#include "mcap/mcap_writer.hpp"
+#include "epipole/core/mcap_writer.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -11,28 +11,11 @@
 #include <limits>
 
 #include "epipole/core/error.hpp"
+#include "mcap_format.hpp"
 
-namespace epipole::firmware::mcap {
+namespace epipole::mcap {
 
 namespace {
-
-constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
-
-enum Op : std::uint8_t {
-  kHeader = 0x01,
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kMessageIndex = 0x07,
-  kChunkIndex = 0x08,
-  kAttachment = 0x09,
-  kAttachmentIndex = 0x0A,
-  kStatistics = 0x0B,
-  kSummaryOffset = 0x0E,
-  kDataEnd = 0x0F,
-};
 
 // Little-endian fields appended to a buffer.
 class Out {
@@ -419,4 +402,4 @@ void Writer::close() {
   abandon();  // closed; nothing left of it
 }
 
-}  // namespace epipole::firmware::mcap
+}  // namespace epipole::mcap

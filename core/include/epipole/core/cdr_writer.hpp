@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-namespace epipole::firmware::ros {
+namespace epipole::cdr {
 
 // Appends to a byte buffer the caller owns (reserved ahead: appending within its capacity never
 // allocates).
@@ -63,4 +63,4 @@ class CdrWriter {
   std::size_t origin_ = 0;
 };
 
-}  // namespace epipole::firmware::ros
+}  // namespace epipole::cdr

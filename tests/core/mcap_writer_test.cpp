@@ -1,7 +1,7 @@
 // The MCAP writer when the disk says no: a write that fails is an error naming the file, the file
 // is left closed with what it had, and the writer records into the next file as if nothing
 // happened (the recording output then opens one through its ring).
-#include "mcap/mcap_writer.hpp"
+#include "epipole/core/mcap_writer.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/resource.h>
@@ -10,10 +10,10 @@
 #include <fstream>
 #include <string>
 
+#include "epipole/core/temporary_folder.hpp"
 #include "error_of.hpp"
-#include "sim_rig.hpp"
 
-namespace epipole::firmware::mcap {
+namespace epipole::mcap {
 namespace {
 
 bool ends_with_magic(const std::filesystem::path& file) {
@@ -55,7 +55,7 @@ void write_messages(Writer& w, int count, std::size_t bytes) {
 }
 
 TEST(McapWriter, AFailedWriteClosesTheFileAndTheNextFileIsWhole) {
-  const test::TempDir dir;
+  const TemporaryFolder dir("epipole-test");
   Writer w({{"t", "ros2msg", "uint8[] data\n"}}, {{1, "/t", "cdr", {}}}, 64 * 1024, 64 * 1024);
   w.open(dir.path() / "first.mcap", "test");
   std::string error;
@@ -76,7 +76,7 @@ TEST(McapWriter, AFailedWriteClosesTheFileAndTheNextFileIsWhole) {
 }
 
 TEST(McapWriter, AFileThatExistsIsNeverOverwritten) {
-  const test::TempDir dir;
+  const TemporaryFolder dir("epipole-test");
   std::ofstream(dir.path() / "there.mcap") << "keep";
   Writer w({{"t", "ros2msg", "uint8[] data\n"}}, {{1, "/t", "cdr", {}}}, 1024, 1024);
   EXPECT_NE(
@@ -89,4 +89,4 @@ TEST(McapWriter, AFileThatExistsIsNeverOverwritten) {
 }
 
 }  // namespace
-}  // namespace epipole::firmware::mcap
+}  // namespace epipole::mcap

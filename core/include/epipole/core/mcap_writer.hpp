@@ -18,7 +18,7 @@
 #include <utility>
 #include <vector>
 
-namespace epipole::firmware::mcap {
+namespace epipole::mcap {
 
 // A channel's id is its index among the writer's channels.
 struct Channel {
@@ -111,4 +111,4 @@ class Writer {
   std::uint64_t first_time_ = 0, last_time_ = 0;
 };
 
-}  // namespace epipole::firmware::mcap
+}  // namespace epipole::mcap
