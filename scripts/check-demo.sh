@@ -2,8 +2,9 @@
 # Checks what the main job (scripts/run-demo.sh) wrote: the calibration's files, and for every
 # scene of the simulated board its frame pairs, its pictures and a serial stream that the robot's
 # end decoded without a single error, and each recording as an independent MCAP reader and ROS 2
-# decoder read it (tests/clients/mcap-read.mjs). Exits non-zero naming each thing that is missing
-# or wrong.
+# decoder read it (tests/clients/mcap-read.mjs), and the recording's replay: its results the
+# recorded scene's (the same rectified pair and disparity pictures, byte for byte). Exits non-zero
+# naming each thing that is missing or wrong.
 #
 #   scripts/check-demo.sh OUT_DIR
 set -euo pipefail
@@ -68,6 +69,24 @@ while read -r scene; do
   echo "check-demo: $scene: $(jq -r --arg type "$per_frame" \
     '"\(.frames) pairs, \(.received[$type] // 0) \($type) messages decoded (\(.decoder.protocol), \(.decoder.errors) errors), \(.pictures | length) pictures"' <<<"$s")"
 done < <(jq -r '.scenes[].scene' "$summary")
+
+# The replay of the recording: the recorded scene's first pair again, rectified with the
+# calibration the recording carries, the same disparity.
+replay="$out/replay/summary.json"
+if s=$(jq -ce '.scenes[0]' "$replay" 2>/dev/null); then
+  scene=$(jq -r .scene <<<"$s")
+  recorded=$(jq -r '.scenes[] | select(.recordings) | .scene' "$summary" | head -n 1)
+  check '.frames > 0' "no frame pairs replayed"
+  check '.calibration == "yes"' "replayed without the recording's calibration"
+  check '.decoder.errors == 0' "the replay's serial stream was not decoded without errors"
+  for picture in frame0-rectified-pair.png frame0-disparity16.png; do
+    cmp -s "$out/sim/$recorded/$picture" "$out/replay/$scene/$picture" ||
+      problem "replay $scene: $picture is not the recorded scene's ($recorded)"
+  done
+  echo "check-demo: replay $scene: $(jq -r '.frames' <<<"$s") pairs, the recorded $recorded scene's first rectified pair and disparity again"
+else
+  problem "$replay is missing or lists no scene"
+fi
 
 if ((problems > 0)); then
   echo "check-demo: $problems problems in $out" >&2

@@ -7,8 +7,11 @@
 #      chessboard rig with its calibration, Middlebury Aloe, and a synthetic pair with faces at a
 #      known depth. For each scene: the rectified pair with epipolar lines, corners, colour
 #      disparity with a legend, the raw serial stream as the robot received it and its decoded
-#      messages (serial.jsonl), and a summary; the Aloe scene is also recorded, every pair, as
-#      ROS 2 messages in an MCAP file (docs/outputs.md) that Foxglove, Lichtblick and ros2 bag open.
+#      messages (serial.jsonl), and a summary; the chessboard scene is also recorded, every pair,
+#      as ROS 2 messages in an MCAP file (docs/outputs.md) that Foxglove, Lichtblick and ros2 bag
+#      open;
+#   3. replays that recording as a scene (its raw pairs and the calibration it carries), as a user
+#      replays what the robot saw: the same results again (scripts/check-demo.sh compares them).
 #
 #   scripts/run-demo.sh [OUT_DIR]      (default: out/demo)
 set -euo pipefail
@@ -34,11 +37,17 @@ echo "demo: calibrating the chessboard rig"
   --report "$out/calibration/report.json" --preview "$out/calibration/preview.png"
 
 echo "demo: the firmware on the simulated board (board/sim)"
-"$tool" sim --board board/sim --frames 60 --pictures 2 --record aloe --out "$out/sim"
-for recording in "$out"/sim/aloe/recordings/*.mcap; do
-  echo "demo: the Aloe scene's recording: $recording"
+"$tool" sim --board board/sim --frames 60 --pictures 2 --record chessboard --out "$out/sim"
+recordings=("$out"/sim/chessboard/recordings/*.mcap)
+for recording in "${recordings[@]}"; do
+  echo "demo: the chessboard scene's recording: $recording"
   echo "      open it in Foxglove or Lichtblick (Open local file), or: ros2 bag info $recording"
 done
+
+echo "demo: replaying the recording as a scene"
+echo "      $tool sim --board board/sim --replay ${recordings[0]} --out $out/replay"
+"$tool" sim --board board/sim --frames 60 --pictures 2 --replay "${recordings[0]}" \
+  --out "$out/replay"
 
 echo "demo: pictures, serial streams and summaries in $out/"
 find "$out" -type f | sort

@@ -4,6 +4,7 @@
 // summary.
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -45,7 +46,25 @@ struct SimOptions {
   std::string out = "out/sim";
   bool json = false;                // the summary on stdout instead of a line per scene
   std::vector<std::string> record;  // scenes recorded (every pair, MCAP) into <out>/<scene>/
+  std::vector<std::string> replay;  // recordings replayed, each a scene named after its file
 };
+
+// A recording's scene: named after its file (letters, digits, - and _), the recording's raw pairs
+// and calibration replayed (docs/outputs.md).
+struct ReplayedScene {
+  std::string name;
+  std::string setting;  // the board file override that adds it
+};
+ReplayedScene replayed_scene(const fs::path& recording) {
+  require(fs::is_regular_file(recording), "--replay ", recording.string(), ": no such file");
+  std::string name = recording.stem().string();
+  for (char& c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_') c = '_';
+  }
+  // The path as a YAML string (JSON's quoting is YAML's).
+  return {name, "sim.scenes." + name +
+                    ".recording=" + nlohmann::json(fs::absolute(recording).string()).dump()};
+}
 
 // The board file's recording output turned on for a scene: every pair into `directory`.
 std::vector<std::string> recording_overrides(const fs::path& directory) {
@@ -210,15 +229,18 @@ class FrameProgress final : public firmware::FrameObserver {
   Progress progress_;
 };
 
-nlohmann::json run_scene(const std::string& scene, const SimOptions& options) {
+nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
+                         std::vector<std::string> overrides) {
   const std::vector<hal::BackendOption> chosen = {{"scene", scene}};
   const fs::path directory = fs::path(options.out) / scene;
   const bool record =
       std::find(options.record.begin(), options.record.end(), scene) != options.record.end();
   const fs::path recordings = directory / "recordings";
   if (record) fs::remove_all(recordings);  // this run's recording alone
-  firmware::BoardConfig config = firmware::load_board_config(
-      options.board, record ? recording_overrides(recordings) : std::vector<std::string>(), chosen);
+  if (record) {
+    for (std::string& setting : recording_overrides(recordings)) overrides.push_back(setting);
+  }
+  firmware::BoardConfig config = firmware::load_board_config(options.board, overrides, chosen);
   fs::create_directories(directory);
   // The pty's robot end: a link in the output folder, so the firmware's link is easy to find.
   if (hal::BackendRegistry::builtin().serial_traits(config.serial.backend).simulated &&
@@ -307,6 +329,13 @@ void run_sim(const SimOptions& options) {
           "is '",
           board.cameras.backend, "')");
   std::vector<std::string> scenes = options.scenes;
+  std::map<std::string, std::string> replayed;  // scene: its override
+  for (const std::string& file : options.replay) {
+    const ReplayedScene r = replayed_scene(file);
+    require(replayed.emplace(r.name, r.setting).second, "--replay ", file,
+            ": two recordings named ", r.name);
+    scenes.push_back(r.name);
+  }
   if (scenes.empty()) {
     for (const auto& s : hal::sim_settings(board.sections).scenes) scenes.push_back(s.name);
   }
@@ -317,7 +346,10 @@ void run_sim(const SimOptions& options) {
             ": not a scene this run runs");
   }
   for (const std::string& scene : scenes) {
-    const nlohmann::json s = run_scene(scene, options);
+    const auto replay = replayed.find(scene);
+    const nlohmann::json s = run_scene(
+        scene, options,
+        replay == replayed.end() ? std::vector<std::string>() : std::vector{replay->second});
     for (const auto& file : s.value("recordings", nlohmann::json::array())) {
       if (!options.json)
         std::cout << "sim: scene " << scene << " recorded into " << file.get<std::string>() << "\n";
@@ -353,6 +385,9 @@ void add_sim_command(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("--record", options->record,
                   "Scenes to record, every pair, into OUT/SCENE/recordings/ (MCAP: "
                   "docs/outputs.md)");
+  cmd->add_option("--replay", options->replay,
+                  "MCAP recordings to replay, each a scene named after its file: its raw pairs "
+                  "with the calibration it carries (docs/outputs.md)");
   cmd->add_flag("--json", options->json,
                 "Print the summary (as summary.json) instead of a line per scene");
   cmd->callback([options] { run_sim(*options); });
