@@ -38,7 +38,10 @@ echo "demo: calibrating the chessboard rig"
 
 echo "demo: the firmware on the simulated board (board/sim)"
 "$tool" sim --board board/sim --frames 60 --pictures 2 --record chessboard --out "$out/sim"
+shopt -s nullglob
 recordings=("$out"/sim/chessboard/recordings/*.mcap)
+shopt -u nullglob
+((${#recordings[@]} > 0)) || { echo "demo: the chessboard scene left no recording" >&2; exit 1; }
 for recording in "${recordings[@]}"; do
   echo "demo: the chessboard scene's recording: $recording"
   echo "      open it in Foxglove or Lichtblick (Open local file), or: ros2 bag info $recording"

@@ -17,9 +17,10 @@ namespace epipole::mcap {
 
 namespace {
 
-// A chunk that says it holds more than this is refused rather than allocated: the writers chunk
-// a few MiB.
-constexpr std::uint64_t kLargestChunk = 1ull << 30;
+// A chunk that says it holds more than this is refused rather than allocated (the writers chunk
+// a few MiB), and so is any record read that is larger than a chunk could be.
+constexpr std::uint64_t kLargestChunk = 256ull << 20;
+constexpr std::uint64_t kLargestRecord = kLargestChunk + (1u << 20);
 
 // Where the bytes come from: the records are read in order, each wholly, or skipped.
 class Source {
@@ -63,7 +64,9 @@ class FileSource final : public Source {
   std::span<const std::uint8_t> read(std::size_t n) override {
     buffer_.resize(n);
     if (std::fread(buffer_.data(), 1, n, file_.get()) != n) {
-      throw Error(cat(name_, ": cannot read at offset ", at_, ": ", std::strerror(errno)));
+      throw Error(cat(name_, ": cannot read at offset ", at_, ": ",
+                      std::feof(file_.get()) ? "it ends early (was it cut while read?)"
+                                             : std::strerror(errno)));
     }
     at_ += n;
     return buffer_;
@@ -125,7 +128,7 @@ class Fields {
 };
 
 std::uint32_t crc_of(std::span<const std::uint8_t> bytes) {
-  return static_cast<std::uint32_t>(crc32(0, bytes.data(), static_cast<uInt>(bytes.size())));
+  return static_cast<std::uint32_t>(crc32_z(0, bytes.data(), bytes.size()));
 }
 
 class Scanner {
@@ -156,6 +159,10 @@ class Scanner {
       if (!wanted(op)) {
         source_.skip(length);
         continue;
+      }
+      if (length > kLargestRecord) {
+        throw Error(
+            cat(where_, ": a record of ", length, " bytes (at most ", kLargestRecord, " read)"));
       }
       record(op, source_.read(static_cast<std::size_t>(length)), false);
     }
@@ -219,7 +226,7 @@ class Scanner {
     s.encoding = f.string("encoding");
     const std::span<const std::uint8_t> data = f.bytes32("data");
     s.data.assign(reinterpret_cast<const char*>(data.data()), data.size());
-    if (id == 0) throw Error(cat(where_, ": a schema of id 0 (reserved for none)"));
+    if (id == 0) return;  // reserved for none: ignored, as the specification asks
     schemas_[id] = true;
     if (visit_.schema) visit_.schema(id, s);
   }
@@ -287,6 +294,11 @@ class Scanner {
     }
     std::span<const std::uint8_t> plain = records;
     if (compression == "zstd") {
+      const unsigned long long declared = ZSTD_getFrameContentSize(records.data(), records.size());
+      if (declared == ZSTD_CONTENTSIZE_ERROR ||
+          (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared != size)) {
+        throw Error(cat(where_, ": a chunk whose zstd frame does not hold its ", size, " bytes"));
+      }
       chunk_.resize(static_cast<std::size_t>(size));
       const std::size_t n =
           ZSTD_decompress(chunk_.data(), chunk_.size(), records.data(), records.size());

@@ -86,8 +86,8 @@ void note_channel(RawTopics& t, const std::filesystem::path& file, std::uint16_t
   for (auto [side, channel, topic] : {std::tuple{"left/image_raw", &t.left, &t.left_topic},
                                       std::tuple{"right/image_raw", &t.right, &t.right_topic}}) {
     if (!ends_with(c.topic, side)) continue;
-    require(!*channel, file.string(), ": two topics of ", side, " images (", *topic, ", ", c.topic,
-            "): which is replayed is not clear");
+    require(!*channel || *channel == id, file.string(), ": two topics of ", side, " images (",
+            *topic, ", ", c.topic, "): which is replayed is not clear");
     *channel = id;
     *topic = c.topic;
   }
@@ -98,7 +98,14 @@ void note_channel(RawTopics& t, const std::filesystem::path& file, std::uint16_t
 StereoImages load_recording(const std::filesystem::path& file, const VideoOptions& options) {
   RawTopics topics;
   std::vector<Stamped> left, right;
-  const auto fitted = [&](Stamped s) {
+  int width = 0, height = 0;  // of the recording's images: all one size, as one rig's
+  const auto fitted = [&](Stamped s, const std::string& what) {
+    if (width == 0) {
+      width = s.image.width();
+      height = s.image.height();
+    }
+    require(s.image.width() == width && s.image.height() == height, what, ": ", s.image.width(),
+            "x", s.image.height(), " but the recording's images before were ", width, "x", height);
     if (options.fit_width > 0 && options.fit_height > 0) {
       s.image = letterbox(s.image.view(), options.fit_width, options.fit_height);
     }
@@ -117,25 +124,23 @@ StereoImages load_recording(const std::filesystem::path& file, const VideoOption
     require(images.size() < static_cast<std::size_t>(options.max_frames), file.string(),
             ": more than ", options.max_frames, " images on ", topic,
             " (max_frames: a scene is held in memory)");
-    images.push_back(
-        fitted(decode_image(m.data, cat(file.string(), ": ", topic, " message ", m.sequence))));
+    const std::string what = cat(file.string(), ": ", topic, " message ", m.sequence);
+    images.push_back(fitted(decode_image(m.data, what), what));
   };
   mcap::scan_file(file, visit);
   require(topics.left && topics.right, file.string(),
           ": no sensor_msgs/Image topics .../left/image_raw and .../right/image_raw (the raw "
           "images a recording of the firmware holds)");
-  // Paired by stamp: both are stamped with their pair's trigger.
+  // Paired by stamp (both are stamped with their pair's trigger), in the left images' order.
+  std::map<std::int64_t, std::size_t> right_by_stamp;
+  for (std::size_t i = 0; i < right.size(); ++i) right_by_stamp.emplace(right[i].stamp_ns, i);
   StereoImages pairs;
-  std::size_t r = 0;
   for (Stamped& l : left) {
-    while (r < right.size() && right[r].stamp_ns < l.stamp_ns) ++r;
-    if (r == right.size() || right[r].stamp_ns != l.stamp_ns) continue;
-    require(same_size(l.image.view(), right[r].image.view()), file.string(), ": the left image of ",
-            l.stamp_ns, " ns is ", l.image.width(), "x", l.image.height(), " but the right is ",
-            right[r].image.width(), "x", right[r].image.height());
+    const auto r = right_by_stamp.find(l.stamp_ns);
+    if (r == right_by_stamp.end()) continue;
     pairs.left.push_back(std::move(l.image));
-    pairs.right.push_back(std::move(right[r].image));
-    ++r;
+    pairs.right.push_back(std::move(right[r->second].image));
+    right_by_stamp.erase(r);
   }
   require(!pairs.left.empty(), file.string(), ": no left and right images of one stamp (",
           left.size(), " left, ", right.size(), " right)");
