@@ -9,7 +9,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git clang-format ccache
   # host libraries
   libsimde-dev libeigen3-dev libyaml-cpp-dev libgpiod-dev libcamera-dev libpng-dev libjpeg-dev
-  libzstd-dev zlib1g-dev cyclonedds-dev cyclonedds-tools
+  libzstd-dev zlib1g-dev cyclonedds-dev cyclonedds-tools libcivetweb-dev
   libcli11-dev nlohmann-json3-dev libpugixml-dev
   libavformat-dev libavcodec-dev libswscale-dev libavutil-dev
   # tests, benchmarks and host-only references (never linked into the firmware)

@@ -27,7 +27,7 @@ TEST(OutputSections, WhatIsNotAnOutputsIsAnErrorNamingTheKey) {
   const test::SimRig rig;
   EXPECT_EQ(error_of([&] { rig.parse("outputs: {mcpa: {directory: r}}\n"); }),
             (rig.dir.path() / "board.yaml").string() +
-                ": outputs.mcpa: no output of that name (the outputs: mcap, ros2)");
+                ": outputs.mcpa: no output of that name (the outputs: mcap, ros2, view)");
   EXPECT_NE(error_of([&] { rig.parse("outputs: [mcap]\n"); }).find("outputs"), std::string::npos);
   EXPECT_NE(error_of([&] {
               rig.parse("outputs: {mcap: {directory: r, every: 0}}\n");
@@ -47,6 +47,18 @@ TEST(OutputSections, WhatIsNotAnOutputsIsAnErrorNamingTheKey) {
   EXPECT_NE(error_of([&] {
               rig.parse("outputs: {mcap: {directory: r, namespace: epipole}}\n");
             }).find("outputs.mcap.namespace"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              rig.parse("outputs: {view: {port: 70000}}\n");
+            }).find("outputs.view.port: 70000 is outside 0..65535"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              rig.parse("outputs: {view: {clients: 0}}\n");
+            }).find("outputs.view.clients: 0 is outside 1..16"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              rig.parse("outputs: {view: {bind: localhost}}\n");
+            }).find("outputs.view.bind: 'localhost' is not an IPv4 address"),
             std::string::npos);
 }
 

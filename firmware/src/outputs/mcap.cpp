@@ -154,7 +154,8 @@ class McapOutput final : public Output {
         writer_(make_writer(context.board, settings_)),
         rig_(settings_.names, context.calibration, context.board.stereo.max_disparity),
         delivery_(
-            "mcap", context.board, kRectified | kRaw | kDisparity | kPoints,
+            "mcap", context.board,
+            PairPart::kRectified | PairPart::kRaw | PairPart::kDisparity | PairPart::kPoints,
             [this](const PairCopy& pair) { record(pair); },
             [this](const protocol::Health& health) { record_health(health); }) {
     check_folder(settings_.directory);

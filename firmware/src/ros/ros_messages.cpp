@@ -383,12 +383,15 @@ void write_disparity_image(std::vector<std::uint8_t>& out, Time stamp, std::stri
   w.f32(1.0f / 16);
 }
 
-void write_feature_cloud(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
-                         std::span<const SparsePoint> points, GrayView left) {
-  CdrWriter w(out);
+namespace {
+
+// A cloud of x y z intensity (float32 each) up to its data, which the caller writes at the
+// returned pointer (16 bytes a point), then closes with is_dense.
+std::uint8_t* cloud(CdrWriter& w, Time stamp, std::string_view frame, std::size_t width,
+                    std::size_t height) {
   header(w, stamp, frame);
-  w.u32(1);
-  w.u32(static_cast<std::uint32_t>(points.size()));
+  w.u32(static_cast<std::uint32_t>(height));
+  w.u32(static_cast<std::uint32_t>(width));
   w.u32(4);
   point_field(w, "x", 0);
   point_field(w, "y", 4);
@@ -396,14 +399,29 @@ void write_feature_cloud(std::vector<std::uint8_t>& out, Time stamp, std::string
   point_field(w, "intensity", 12);
   w.boolean(false);
   w.u32(16);
-  w.u32(static_cast<std::uint32_t>(16 * points.size()));
-  std::uint8_t* data = w.byte_sequence(16 * points.size());
+  w.u32(static_cast<std::uint32_t>(16 * width));
+  return w.byte_sequence(16 * width * height);
+}
+
+}  // namespace
+
+void write_feature_cloud(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
+                         std::span<const SparsePoint> points, GrayView left) {
+  CdrWriter w(out);
+  std::uint8_t* data = cloud(w, stamp, frame, points.size(), 1);
   for (std::size_t i = 0; i < points.size(); ++i) {
     float point[4];
     feature_points(points.subspan(i, 1), left, point);
     std::memcpy(data + 16 * i, point, sizeof point);
   }
   w.boolean(true);  // every point is finite
+}
+
+void write_point_cloud(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
+                       std::size_t width, std::size_t height, const float* points) {
+  CdrWriter w(out);
+  std::memcpy(cloud(w, stamp, frame, width, height), points, 16 * width * height);
+  w.boolean(false);  // NaN where a pixel has no disparity
 }
 
 void write_rig_transforms(std::vector<std::uint8_t>& out, Time stamp, const FrameNames& frames,

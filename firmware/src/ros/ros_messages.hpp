@@ -115,6 +115,10 @@ void write_disparity_image(std::vector<std::uint8_t>& out, Time stamp, std::stri
 // intensity (the rectified left image at the point; 0 without it), float32 each.
 void write_feature_cloud(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
                          std::span<const SparsePoint> points, GrayView left);
+// An organised cloud of width x height points, 4 floats each (organised_points()), NaN where
+// unknown.
+void write_point_cloud(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
+                       std::size_t width, std::size_t height, const float* points);
 void write_rig_transforms(std::vector<std::uint8_t>& out, Time stamp, const FrameNames& frames,
                           double baseline_m);
 // diagnostic_msgs/DiagnosticArray: one status named `name`, OK or WARN (health_status()), every
