@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Unpacks the board-side libraries Epipole links (Debian's :arm64 and :armhf packages of
-# yaml-cpp and libgpiod, linked statically, libcamera, CycloneDDS, civetweb, libpng, libjpeg and zstd with the libraries
+# yaml-cpp and libgpiod, linked statically, libcamera, CycloneDDS, civetweb, TurboJPEG, libpng, libjpeg and zstd with the libraries
 # they need at run time, and for the board's epipole-bench Debian's OpenCV with the libraries it
 # loads) into a cache folder that the cross toolchain files add to their search path (and the
 # cross-built tests' library path under qemu), and writes a dpkg database of them beside
@@ -17,8 +17,8 @@ set -euo pipefail
 packages=(libyaml-cpp-dev libyaml-cpp0.7 libgpiod-dev libgpiod2)
 # The recordings' compression (MCAP chunks), linked dynamically.
 recording=(libzstd-dev libzstd1)
-# The live view's HTTP and WebSocket server, linked dynamically.
-view=(libcivetweb-dev libcivetweb1)
+# The live view's HTTP and WebSocket server and its pictures (TurboJPEG), linked dynamically.
+view=(libcivetweb-dev libcivetweb1 libturbojpeg0-dev libturbojpeg0)
 # Image files: the firmware replays a simulated board's scenes on a board too.
 images=(libpng-dev libpng16-16 libjpeg62-turbo-dev libjpeg62-turbo zlib1g-dev)
 # epipole-bench's OpenCV pipeline: the headers and libraries of the modules it uses and of those
@@ -60,7 +60,7 @@ for arch in "$@"; do
       ;;
   esac
   root="$parent/target-libs-$arch"
-  stamp_name=.complete-v9
+  stamp_name=.complete-v10
   stamp="$root/$stamp_name"
   triple=$(dpkg-architecture -a"$arch" -qDEB_HOST_MULTIARCH 2>/dev/null)
   if [[ -f $stamp ]]; then

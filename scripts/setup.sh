@@ -10,12 +10,15 @@ packages=(
   # host libraries
   libsimde-dev libeigen3-dev libyaml-cpp-dev libgpiod-dev libcamera-dev libpng-dev libjpeg-dev
   libzstd-dev zlib1g-dev cyclonedds-dev cyclonedds-tools libcivetweb-dev
+  libturbojpeg0-dev
   libcli11-dev nlohmann-json3-dev libpugixml-dev
   libavformat-dev libavcodec-dev libswscale-dev libavutil-dev
   # tests, benchmarks and host-only references (never linked into the firmware)
   googletest libgtest-dev libgmock-dev libbenchmark-dev libopencv-dev
   # another DDS vendor's subscriber for the ROS 2 output's tests (Fast DDS, ROS 2's default)
   libfastrtps-dev
+  # a browser for the live view's page test (headless)
+  chromium
   # clang with its sanitizer and libFuzzer runtimes (the fuzz preset)
   clang libclang-rt-14-dev
   # cross compilers and the user-mode emulator that runs cross-built tests

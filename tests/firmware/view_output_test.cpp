@@ -3,9 +3,7 @@
 // (tests/clients/foxglove-view.mjs: @foxglove/ws-protocol, @foxglove/rosmsg2-serialization)
 // subscribes to every channel it advertises. What it decodes must be what the pipeline computed;
 // a client that stops reading costs it messages, never the frame loop a wait.
-#include <arpa/inet.h>
 #include <gtest/gtest.h>
-#include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -19,6 +17,7 @@
 
 #include "epipole/firmware/firmware.hpp"
 #include "error_of.hpp"
+#include "loopback.hpp"
 #include "ros_message_checks.hpp"
 #include "sim_rig.hpp"
 #include "test_clients.hpp"
@@ -26,37 +25,9 @@
 namespace epipole::firmware {
 namespace {
 
-sockaddr_in loopback(int port) {
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  return a;
-}
-
-// A port of the loopback interface nobody listens on (the system's pick).
-int free_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a = loopback(0);
-  socklen_t size = sizeof a;
-  const bool bound = ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
-                     ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &size) == 0;
-  ::close(fd);
-  return bound ? ntohs(a.sin_port) : 0;
-}
-
-// Whether something listens on the port within 10 s.
-bool listening(int port) {
-  for (int i = 0; i < 1000; ++i) {
-    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    const sockaddr_in a = loopback(port);
-    const bool connected = ::connect(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
-    ::close(fd);
-    if (connected) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return false;
-}
+using test::free_port;
+using test::listening;
+using test::loopback;
 
 // Keeps each pair's results and counts the pairs.
 struct Counted final : FrameObserver {

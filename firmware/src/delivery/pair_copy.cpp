@@ -41,6 +41,7 @@ PairCopy::PairCopy(const BoardConfig& board, PairParts parts) : parts_(parts) {
     detections.reserve(protocol::kMaxDetections);
     detection_depths.reserve(protocol::kMaxDetections);
   }
+  if (parts & kCorners) corners.reserve(static_cast<std::size_t>(board.corners.max_corners));
 }
 
 void PairCopy::copy_from(const FrameResult& r, const PairStamp& pair_stamp) {
@@ -57,13 +58,15 @@ void PairCopy::copy_from(const FrameResult& r, const PairStamp& pair_stamp) {
     copy_within(r.detections, detections);
     copy_within(r.detection_depths, detection_depths);
   }
+  if (parts_ & kCorners) copy_within(r.corners_left, corners);
 }
 
 std::size_t PairCopy::working_set_bytes() const {
   return sizeof(PairCopy) + left.size_bytes() + right.size_bytes() + left_raw.size_bytes() +
          right_raw.size_bytes() + disparity.size_bytes() + points.capacity() * sizeof(SparsePoint) +
          detections.capacity() * sizeof(vision::Detection) +
-         detection_depths.capacity() * sizeof(DetectionDepth);
+         detection_depths.capacity() * sizeof(DetectionDepth) +
+         corners.capacity() * sizeof(vision::Corner);
 }
 
 }  // namespace epipole::firmware::outputs

@@ -10,6 +10,7 @@
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/sparse_points.hpp"
 #include "epipole/vision/cascade.hpp"
+#include "epipole/vision/corner.hpp"
 
 namespace epipole::firmware::outputs {
 
@@ -20,6 +21,7 @@ enum PairPart : unsigned {
   kDisparity = 1u << 2,   // the dense disparity (x16)
   kPoints = 1u << 3,      // the sparse matches' 3-D points
   kDetections = 1u << 4,  // the detector's boxes and their depths
+  kCorners = 1u << 5,     // the corners found in the left image
 };
 using PairParts = unsigned;
 
@@ -53,6 +55,7 @@ class PairCopy {
   std::vector<SparsePoint> points;  // at most the board's sparse.max_matches
   std::vector<vision::Detection> detections;
   std::vector<DetectionDepth> detection_depths;  // one per detection
+  std::vector<vision::Corner> corners;           // of the left image, at most corners.max_corners
 
  private:
   PairParts parts_;

@@ -3,11 +3,12 @@
 //
 //   outputs:
 //     view: {port: 8765, bind: 127.0.0.1, clients: 4, every: 1, points_step: 4,
-//            namespace: /epipole, frame_prefix: epipole_}
+//            picture_hz: 5, quality: 80, namespace: /epipole, frame_prefix: epipole_}
 //
-// It listens on the loopback interface unless `bind` says otherwise. A message is made only for
-// the channels a client is subscribed to; each client gets the freshest of each (a slow one gets
-// messages dropped and counted), never making the frame loop wait.
+// It listens on the loopback interface unless `bind` says otherwise; the same port serves a page
+// for any browser (view/view_pages.hpp). A message is made only for the channels a client is
+// subscribed to, pictures only while a page asks for them; each client gets the freshest of each
+// message (a slow one gets messages dropped and counted), never making the frame loop wait.
 
 #include <arpa/inet.h>
 #include <yaml-cpp/yaml.h>
@@ -21,8 +22,10 @@
 #include "output_files.hpp"
 #include "ros/rig_model.hpp"
 #include "ros/ros_messages.hpp"
+#include "steady_time.hpp"
 #include "system_time.hpp"
 #include "view/foxglove_server.hpp"
+#include "view/view_pages.hpp"
 
 namespace epipole::firmware::outputs {
 
@@ -34,6 +37,7 @@ struct ViewSettings final : OutputSettings {
   int clients = 4;
   int every = 1;  // every Nth pair is served
   int points_step = 4;
+  view::PageSettings page;
   ros::RosNames names;
   std::unique_ptr<OutputSettings> clone() const override {
     return std::make_unique<ViewSettings>(*this);
@@ -45,7 +49,8 @@ std::unique_ptr<OutputSettings> read_settings(const YAML::Node& n, const yaml::F
   if (!n.IsDefined() || n.IsNull()) return s;
   const std::string path = "outputs.view";
   f.only_keys(n, path,
-              {"bind", "port", "clients", "every", "points_step", "namespace", "frame_prefix"});
+              {"bind", "port", "clients", "every", "points_step", "picture_hz", "quality",
+               "namespace", "frame_prefix"});
   f.if_present(n, path, "bind", [&](const YAML::Node& v, const std::string& k) {
     s->bind = f.text(v, k);
     in_addr address{};
@@ -66,6 +71,12 @@ std::unique_ptr<OutputSettings> read_settings(const YAML::Node& n, const yaml::F
   });
   f.if_present(n, path, "points_step", [&](const YAML::Node& v, const std::string& k) {
     s->points_step = f.integer_in(v, k, 1, 64);
+  });
+  f.if_present(n, path, "picture_hz", [&](const YAML::Node& v, const std::string& k) {
+    s->page.picture_hz = f.number_in(v, k, 0.1, 60);
+  });
+  f.if_present(n, path, "quality", [&](const YAML::Node& v, const std::string& k) {
+    s->page.quality = f.integer_in(v, k, 1, 100);
   });
   ros::read_ros_names(n, f, path, s->names);
   return s;
@@ -135,10 +146,13 @@ class ViewOutput final : public Output {
         calibration_(context.calibration),
         offline_(context.offline),
         rig_(settings_.names, context.calibration, context.board.stereo.max_disparity),
+        pages_(context.board, settings_.page),
         server_({settings_.bind, settings_.port, settings_.clients, "epipole " + board_.name},
                 channels(context.board, settings_)),
         delivery_(
-            "view", context.board, PairPart::kRectified | PairPart::kDisparity | PairPart::kPoints,
+            "view", context.board,
+            PairPart::kRectified | PairPart::kDisparity | PairPart::kPoints | PairPart::kCorners |
+                PairPart::kDetections,
             [this](const PairCopy& pair) { serve(pair); },
             [this](const protocol::Health& health) { serve_health(health); }) {
     std::size_t largest = 0;
@@ -146,6 +160,7 @@ class ViewOutput final : public Output {
       largest = std::max(largest, c.largest);
     }
     message_.reserve(largest);
+    server_.serve_http([this](mg_connection* conn) { return pages_.serve(conn); });
     if (calibration_) {
       triangulator_.emplace(*calibration_);
       const int step = settings_.points_step;
@@ -171,27 +186,27 @@ class ViewOutput final : public Output {
   }
   void offer(const FrameResult& result, const PairStamp& stamp) override {
     if (pairs_++ % static_cast<std::uint64_t>(settings_.every) != 0) return;
-    if (!any_subscribed()) return;  // nothing copied for no one
+    // Nothing copied for no one.
+    if (!any_subscribed() && !pages_.due(detail::steady_now())) return;
     delivery_.offer(result, stamp);
   }
-  void offer_health(const protocol::Health& health) override {
-    if (server_.subscribed(kDiagnostics)) delivery_.offer_health(health);
-  }
+  void offer_health(const protocol::Health& health) override { delivery_.offer_health(health); }
   DeliveryCounters counters() const override {
     DeliveryCounters c = delivery_.counters();
     c.dropped += server_.counters().dropped;  // and what clients did not take in time
     return c;
   }
   std::size_t working_set_bytes() const override {
-    return delivery_.working_set_bytes() + server_.working_set_bytes() + message_.capacity() +
-           cloud_.capacity() * 4 + rig_.depth_mm.capacity() * 2;
+    return delivery_.working_set_bytes() + server_.working_set_bytes() +
+           pages_.working_set_bytes() + message_.capacity() + cloud_.capacity() * 4 +
+           rig_.depth_mm.capacity() * 2;
   }
   // The port it listens on (0 until it started): tests ask for any free port.
   int port() const { return server_.port(); }
 
  private:
   bool any_subscribed() const {
-    for (std::uint16_t c = 0; c < kTfStatic; ++c) {
+    for (std::uint16_t c = 0; c < kDiagnostics; ++c) {  // the pairs' channels
       if (server_.subscribed(c)) return true;
     }
     return false;
@@ -203,6 +218,7 @@ class ViewOutput final : public Output {
   void send(Topic topic, std::uint64_t time) { server_.publish(topic, time, message_); }
 
   void serve(const PairCopy& pair) {
+    if (const std::int64_t now = detail::steady_now(); pages_.due(now)) pages_.picture(pair, now);
     const std::int64_t ns = pair.stamp.system_ns;
     const auto time = static_cast<std::uint64_t>(ns);
     const ros::Time stamp = ros::time_of(ns);
@@ -251,6 +267,8 @@ class ViewOutput final : public Output {
   }
 
   void serve_health(const protocol::Health& health) {
+    pages_.health(health);
+    if (!server_.subscribed(kDiagnostics)) return;
     const std::int64_t ns = detail::system_now_ns();
     ros::write_diagnostics(begin(), ros::time_of(ns), "epipole: health", board_.name, health,
                            dropped_before_);
@@ -263,6 +281,7 @@ class ViewOutput final : public Output {
   const std::optional<calib::StereoCalibration>& calibration_;
   bool offline_;
   ros::RigModel rig_;
+  view::ViewPages pages_;  // before the server, whose threads call it
   view::FoxgloveServer server_;
   std::optional<calib::Triangulator> triangulator_;
   std::vector<float> cloud_;

@@ -47,12 +47,13 @@ struct FoxgloveServer::Client {
   bool taken = false;             // a connection holds this slot (from its handshake)
   mg_connection* conn = nullptr;  // once it is ready
   bool writing = false;           // the sender writes to conn: a close waits for it
+  bool broken = false;            // a write did not finish: nothing more is sent, it is closed
   bool stop = false;
   std::vector<std::int64_t> subscription;  // per channel: the client's id for it, -1 none
   std::vector<Pending> pending;            // per channel
   std::vector<std::uint8_t> sending;
   std::uint64_t order = 0;
-  std::uint64_t sent = 0, dropped = 0;
+  std::atomic<std::uint64_t> sent{0}, dropped{0};  // read without the lock (health)
   std::thread sender;
 };
 
@@ -98,11 +99,21 @@ void FoxgloveServer::start() {
   mg_init_library(0);
   session_ = std::to_string(detail::system_now_ns());
   const std::string ports = settings_.bind + ":" + std::to_string(settings_.port);
-  const std::string threads = std::to_string(settings_.max_clients + 2);
-  const char* options[] = {"listening_ports", ports.c_str(), "num_threads", threads.c_str(),
-                           // Clients that only listen (Foxglove after subscribing) are kept:
-                           // pinged when quiet, not timed out.
-                           "enable_websocket_ping_pong", "yes", "websocket_timeout_ms", "10000",
+  // A thread per connected client, and some for the page and connections opened but idle.
+  const std::string threads = std::to_string(settings_.max_clients + 6);
+  // Clients that only listen (Foxglove after subscribing) are kept: pinged when quiet, not timed
+  // out. A write a client does not take within request_timeout_ms gives up (the client is then
+  // closed), as does a connection that sends no request.
+  const char* options[] = {"listening_ports",
+                           ports.c_str(),
+                           "num_threads",
+                           threads.c_str(),
+                           "enable_websocket_ping_pong",
+                           "yes",
+                           "websocket_timeout_ms",
+                           "10000",
+                           "request_timeout_ms",
+                           "10000",
                            nullptr};
   mg_callbacks callbacks{};
   mg_init_data init{&callbacks, this, options};
@@ -121,6 +132,14 @@ void FoxgloveServer::start() {
       enter_thread_role_or_say(ThreadRole::output);
       send_loop(*c);
     });
+  }
+  if (http_) {
+    mg_set_request_handler(
+        context_, "/",
+        [](mg_connection* conn, void* self) {
+          return static_cast<FoxgloveServer*>(self)->http_(conn);
+        },
+        this);
   }
   static mg_websocket_subprotocols subprotocols{
       2, const_cast<const char**>(static_cast<const char* const*>(kSubprotocols))};
@@ -154,6 +173,13 @@ int FoxgloveServer::on_connect(const mg_connection* conn) {
   if (stopping_ || request->acceptedWebSocketSubprotocol == nullptr) {
     ++refused_;
     return 1;  // not a Foxglove client: no subprotocol of ours
+  }
+  // A key of any other length than the 24 characters of RFC 6455 fails civetweb's handshake
+  // after this: refused here, before it takes a slot that no close would give back.
+  const char* key = mg_get_header(conn, "Sec-WebSocket-Key");
+  if (key == nullptr || std::strlen(key) != 24) {
+    ++refused_;
+    return 1;
   }
   for (const auto& client : clients_) {
     const std::lock_guard lock(client->mutex);
@@ -202,13 +228,17 @@ int FoxgloveServer::on_data(mg_connection* conn, int bits, const char* data, std
   auto* client = static_cast<Client*>(mg_get_user_connection_data(conn));
   const int opcode = bits & 0x0f;
   if (client == nullptr || opcode == MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE) return 0;
-  if (opcode == MG_WEBSOCKET_OPCODE_PING) {
-    mg_lock_connection(conn);
-    mg_websocket_write(conn, MG_WEBSOCKET_OPCODE_PONG, data, length);
-    mg_unlock_connection(conn);
+  {
+    const std::lock_guard lock(client->mutex);
+    if (client->broken) return 0;  // its stream was cut within a frame: closed
+  }
+  // (civetweb answers pings itself.)
+  if (opcode == MG_WEBSOCKET_OPCODE_PING || opcode == MG_WEBSOCKET_OPCODE_PONG) return 1;
+  if (opcode == MG_WEBSOCKET_OPCODE_CONTINUATION || (bits & 0x80) == 0) {
+    ++rejected_;
+    status(conn, 2, "a request in fragments: requests are read whole (one frame each)");
     return 1;
   }
-  if (opcode == MG_WEBSOCKET_OPCODE_PONG) return 1;
   if (opcode != MG_WEBSOCKET_OPCODE_TEXT) {
     ++rejected_;
     status(conn, 2, "this server is read-only: it takes no client messages");
@@ -235,6 +265,7 @@ void FoxgloveServer::on_close(const mg_connection* conn) {
   }
   client->conn = nullptr;
   client->taken = false;
+  client->broken = false;
 }
 
 void FoxgloveServer::status(mg_connection* conn, int level, const std::string& message) {
@@ -325,6 +356,7 @@ void FoxgloveServer::unsubscribe(Client& client, mg_connection* conn, std::int64
 void FoxgloveServer::queue(Client& client, std::uint16_t channel, std::int64_t subscription,
                            std::uint64_t time_ns, std::span<const std::uint8_t> data) {
   Client::Pending& p = client.pending[channel];
+  if (client.broken) return;
   if (p.due) ++client.dropped;
   p.frame.resize(kFrameHeader + data.size());
   p.frame[0] = kMessageData;
@@ -362,7 +394,8 @@ void FoxgloveServer::send_loop(Client& client) {
     return first;
   };
   for (;;) {
-    client.wake.wait(lock, [&] { return client.stop || (client.conn != nullptr && next()); });
+    client.wake.wait(
+        lock, [&] { return client.stop || (client.conn != nullptr && !client.broken && next()); });
     if (client.stop) return;
     Client::Pending* p = next();
     client.sending.assign(p->frame.begin(), p->frame.end());
@@ -377,7 +410,14 @@ void FoxgloveServer::send_loop(Client& client) {
     mg_unlock_connection(conn);
     lock.lock();
     client.writing = false;
-    if (written > 0) ++client.sent;
+    if (written == static_cast<int>(client.sending.size())) {
+      ++client.sent;
+    } else {
+      // Cut off within a frame (a client that stopped reading, past the write timeout): what
+      // would follow could not be read. Nothing more goes to it; it is closed at its next word.
+      client.broken = true;
+      for (Client::Pending& pending : client.pending) pending.due = false;
+    }
     client.wake.notify_all();
   }
 }
@@ -388,9 +428,8 @@ ServerCounters FoxgloveServer::counters() const {
   c.refused = refused_;
   c.rejected = rejected_;
   for (const auto& client : clients_) {
-    const std::lock_guard lock(client->mutex);
-    c.sent += client->sent;
-    c.dropped += client->dropped;
+    c.sent += client->sent.load(std::memory_order_relaxed);
+    c.dropped += client->dropped.load(std::memory_order_relaxed);
   }
   return c;
 }

@@ -9,12 +9,14 @@
 // Each client has a slot, allocated at start-up for at most `max_clients`: per channel the
 // freshest message not yet sent, and a thread of its own that sends them in the order they
 // came. publish() copies into the slots of the clients subscribed and returns; a client that
-// reads slowly (or not at all) gets messages replaced before they were sent, counted as
-// dropped, and never makes the publisher wait for it.
+// reads slowly gets messages replaced before they were sent, counted as dropped, and never makes
+// the publisher wait for it. A client that takes nothing for 10 s while a message is being
+// written to it is cut off (nothing more is sent) and closed.
 
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <span>
@@ -59,6 +61,9 @@ class FoxgloveServer {
   FoxgloveServer(const FoxgloveServer&) = delete;
   FoxgloveServer& operator=(const FoxgloveServer&) = delete;
 
+  // Every HTTP request but the WebSocket's goes to `handler` (on civetweb's threads; it returns
+  // the status it sent). Set before start().
+  void serve_http(std::function<int(mg_connection*)> handler) { http_ = std::move(handler); }
   // Listens; throws Error naming the address when it cannot.
   void start();
   // Closes every client and stops listening.
@@ -93,6 +98,7 @@ class FoxgloveServer {
 
   ServerSettings settings_;
   std::vector<Channel> channels_;
+  std::function<int(mg_connection*)> http_;
   std::unique_ptr<std::atomic<int>[]> subscribers_;  // per channel
   std::vector<std::unique_ptr<Client>> clients_;
   std::mutex latched_mutex_;
