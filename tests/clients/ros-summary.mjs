@@ -91,13 +91,19 @@ export function summary(type, m) {
       return { status: m.status.map((s) => ({ level: s.level, name: s.name, message: s.message,
         hardware_id: s.hardware_id,
         values: Object.fromEntries(s.values.map((v) => [v.key, v.value])) })) };
+    case "foxglove_msgs/msg/ImageAnnotations":
+      return { circles: m.circles.length,
+        boxes: m.points.map((p) => ({ type: p.type, thickness: p.thickness,
+          points: p.points.map((q) => [q.x, q.y]) })),
+        texts: m.texts.map((t) => ({ text: t.text, position: [t.position.x, t.position.y],
+          font_size: t.font_size })) };
     default: throw new Error(`no summary for ${type}`);
   }
 }
 
 // The message as the tests read it: its topic, type and stamp, and its summary.
 export function describe(topic, type, m, extra = {}) {
-  const stamp = m.header?.stamp ?? m.transforms?.[0]?.header.stamp;
+  const stamp = m.header?.stamp ?? m.transforms?.[0]?.header.stamp ?? m.points?.[0]?.timestamp;
   return { topic, type, ...extra, stamp: stamp ? [stamp.sec, stamp.nanosec ?? stamp.nsec] : null,
     ...summary(type, m) };
 }

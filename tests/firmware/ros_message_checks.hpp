@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -37,11 +38,15 @@ struct Kept final : FrameObserver {
   struct Pair {
     Image<std::int16_t> disparity;
     std::vector<SparsePoint> points;
+    std::vector<vision::Detection> detections;
+    std::vector<DetectionDepth> depths;
   };
   std::map<std::uint32_t, Pair> by_left;
   void on_frame(const FrameResult& r) override {
     Pair p{Image<std::int16_t>(r.disparity.width(), r.disparity.height()),
-           {r.points.begin(), r.points.end()}};
+           {r.points.begin(), r.points.end()},
+           {r.detections.begin(), r.detections.end()},
+           {r.detection_depths.begin(), r.detection_depths.end()}};
     for (int y = 0; y < r.disparity.height(); ++y) {
       std::copy_n(r.disparity.row(y), r.disparity.width(), p.disparity.view().row(y));
     }
@@ -54,6 +59,7 @@ struct RosChecks {
   int depths = 0;     // depth pixels with a disparity
   int points = 0;     // points of the organised cloud with a disparity
   int features = 0;   // sparse points
+  int boxes = 0;      // detections drawn
   int unmatched = 0;  // messages of pairs whose left image is not among the messages
 };
 
@@ -74,7 +80,7 @@ inline RosChecks check_ros_messages(const json& messages, const Kept& kept,
   for (const json& m : messages) {
     const std::string topic = m["topic"];
     const std::string time = m["log_time"];
-    if (topic != "/diagnostics") {
+    if (topic != "/diagnostics" && !m["stamp"].is_null()) {
       EXPECT_EQ(std::to_string(m["stamp"][0].get<std::int64_t>() * 1'000'000'000 +
                                m["stamp"][1].get<std::int64_t>()),
                 time)
@@ -152,6 +158,30 @@ inline RosChecks check_ros_messages(const json& messages, const Kept& kept,
           EXPECT_NEAR(sample[2].get<double>(), z_mm, 0.5) << x << "," << y;
           checks.depths += valid;
         }
+      }
+    } else if (topic == "/epipole/detections") {
+      if (!frame_of_time.count(time)) {
+        ++checks.unmatched;
+        continue;
+      }
+      const Kept::Pair& pair = kept.by_left.at(frame_of_time[time]["hash"]);
+      EXPECT_EQ(m["circles"], 0);
+      EXPECT_EQ(m["boxes"].size(), pair.detections.size());
+      EXPECT_EQ(m["texts"].size(), pair.detections.size());
+      if (m["boxes"].size() != pair.detections.size()) continue;
+      for (std::size_t i = 0; i < pair.detections.size(); ++i) {
+        const vision::Detection& d = pair.detections[i];
+        const json& box = m["boxes"][i];
+        EXPECT_EQ(box["type"], 2) << "LINE_LOOP";
+        EXPECT_EQ(box["points"], json::parse(cat("[[", d.x, ",", d.y, "],[", d.x + d.width, ",",
+                                                 d.y, "],[", d.x + d.width, ",", d.y + d.height,
+                                                 "],[", d.x, ",", d.y + d.height, "]]")));
+        char label[32] = "depth unknown";
+        if (i < pair.depths.size() && pair.depths[i].valid) {
+          std::snprintf(label, sizeof label, "%.2f m", pair.depths[i].depth);
+        }
+        EXPECT_EQ(m["texts"][i]["text"], label);
+        ++checks.boxes;
       }
     } else if (topic == "/diagnostics") {
       const json& status = m["status"][0];

@@ -54,6 +54,7 @@ struct Served {
     BoardConfig config =
         rig.parse("outputs: {view: {port: " + std::to_string(port) + settings + "}}\n");
     config.stages |= protocol::stage_bit(protocol::Stage::sparse);
+    rig.add_cascade(config);
     fw = std::make_unique<Firmware>(rig.replaying(config, 3));
     fw->frame_loop().set_observer(&observed);
     loop = std::thread([this] { summary = fw->run(0, stop); });
@@ -85,7 +86,7 @@ TEST(ViewOutput, FoxglovesClientGetsEveryChannelAsThePipelineComputedIt) {
   EXPECT_EQ(out["server_info"]["name"], "epipole test-sim");
   std::map<std::string, int> counts;
   for (const json& m : out["messages"]) ++counts[m["topic"].get<std::string>()];
-  ASSERT_EQ(out["channels"].size(), 10u);
+  ASSERT_EQ(out["channels"].size(), 11u);
   for (const json& c : out["channels"]) {
     const std::string topic = c["topic"];
     EXPECT_GE(counts[topic], topic == "/tf_static" || topic == "/diagnostics" ? 1 : 5) << topic;
@@ -97,6 +98,7 @@ TEST(ViewOutput, FoxglovesClientGetsEveryChannelAsThePipelineComputedIt) {
   EXPECT_GT(checks.depths, 0);
   EXPECT_GT(checks.points, 0);
   EXPECT_GT(checks.features, 0);
+  EXPECT_GT(checks.boxes, 0) << "the detections, drawn and labelled";
   ASSERT_NE(served.view(), nullptr);
   EXPECT_EQ(served.view()->failures, 0u);
 }

@@ -20,6 +20,7 @@
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/journal.hpp"
 #include "output_files.hpp"
+#include "ros/image_annotations.hpp"
 #include "ros/rig_model.hpp"
 #include "ros/ros_messages.hpp"
 #include "steady_time.hpp"
@@ -92,6 +93,7 @@ enum Topic : std::uint16_t {
   kDepth,
   kPoints,
   kFeatures,
+  kBoxes,  // the detections, with their distance
   kDiagnostics,
   kTfStatic,
   kTopicCount
@@ -111,6 +113,7 @@ constexpr TopicRow kTopics[kTopicCount] = {
     {"depth", ros::image_type, false},
     {"points", ros::point_cloud_type, false},
     {"features", ros::point_cloud_type, false},
+    {"detections", ros::image_annotations_type, false},
     {"/diagnostics", ros::diagnostic_array_type, false},
     {"/tf_static", ros::tf_message_type, true},
 };
@@ -127,6 +130,7 @@ std::vector<view::Channel> channels(const BoardConfig& board, const ViewSettings
       pixels * 2 + 512,
       (pixels / (step * step)) * 16 + 1024,
       static_cast<std::size_t>(board.sparse.max_matches) * 16 + 1024,
+      protocol::kMaxDetections * 512 + 64,
       8 * 1024,
       1024};
   std::vector<view::Channel> out;
@@ -263,6 +267,10 @@ class ViewOutput final : public Output {
     if (wanted(kFeatures)) {
       ros::write_feature_cloud(begin(), stamp, rig_.left_optical, pair.points, left);
       send(kFeatures, time);
+    }
+    if (wanted(kBoxes) && protocol::has_stage(pair.stages, protocol::Stage::detect)) {
+      ros::write_detection_annotations(begin(), stamp, pair.detections, pair.detection_depths);
+      send(kBoxes, time);
     }
   }
 

@@ -13,6 +13,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/protocol/fields.hpp"
 #include "epipole/vision/stereo.hpp"
+#include "ros/message_schema.hpp"
 
 namespace epipole::firmware::ros {
 
@@ -23,8 +24,6 @@ static_assert(std::endian::native == std::endian::little, "CDR is written as lit
 namespace {
 
 // The message definitions (ROS 2's own .msg files, without their comments).
-constexpr std::string_view kTime = "int32 sec\nuint32 nanosec\n";
-constexpr std::string_view kHeader = "builtin_interfaces/Time stamp\nstring frame_id\n";
 constexpr std::string_view kImage =
     "std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\nuint8 is_bigendian\n"
     "uint32 step\nuint8[] data\n";
@@ -58,28 +57,6 @@ constexpr std::string_view kDiagnosticStatus =
     "byte OK=0\nbyte WARN=1\nbyte ERROR=2\nbyte STALE=3\nbyte level\nstring name\n"
     "string message\nstring hardware_id\ndiagnostic_msgs/KeyValue[] values\n";
 constexpr std::string_view kKeyValue = "string key\nstring value\n";
-
-struct Dependency {
-  std::string_view name;
-  std::string_view definition;
-};
-
-// The definition, then each dependency after its separator line.
-std::string_view schema(std::string& storage, std::string_view definition,
-                        std::initializer_list<Dependency> dependencies) {
-  storage = definition;
-  for (const Dependency& d : dependencies) {
-    storage += std::string(80, '=');
-    storage += "\nMSG: ";
-    storage += d.name;
-    storage += '\n';
-    storage += d.definition;
-  }
-  return storage;
-}
-
-constexpr Dependency kHeaderDeps[] = {{"std_msgs/Header", kHeader},
-                                      {"builtin_interfaces/Time", kTime}};
 
 void header(CdrWriter& w, Time stamp, std::string_view frame) {
   w.i32(stamp.sec);
