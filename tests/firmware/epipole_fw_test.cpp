@@ -13,6 +13,8 @@
 #include <chrono>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
 #include <vector>
@@ -20,9 +22,11 @@
 #include "epipole/core/image_io.hpp"
 #include "epipole/firmware/protocol/codec.hpp"
 #include "epipole/hal/serial_port.hpp"
+#include "loopback.hpp"
 #include "pty/pty_serial.hpp"
 #include "sim_rig.hpp"
 #include "termios/termios_serial.hpp"
+#include "test_clients.hpp"
 #include "test_paths.hpp"
 
 namespace epipole::firmware {
@@ -123,6 +127,40 @@ TEST(EpipoleFw, BadConfigurationIsOneLineAndExitCodeOne) {
 
 // Cameras and a serial adapter that are not there when the firmware starts (USB devices slower
 // than the service at boot) are waited for, said once in the journal, and no reason to exit.
+// The live view of epipole-fw itself, as Foxglove and Lichtblick connect to it: Foxglove's own
+// client (tests/clients/foxglove-view.mjs) subscribes to every channel it advertises and
+// decodes messages on each (the values are checked against the pipeline's in
+// ViewOutput.FoxglovesClientGetsEveryChannelAsThePipelineComputedIt).
+TEST(EpipoleFw, FoxglovesClientTakesEveryChannelOfItsLiveView) {
+  ASSERT_TRUE(test::clients_installed()) << "the test clients are not installed: scripts/setup.sh";
+  BoardFolder board;
+  firmware::BoardConfig with_cascade = board.rig.config;
+  board.rig.add_cascade(with_cascade);  // writes cascade.bin beside the board file
+  const int port = test::free_port();
+  std::ifstream file(board.rig.dir.path() / "board.yaml");
+  std::string text{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+  text.replace(text.find("detect: false"), 13, "detect: true");
+  text += "outputs: {view: {port: " + std::to_string(port) +
+          "}}\ndetector: {cascade: cascade.bin, min_size: 20}\n";
+  std::ofstream(board.rig.dir.path() / "view.yaml") << text;
+  const Process p = start({"--board", (board.rig.dir.path() / "view.yaml").string()});
+  ASSERT_TRUE(test::listening(port));
+  const test::ToolResult got =
+      test::run_client("foxglove-view.mjs", "ws://127.0.0.1:" + std::to_string(port) + "/ 3 2");
+  ::kill(p.pid, SIGTERM);
+  const auto [code, out] = finish(p);
+  EXPECT_EQ(code, 0) << out;
+  ASSERT_EQ(got.exit_code, 0) << got.out;
+  const nlohmann::json taken = nlohmann::json::parse(got.out);
+  EXPECT_EQ(taken["protocol"], "foxglove.websocket.v1");
+  EXPECT_EQ(taken["channels"].size(), 11u);
+  std::map<std::string, int> counts;
+  for (const nlohmann::json& m : taken["messages"]) ++counts[m["topic"].get<std::string>()];
+  for (const nlohmann::json& c : taken["channels"]) {
+    EXPECT_GE(counts[c["topic"].get<std::string>()], 1) << c["topic"];
+  }
+}
+
 TEST(EpipoleFw, DevicesNotThereAtStartAreWaitedFor) {
   const test::TempDir dir;
   std::ofstream(dir.path() / "board.yaml")

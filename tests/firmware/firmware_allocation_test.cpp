@@ -14,6 +14,7 @@
 
 #include "allocation_counter.hpp"
 #include "epipole/firmware/firmware.hpp"
+#include "foxglove_socket.hpp"
 #include "sim_rig.hpp"
 #include "termios/termios_serial.hpp"
 
@@ -85,14 +86,19 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   // output run (the recording's thread allocates nothing per pair either, once its file is
   // open).
   test::SimRig rig(128, 64, 6);
-  // Every output: the recording, and ROS 2 over DDS on loopback in a domain of this run's own
-  // (no subscriber: DDS serialises and drops every sample all the same).
+  // Every output: the recording, ROS 2 over DDS on loopback in a domain of this run's own (no
+  // subscriber: DDS serialises and drops every sample all the same), and the live view with a
+  // client subscribed to every channel (connected at pair 5, before the count starts).
+  const int view_port = test::free_port();
   BoardConfig config = rig.parse(
       "threads: {count: 2}\n"
       "outputs: {mcap: {directory: recordings, continuous: true, every: 1, file_mb: 64,\n"
       "                 total_mb: 64},\n"
       "          ros2: {domain: " +
-      std::to_string(100 + ::getpid() % 100) + "}}\n");
+      std::to_string(100 + ::getpid() % 100) +
+      "},\n"
+      "          view: {port: " +
+      std::to_string(view_port) + "}}\n");
   config.stereo.max_disparity = 16;
   config.stereo.hole_fill = 32;  // the post-filters too
   config.stereo.temporal_percent = 40;
@@ -112,9 +118,22 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
     while (reading) robot.read(buffer, 10'000'000);
   });
   Sampler sampler(20, 1020);
+  std::unique_ptr<test::FoxgloveSocket> viewer;
+  // The viewer connects on the loop's thread at pair 5 (or the first after it), which waits until
+  // it is subscribed (the latched transforms came): its connection's allocations are not the steady
+  // state's.
+  const auto connect_viewer = [&](std::uint32_t frame) {
+    if (frame < 5 || viewer != nullptr) return;
+    viewer = std::make_unique<test::FoxgloveSocket>(view_port);
+    for (int i = 0; i < 3000 && viewer->ok() && viewer->frames() == 0; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  };
+  sampler.each = connect_viewer;
   if (GetParam() == BoardConfig::LinkProtocol::epipole) {
     // The robot's run-time commands, applied on the way: the trigger rate and the exposure.
-    sampler.each = [&robot](std::uint32_t frame) {
+    sampler.each = [&robot, connect_viewer](std::uint32_t frame) {
+      connect_viewer(frame);
       const auto send = [&](const protocol::Message& m, std::uint16_t sequence) {
         std::array<std::uint8_t, protocol::kMaxFrameSize> bytes{};
         const std::size_t n = protocol::encode_frame(m, sequence, bytes);
@@ -139,7 +158,10 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   EXPECT_GT(sampler.at_first, 0u);
   EXPECT_GT(sampler.detections, 0u);
   EXPECT_GT(sampler.points, 0u);
-  ASSERT_EQ(s.outputs.size(), 2u);
+  ASSERT_NE(viewer, nullptr);
+  EXPECT_TRUE(viewer->ok()) << "the viewer connected and subscribed";
+  EXPECT_GT(viewer->frames(), 100u) << "and took messages";
+  ASSERT_EQ(s.outputs.size(), 3u);
   for (const OutputReport& o : s.outputs) {
     EXPECT_GT(o.delivered, 100u) << o.name << " did its work";
     EXPECT_EQ(o.failures, 0u) << o.name;

@@ -2,6 +2,7 @@
 
 #include <civetweb.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -22,12 +23,19 @@ using nlohmann::json;
 // A page asked within this long: pictures are made.
 constexpr std::int64_t kWatchedNs = 5'000'000'000;
 
-// Health's fields as JSON numbers, named as on the serial link (epipole link --json).
+// Health's fields as a JSON object of numbers, named as on the serial link (epipole link
+// --json), appended to a buffer reserved ahead (nothing is allocated once a second).
 struct HealthJson {
-  json& out;
+  std::vector<std::uint8_t>& out;
+  void text(std::string_view s) { out.insert(out.end(), s.begin(), s.end()); }
   template <typename T>
   void operator()(const char* name, const T& value) {
-    out[name] = +value;
+    text(out.size() > 1 ? ",\"" : "\"");
+    text(name);
+    text("\":");
+    char number[24];
+    const auto [end, ec] = std::to_chars(number, number + sizeof number, +value);
+    text({number, ec == std::errc() ? static_cast<std::size_t>(end - number) : 0});
   }
   template <typename... A>
   void list(A&&...) {}  // health has no lists
@@ -48,6 +56,8 @@ ViewPages::ViewPages(const BoardConfig& board, PageSettings settings)
        {&left_jpeg_, &disparity_jpeg_, &left_spare_, &disparity_spare_}) {
     picture->reserve(encoder_.working_set_bytes());
   }
+  health_json_.reserve(4096);
+  health_spare_.reserve(4096);
 }
 
 std::size_t ViewPages::working_set_bytes() const {
@@ -106,12 +116,13 @@ void ViewPages::picture(const outputs::PairCopy& pair, std::int64_t now) {
 }
 
 void ViewPages::health(const protocol::Health& health) {
-  json out = json::object();
-  HealthJson fields{out};
+  health_spare_.clear();
+  HealthJson fields{health_spare_};
+  fields.text("{");
   protocol::fields(fields, health);
-  const std::string text = out.dump();
+  fields.text("}");
   const std::lock_guard lock(mutex_);
-  store(health_json_, text);
+  health_json_.swap(health_spare_);
 }
 
 int ViewPages::send(mg_connection* conn, const char* type, const std::vector<std::uint8_t>& bytes,

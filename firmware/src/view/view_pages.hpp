@@ -59,6 +59,7 @@ class ViewPages {
   std::atomic<std::int64_t> asked_{-1'000'000'000'000};     // when a page last asked (steady ns)
   std::atomic<std::int64_t> pictured_{0};                   // when the last pictures were made
   std::vector<std::uint8_t> left_spare_, disparity_spare_;  // the next pictures, made unlocked
+  std::vector<std::uint8_t> health_spare_;                  // the next health, made unlocked
   mutable std::mutex mutex_;  // the latest pictures and texts, for the request handlers
   std::vector<std::uint8_t> left_jpeg_, disparity_jpeg_, frame_json_, health_json_;
   std::int64_t frame_ = -1;  // the pair they show
