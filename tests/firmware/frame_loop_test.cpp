@@ -748,10 +748,16 @@ void send_at(Recorder& recorder, LinkedRig& linked, std::uint32_t at,
     if (before) before(r);
     if (r.frame < at || sent) return;
     sent = true;
+    const std::uint64_t received = linked.fw->link().counters().commands;
     for (std::size_t i = 0; i < commands.size(); ++i) {
       linked.send(commands[i], static_cast<std::uint16_t>(first + i));
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    // The link's thread has them before the loop goes on (a loaded machine can hold that thread
+    // back for longer than the loop takes for the pairs left).
+    for (int i = 0; i < 2500 && linked.fw->link().counters().commands < received + commands.size();
+         ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
   };
 }
 
