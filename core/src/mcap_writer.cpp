@@ -160,7 +160,7 @@ Writer::Writer(std::vector<Schema> schemas, std::vector<Channel> channels, std::
       message_counts_(channels_.size(), 0) {
   require(zstd_ != nullptr, "mcap: cannot make a zstd context");
   require(channels_.size() <= kMaxChannels, "mcap: more than ", kMaxChannels, " channels");
-  chunks_.reserve(1024);
+  chunks_.reserve(kMaxChunks);
   chunk_.reserve(chunk_bytes + largest_message + 1024);
   compressed_.reserve(ZSTD_compressBound(chunk_.capacity()));
   index_.reserve(4096);

@@ -88,5 +88,20 @@ TEST(McapWriter, AFileThatExistsIsNeverOverwritten) {
   EXPECT_EQ(kept, "keep");
 }
 
+// The chunk index holds kMaxChunks chunks; chunks_left() says how many more the file takes before
+// it would grow (its owner then starts a new file).
+TEST(McapWriter, SaysHowManyChunksTheFileTakesBeforeItsIndexGrows) {
+  const TemporaryFolder dir("epipole-test");
+  Writer w({{"t", "ros2msg", "uint8[] data\n"}}, {{1, "/t", "cdr", {}}}, 1024, 1024);
+  w.open(dir.path() / "chunks.mcap", "test");
+  EXPECT_EQ(w.chunks_left(), Writer::kMaxChunks);
+  write_messages(w, 10, 2048);  // each message fills a chunk of 1 KiB
+  EXPECT_EQ(w.chunks_left(), Writer::kMaxChunks - 10);
+  w.close();
+  w.open(dir.path() / "next.mcap", "test");
+  EXPECT_EQ(w.chunks_left(), Writer::kMaxChunks) << "a new file, a new index";
+  w.close();
+}
+
 }  // namespace
 }  // namespace epipole::mcap

@@ -132,12 +132,18 @@ TEST_P(SteadyState, NoAllocationOverAThousandFrames) {
   sampler.each = connect_viewer;
   if (GetParam() == BoardConfig::LinkProtocol::epipole) {
     // The robot's run-time commands, applied on the way: the trigger rate and the exposure.
-    sampler.each = [&robot, connect_viewer](std::uint32_t frame) {
+    sampler.each = [&robot, &fw, connect_viewer](std::uint32_t frame) {
       connect_viewer(frame);
+      // Each command is with the link's thread before the loop goes on (a loaded machine can
+      // hold that thread back past the run's end).
       const auto send = [&](const protocol::Message& m, std::uint16_t sequence) {
         std::array<std::uint8_t, protocol::kMaxFrameSize> bytes{};
         const std::size_t n = protocol::encode_frame(m, sequence, bytes);
+        const std::uint64_t received = fw.link().counters().commands;
         robot.write(std::as_bytes(std::span(bytes.data(), n)), 100'000'000);
+        for (int i = 0; i < 2500 && fw.link().counters().commands == received; ++i) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
       };
       if (frame == 300) send(protocol::SetTriggerRate{20'000}, 1);
       if (frame == 400) send(protocol::SetExposure{3000, 600}, 2);

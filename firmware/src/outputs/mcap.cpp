@@ -234,8 +234,15 @@ class McapOutput final : public Output {
   }
 
   // A new file when there is none or the one open is full.
+  // A new file also when the open one's chunk index is nearly full (its 1024 chunks are 4 GiB
+  // of messages before compression, which a file of highly compressible pairs can reach before
+  // its file_mb): the index never grows, nothing is allocated.
   void open_if_needed(std::int64_t system_ns) {
-    if (writer_.is_open() && writer_.bytes() < ring_.limits().file_bytes) return;
+    constexpr std::size_t kChunksAPairMayTake = 8;
+    if (writer_.is_open() && writer_.bytes() < ring_.limits().file_bytes &&
+        writer_.chunks_left() > kChunksAPairMayTake) {
+      return;
+    }
     writer_.close();
     writer_.open(ring_.next_file(system_ns), build_info());
     journal(Priority::info, "output mcap: recording into %s", writer_.file().c_str());

@@ -35,13 +35,15 @@ struct Schema {
 };
 
 // One file at a time: open(), messages, close(). Its buffers are allocated by the constructor
-// (a chunk of `chunk_bytes` plus the largest message, its compressed copy, the index of 1024
-// chunks), so a message that fits allocates nothing; a file of more chunks grows the index. A
+// (a chunk of `chunk_bytes` plus the largest message, its compressed copy, the index of
+// kMaxChunks chunks), so a message that fits allocates nothing; a file of more chunks grows the
+// index (its owner starts a new file before: chunks_left()). A
 // write that fails throws Error naming the file, which is then left as it is (every chunk written
 // before it readable) and closed: the owner opens another.
 class Writer {
  public:
   static constexpr std::size_t kMaxChannels = 32;
+  static constexpr std::size_t kMaxChunks = 1024;  // a file's chunks the index holds
   Writer(std::vector<Schema> schemas, std::vector<Channel> channels, std::size_t chunk_bytes,
          std::size_t largest_message, int zstd_level = 1);
   ~Writer();
@@ -61,6 +63,10 @@ class Writer {
               std::span<const std::uint8_t> data, std::uint64_t log_time);
   // Writes the last chunk, the summary and the footer, syncs and closes the file.
   void close();
+  // The chunks the open file can take before its index would grow.
+  std::size_t chunks_left() const {
+    return chunks_.size() < kMaxChunks ? kMaxChunks - chunks_.size() : 0;
+  }
   // What the file holds so far (written, and the open chunk uncompressed).
   std::uint64_t bytes() const { return written_ + chunk_.size(); }
   const std::filesystem::path& file() const { return file_; }
