@@ -8,9 +8,11 @@
 #include <unistd.h>
 
 #include <array>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <thread>
 
 #include "epipole/firmware/firmware.hpp"
 #include "ros_message_checks.hpp"
@@ -56,6 +58,10 @@ Taken take_topics(const std::string& listener, const std::string& name) {
   std::array<char, 256> line{};
   const bool ready = std::fgets(line.data(), line.size(), pipe) != nullptr &&
                      std::string(line.data()) == "ready\n";
+  // "ready" is the subscriber's readers matching the writers; the writers' side of the match
+  // follows a discovery round later (a reliable writer delivers nothing written before it), which
+  // under the sanitizers took longer than the first pair: a moment for it.
+  if (ready) std::this_thread::sleep_for(std::chrono::milliseconds(500));
   std::atomic<bool> stop{!ready};
   const RunSummary s = fw.run(30, stop);
   const test::ToolResult got = test::finish_tool(pipe);
