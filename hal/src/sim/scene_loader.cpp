@@ -1,4 +1,5 @@
-// The simulated board's scenes from image and video files (builds with image files).
+// The simulated board's scenes from image and video files, or rendered worlds (builds with image
+// files).
 #include <functional>
 
 #include "epipole/core/error.hpp"
@@ -6,6 +7,7 @@
 #include "sim/sim_files.hpp"
 #include "sim/sim_scene.hpp"
 #include "sim/sim_settings.hpp"
+#include "sim/world_scene.hpp"
 
 namespace epipole::hal {
 
@@ -53,6 +55,15 @@ StereoImages load_scene(const SimScene& scene, int w, int h) {
   video.max_frames = scene.max_frames;
   video.fit_width = w;
   video.fit_height = h;
+  if (scene.world) {
+    // Rendered through the rig's calibration, of the cameras' size (never letterboxed).
+    try {
+      require(!scene.calibration.empty(), "a world scene needs its rig's calibration");
+      return render_world(*scene.world, calib::load_calibration(scene.calibration), w, h);
+    } catch (const Error& e) {
+      throw Error(cat(key, ".world: ", e.what()));
+    }
+  }
   if (!scene.side_by_side.empty()) {
     return from_video(key + ".side_by_side",
                       [&] { return load_side_by_side_video(scene.side_by_side, video); });

@@ -5,6 +5,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/yaml_fields.hpp"
+#include "sim/world_settings.hpp"
 
 namespace epipole::hal {
 
@@ -17,13 +18,14 @@ SimScene read_scene(const yaml::Fields& f, const std::string& name, const YAML::
   s.name = name;
   const std::string p = cat(kSection, ".scenes.", name);
   f.only_keys(m, p,
-              {"left", "right", "side_by_side", "synthesize", "disparity", "recording",
+              {"left", "right", "side_by_side", "synthesize", "disparity", "recording", "world",
                "max_frames", "calibration"});
   f.if_present(m, p, "max_frames", [&](const YAML::Node& n, const std::string& k) {
     s.max_frames = f.integer_in(n, k, 1, 100'000);
   });
   std::string given;  // the scene's source: one of these
-  for (const std::string source : {"side_by_side", "synthesize", "recording", "left", "right"}) {
+  for (const std::string source :
+       {"world", "side_by_side", "synthesize", "recording", "left", "right"}) {
     if (!f.optional_child(m, p, source.c_str()).IsDefined() ||
         (source == "right" && given == "left")) {
       continue;
@@ -31,7 +33,9 @@ SimScene read_scene(const yaml::Fields& f, const std::string& name, const YAML::
     if (!given.empty()) f.fail(p, cat(given, " and ", source, " are two sources: give one"));
     given = source;
   }
-  if (const YAML::Node v = f.optional_child(m, p, "side_by_side"); v.IsDefined()) {
+  if (const YAML::Node world = f.optional_child(m, p, "world"); world.IsDefined()) {
+    s.world = read_world(f, world, p + ".world");
+  } else if (const YAML::Node v = f.optional_child(m, p, "side_by_side"); v.IsDefined()) {
     s.side_by_side = f.path(v, p + ".side_by_side");
   } else if (const YAML::Node r = f.optional_child(m, p, "recording"); r.IsDefined()) {
     s.recording = f.path(r, p + ".recording");
@@ -50,6 +54,9 @@ SimScene read_scene(const yaml::Fields& f, const std::string& name, const YAML::
   }
   if (const YAML::Node v = f.optional_child(m, p, "calibration"); v.IsDefined()) {
     s.calibration = f.path(v, p + ".calibration");
+  } else if (s.world) {
+    f.fail(p + ".calibration",
+           "a world scene needs its rig's calibration (the raw images are rendered through it)");
   }
   return s;
 }

@@ -3,12 +3,14 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "epipole/hal/backend_settings.hpp"
 #include "epipole/hal/registry.hpp"
 #include "sim/sim_files.hpp"
+#include "sim/world_settings.hpp"
 
 namespace epipole::hal {
 
@@ -21,9 +23,12 @@ struct SimScene {
   std::filesystem::path synthesize;          // or: one image or video, the right view made
   int synthesize_disparity = 0;              // from it at this disparity (pixels)
   std::filesystem::path recording;           // or: an MCAP recording's raw pairs
+  std::optional<SimWorld> world;             // or: a world rendered through the calibration
   int max_frames = 300;                      // a video or recording of more frames is refused
   std::filesystem::path calibration;         // the rig's, overriding the board's (a
-                                             // recording's own when it is replayed)
+                                             // recording's own when it is replayed; a
+                                             // world's is required: its raw images are
+                                             // rendered through it)
 };
 
 // The board file's `sim:` section (docs/boards.md): what the simulated board replays and how.
@@ -52,7 +57,8 @@ std::unique_ptr<BackendSettings> read_sim_section(const YAML::Node& section,
 SimSettings& sim_settings(BackendSections& sections);
 const SimSettings& sim_settings(const BackendSections& sections);
 
-// The scene's images fitted to width x height (letterbox(), sim_scene.hpp), or synthesised.
+// The scene's images fitted to width x height (letterbox(), sim_scene.hpp), or synthesised, or
+// a world rendered through the scene's calibration (world_scene.hpp; of width x height).
 // Throws Error naming the file; builds without image files throw saying so.
 StereoImages load_scene(const SimScene& scene, int width, int height);
 // False in builds without image files, whose simulated board has nothing to replay.
