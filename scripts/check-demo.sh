@@ -66,6 +66,17 @@ while read -r scene; do
       problem "$recording: not every topic of the $delivered recorded pairs, or no calibration: $(jq -c .statistics <<<"$read")"
     echo "check-demo: $scene: $recording: $(jq -r '"\(.statistics.message_count) messages on \(.statistics.channel_count) topics in \(.statistics.chunk_count) chunks, read and decoded"' <<<"$read")"
   done < <(jq -r '.recordings // [] | .[]' <<<"$s")
+  # A rendered world: the last ground decoded against the world's exact truth (docs/vision.md).
+  if jq -e '.truth' <<<"$s" >/dev/null; then
+    nonempty "$dir/truth.yaml"
+    nonempty "$dir/true_disparity.png"
+    check '.last_ground.flags == 1 and
+      ((.last_ground.height_mm - .truth.height_mm) | fabs) <= 25 and
+      ((.last_ground.pitch_cdeg - .truth.pitch_cdeg) | fabs) <= 100 and
+      ((.last_ground.roll_cdeg - .truth.roll_cdeg) | fabs) <= 100' \
+      "the ground $(jq -c .last_ground <<<"$s") is not the world's $(jq -c .truth <<<"$s")"
+    echo "check-demo: $scene: ground $(jq -r '"\(.last_ground.height_mm) mm high, pitch \(.last_ground.pitch_cdeg / 100) deg, roll \(.last_ground.roll_cdeg / 100) deg; truth \(.truth.height_mm | round) mm, \(.truth.pitch_cdeg | round / 100) deg, \(.truth.roll_cdeg | round / 100) deg"' <<<"$s")"
+  fi
   echo "check-demo: $scene: $(jq -r --arg type "$per_frame" \
     '"\(.frames) pairs, \(.received[$type] // 0) \($type) messages decoded (\(.decoder.protocol), \(.decoder.errors) errors), \(.pictures | length) pictures"' <<<"$s")"
 done < <(jq -r '.scenes[].scene' "$summary")

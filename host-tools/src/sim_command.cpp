@@ -30,6 +30,7 @@
 #include "pictures.hpp"
 #include "sim/sim.hpp"
 #include "sim/sim_settings.hpp"
+#include "sim/world_scene.hpp"
 #include "stereo_preview.hpp"
 
 namespace epipole::tools {
@@ -95,6 +96,7 @@ class LinkRecorder {
   const std::map<std::string, int>& counts() const { return counts_; }
   nlohmann::json stats() const { return decoder_.stats(); }
   const nlohmann::json& last_health() const { return last_health_; }
+  const nlohmann::json& last_ground() const { return last_ground_; }
 
  private:
   void run() {
@@ -116,6 +118,7 @@ class LinkRecorder {
     lines_ << json.dump() << "\n";
     ++counts_[json["type"].get<std::string>()];
     if (json["type"] == "health") last_health_ = json;
+    if (json["type"] == "ground") last_ground_ = json;
     return true;
   }
 
@@ -125,6 +128,7 @@ class LinkRecorder {
   JsonStreamDecoder decoder_;
   std::map<std::string, int> counts_;
   nlohmann::json last_health_;
+  nlohmann::json last_ground_;
   std::atomic<bool> stopping_{false};
   std::thread thread_;
 };
@@ -229,6 +233,19 @@ class FrameProgress final : public firmware::FrameObserver {
   Progress progress_;
 };
 
+// A rendered world's exact truth beside its pictures (truth.yaml, true_disparity.png), and its
+// ground for the summary; null for the other scenes.
+nlohmann::json write_truth(const firmware::BoardConfig& config, const fs::path& directory) {
+  const hal::SimScene& scene = hal::sim_settings(config.sections).chosen();
+  const std::optional<calib::StereoCalibration> rig = firmware::load_board_calibration(config);
+  if (!scene.world || !rig) return nullptr;
+  hal::write_world_truth(*scene.world, *rig, directory);
+  const hal::GroundTruth ground = hal::world_ground_truth(*scene.world, *rig);
+  return {{"height_mm", ground.height_m * 1000},
+          {"pitch_cdeg", ground.pitch_deg * 100},
+          {"roll_cdeg", ground.roll_deg * 100}};
+}
+
 nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
                          std::vector<std::string> overrides) {
   const std::vector<hal::BackendOption> chosen = {{"scene", scene}};
@@ -257,6 +274,7 @@ nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
                static_cast<std::streamsize>(binary.size()));
     config.detector.cascade = compiled;
   }
+  const nlohmann::json truth = write_truth(config, directory);
   firmware::Firmware fw(config);
   const int images = static_cast<int>(hal::simulated_board(fw.board().hardware())->scene_images());
   PictureWriter pictures(directory, images, options.pictures, config.stereo.max_disparity);
@@ -291,7 +309,9 @@ nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
     for (const auto& e : fs::directory_iterator(recordings)) files.push_back(e.path().string());
     out["recordings"] = files;
   }
+  if (!truth.is_null()) out["truth"] = truth;
   if (recorder) {
+    out["last_ground"] = recorder->last_ground();
     out["received"] = recorder->counts();
     out["decoder"] = recorder->stats();
     out["last_health"] = recorder->last_health();

@@ -108,7 +108,8 @@ TEST(FrameLoop, RunsEveryStageOnEveryPairAndPublishesIt) {
     EXPECT_EQ(f.trigger_ns, static_cast<hal::Nanoseconds>(f.frame) * period)
         << "results carry the trigger edge's time";
     EXPECT_EQ(f.stages, stage_bit(Stage::capture) | stage_bit(Stage::rectify) |
-                            stage_bit(Stage::corners) | stage_bit(Stage::disparity));
+                            stage_bit(Stage::corners) | stage_bit(Stage::disparity) |
+                            stage_bit(Stage::ground));
     EXPECT_NEAR(f.centre_disparity, rig.disparity * 16, 8) << "frame " << f.frame;
     EXPECT_GT(f.corners, 20u);
     EXPECT_NEAR(f.nearest_mm, rig.depth() * 1000, 0.05 * rig.depth() * 1000);

@@ -368,16 +368,16 @@ TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays)
   health.outputs_dropped = 0x14131211;
   health.output_failures = 0x18171615;
   const Bytes h = payload_of(health);
-  // 3 x u32, u16, 2 x u32, 8 x u32 stage times, 4 x u32 dropped by cause, 8 x u32 counters,
+  // 3 x u32, u16, 2 x u32, 9 x u32 stage times, 4 x u32 dropped by cause, 8 x u32 counters,
   // u16 flags, 2 x u32 waits, u16 busy, 2 x u32 trigger glitches, 2 x u32 outputs.
-  ASSERT_EQ(h.size(), kHeaderSize + 130 + kCrcSize);
-  EXPECT_EQ(h[0], 6) << "version";
-  EXPECT_EQ(h[kHeaderSize + 102], 0x01);
-  EXPECT_EQ(h[kHeaderSize + 103], 0xA5);
-  for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 104 + i], i + 1) << i;
-  EXPECT_EQ(h[kHeaderSize + 112], 0xE8);
-  EXPECT_EQ(h[kHeaderSize + 113], 0x03);
-  for (int i = 0; i < 16; ++i) EXPECT_EQ(h[kHeaderSize + 114 + i], i + 9) << i;
+  ASSERT_EQ(h.size(), kHeaderSize + 134 + kCrcSize);
+  EXPECT_EQ(h[0], 7) << "version";
+  EXPECT_EQ(h[kHeaderSize + 106], 0x01);
+  EXPECT_EQ(h[kHeaderSize + 107], 0xA5);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 108 + i], i + 1) << i;
+  EXPECT_EQ(h[kHeaderSize + 116], 0xE8);
+  EXPECT_EQ(h[kHeaderSize + 117], 0x03);
+  for (int i = 0; i < 16; ++i) EXPECT_EQ(h[kHeaderSize + 118 + i], i + 9) << i;
   FrameSummary frame;
   frame.flags = kFrameTriggerFromCapture;
   const Bytes f = payload_of(frame);
@@ -387,8 +387,8 @@ TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays)
 
 TEST(Stages, OneTableGivesTheMasksTheNamesAndTheOrder) {
   EXPECT_EQ(kAlwaysOnStages, stage_bit(Stage::capture) | stage_bit(Stage::publish));
-  EXPECT_EQ(kSwitchableStages, 0x3E);
-  EXPECT_EQ(kAllStages, 0x7F) << "total is a time slot, not a stage a mask can hold";
+  EXPECT_EQ(kSwitchableStages, 0x7E);
+  EXPECT_EQ(kAllStages, 0xFF) << "total is a time slot, not a stage a mask can hold";
   std::vector<std::string> names;
   for (const StageInfo& s : kStages) {
     EXPECT_EQ(std::string(s.time_field), std::string(s.name) + "_us");

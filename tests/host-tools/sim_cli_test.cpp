@@ -65,7 +65,7 @@ TEST(SimCli, RunsEverySceneOfTheSimulatedBoard) {
   const auto& r = sim_run();
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const nlohmann::json s = summary();
-  ASSERT_EQ(s["scenes"].size(), 3u) << s.dump(2);
+  ASSERT_EQ(s["scenes"].size(), 4u) << s.dump(2);
   std::vector<std::string> names;
   for (const auto& scene : s["scenes"]) {
     names.push_back(scene["scene"]);
@@ -84,15 +84,15 @@ TEST(SimCli, RunsEverySceneOfTheSimulatedBoard) {
         << d.dump();
     EXPECT_GT(scene["last_health"]["fps_centi"].get<int>(), 0);
   }
-  EXPECT_EQ(names, (std::vector<std::string>{"chessboard", "aloe", "faces"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"chessboard", "aloe", "faces", "ground"}));
   if (!r.out.empty()) {
-    EXPECT_EQ(scene_lines(r.out), 3) << r.out;
+    EXPECT_EQ(scene_lines(r.out), 4) << r.out;
   }
 }
 
 TEST(SimCli, WritesThePicturesAndTheStream) {
   ASSERT_EQ(sim_run().exit_code, 0) << sim_run().out;
-  for (const char* scene : {"chessboard", "aloe", "faces"}) {
+  for (const char* scene : {"chessboard", "aloe", "faces", "ground"}) {
     const fs::path dir = out_dir() / scene;
     const epipole::GrayImage pair = epipole::load_gray(dir / "frame0-rectified-pair.png");
     EXPECT_EQ(pair.width(), 1280) << scene;

@@ -83,7 +83,7 @@ std::size_t DepthCells::working_set_bytes() const {
 
 void DepthCells::measure(ImageView<const std::int16_t> disparity,
                          ImageView<const std::uint8_t> confidence,
-                         std::span<std::uint16_t> nearest_mm) {
+                         std::span<std::uint16_t> nearest_mm, const PixelHalfSpace* counted) {
   require(disparity.width() == config_.width && disparity.height() == config_.height, what_,
           ": disparity image ", disparity.width(), "x", disparity.height(),
           " is not the configured ", config_.width, "x", config_.height);
@@ -117,10 +117,20 @@ void DepthCells::measure(ImageView<const std::int16_t> disparity,
       cell_pixels_[static_cast<std::size_t>(first_cell + k)] +=
           column_pixels_[static_cast<std::size_t>(k)];
     }
+    // The half-space's test, per pixel: u_factor x + d_factor v / 16 + this >= 0.
+    const float row_term =
+        counted != nullptr ? static_cast<float>(counted->v_factor * y + counted->constant) : 0.0f;
+    const float u_factor = counted != nullptr ? static_cast<float>(counted->u_factor) : 0.0f;
+    const float d_factor =
+        counted != nullptr ? static_cast<float>(counted->d_factor / vision::kDisparityScale) : 0.0f;
     for (int x = 0; x < width; ++x) {
       const int v = row[x];
       if (static_cast<unsigned>(v - 1) >= counted_values) continue;
       if (trust != nullptr && trust[x] < min_confidence) continue;
+      if (counted != nullptr &&
+          u_factor * static_cast<float>(x) + d_factor * static_cast<float>(v) + row_term < 0.0f) {
+        continue;
+      }
       const unsigned d = static_cast<unsigned>(v) / vision::kDisparityScale;  // v > 0
       const std::size_t bin = static_cast<std::size_t>(first_cell + column_of[x]) * D + d;
       ++histogram[bin];

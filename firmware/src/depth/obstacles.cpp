@@ -24,8 +24,9 @@ ObstacleSectors::ObstacleSectors(const ObstacleConfig& config,
 
 const protocol::Obstacles& ObstacleSectors::measure(ImageView<const std::int16_t> disparity,
                                                     std::uint32_t frame,
-                                                    ImageView<const std::uint8_t> confidence) {
-  cells_.measure(disparity, confidence, result_.nearest_mm);
+                                                    ImageView<const std::uint8_t> confidence,
+                                                    const PixelHalfSpace* counted) {
+  cells_.measure(disparity, confidence, result_.nearest_mm, counted);
   result_.frame = frame;
   result_.count = static_cast<std::uint8_t>(config_.columns);
   result_.field_of_view_centideg =

@@ -22,6 +22,8 @@ struct Writer {
       out.u8(static_cast<std::uint8_t>(value));
     } else if constexpr (std::is_same_v<T, std::int32_t>) {
       out.i32(value);
+    } else if constexpr (std::is_same_v<T, std::int16_t>) {
+      out.u16(static_cast<std::uint16_t>(value));  // two's complement
     } else if constexpr (sizeof(T) == 1) {
       out.u8(value);
     } else if constexpr (sizeof(T) == 2) {
@@ -54,6 +56,8 @@ struct Reader {
       value = static_cast<T>(raw);
     } else if constexpr (std::is_same_v<T, std::int32_t>) {
       value = in.i32();
+    } else if constexpr (std::is_same_v<T, std::int16_t>) {
+      value = static_cast<std::int16_t>(in.u16());
     } else if constexpr (sizeof(T) == 1) {
       value = in.u8();
     } else if constexpr (sizeof(T) == 2) {

@@ -42,6 +42,7 @@ class DisparityStage final : public PipelineStage {
   }
   int add_tasks(PairWork& work) override {
     result_ = &work.result;
+    ground_next_ = protocol::has_stage(work.run, protocol::Stage::ground);
     stripes_left_.store(stripes_, std::memory_order_relaxed);
     return work.batch.add(stripes_, stripe_);
   }
@@ -59,8 +60,12 @@ class DisparityStage final : public PipelineStage {
     }
     r.valid_disparity_permille = static_cast<int>(
         valid * 1000 / (static_cast<std::uint64_t>(r.disparity.width()) * r.disparity.height()));
-    if (obstacles_) r.obstacles = &obstacles_->measure(r.disparity, r.frame, matcher_.confidence());
-    if (grid_) r.depth_grid = &grid_->measure(r.disparity, r.frame, matcher_.confidence());
+    r.disparity_confidence = matcher_.confidence();
+    // With the ground stage, the sectors wait for the ground (stages/ground.cpp).
+    if (obstacles_ && !ground_next_) {
+      r.obstacles = &obstacles_->measure(r.disparity, r.frame, r.disparity_confidence);
+    }
+    if (grid_) r.depth_grid = &grid_->measure(r.disparity, r.frame, r.disparity_confidence);
   }
 
   struct Stripe {
@@ -74,7 +79,8 @@ class DisparityStage final : public PipelineStage {
   vision::StereoMatcher matcher_;
   ObstacleSectors* obstacles_;
   DepthGrid* grid_;
-  bool ran_last_ = false;  // false: the next disparity starts a new sequence
+  bool ran_last_ = false;     // false: the next disparity starts a new sequence
+  bool ground_next_ = false;  // the ground stage runs on this pair
   int stripes_ = 0;
   std::atomic<int> stripes_left_{0};
   FrameResult* result_ = nullptr;

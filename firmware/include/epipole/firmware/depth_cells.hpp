@@ -16,6 +16,12 @@ struct RectifiedPinhole {
   double fy = 0, cy = 0;
 };
 
+// The pixels (u, v, d) a measure counts: those where u_factor u + v_factor v + d_factor d +
+// constant >= 0 (d in pixels), e.g. those above the ground (calib::clearance_form).
+struct PixelHalfSpace {
+  double u_factor = 0, v_factor = 0, d_factor = 0, constant = 0;
+};
+
 struct DepthCellsConfig {
   int width = 0;  // the disparity image
   int height = 0;
@@ -53,8 +59,9 @@ class DepthCells {
   // Writes each cell's nearest depth in millimetres, or protocol::kUnknownDepth, to
   // `nearest_mm` (columns x rows of them). `confidence`: the disparity's, required with
   // config.min_confidence (ignored without). Throws Error on a size mismatch.
+  // `counted`: only the pixels in this half-space count (null: all).
   void measure(ImageView<const std::int16_t> disparity, ImageView<const std::uint8_t> confidence,
-               std::span<std::uint16_t> nearest_mm);
+               std::span<std::uint16_t> nearest_mm, const PixelHalfSpace* counted = nullptr);
 
   // The band's fields of view, degrees, and a column's centre from the optical axis (positive
   // to the right).

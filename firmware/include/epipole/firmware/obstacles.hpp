@@ -31,8 +31,10 @@ class ObstacleSectors {
                   double cx);
 
   // `confidence`: the disparity's, required with config.min_confidence (ignored without).
+  // `counted`: only the pixels in this half-space count (those above the ground); null: all.
   const protocol::Obstacles& measure(ImageView<const std::int16_t> disparity, std::uint32_t frame,
-                                     ImageView<const std::uint8_t> confidence = {});
+                                     ImageView<const std::uint8_t> confidence = {},
+                                     const PixelHalfSpace* counted = nullptr);
   // The view's horizontal field of view, degrees.
   double field_of_view_deg() const { return cells_.horizontal_fov_deg(); }
   // Horizontal angle of a sector's centre from the optical axis, degrees (positive to the right).

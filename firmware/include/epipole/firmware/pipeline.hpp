@@ -49,7 +49,9 @@ struct FrameResult {
   GrayView left, right;             // rectified (the raw images when rectification is off)
   std::span<const vision::Corner> corners_left, corners_right;
   ImageView<const std::int16_t> disparity;  // x16, vision::kInvalidDisparity; empty when off
+  ImageView<const std::uint8_t> disparity_confidence;  // when the board's filters ask for it
   int valid_disparity_permille = 0;
+  const protocol::Ground* ground = nullptr;  // the ground stage's (its flags say if one was found)
   const protocol::Obstacles* obstacles = nullptr;   // null without disparity or calibration
   const protocol::DepthGrid* depth_grid = nullptr;  // the same, or without the board's grid
   std::span<const vision::SparseMatch> matches;     // sparse matches along the rows

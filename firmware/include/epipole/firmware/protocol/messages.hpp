@@ -14,7 +14,7 @@ namespace epipole::protocol {
 // fields(io, m): protocol/fields.hpp says what `io` offers) and its place in the Message variant
 // below; the codec, the decoder's checks and the host tool's JSON take all from there.
 
-inline constexpr std::uint8_t kVersion = 6;
+inline constexpr std::uint8_t kVersion = 7;
 
 enum class MessageType : std::uint8_t {
   // firmware -> robot
@@ -26,6 +26,7 @@ enum class MessageType : std::uint8_t {
   calibration_health = 0x06,
   command_ack = 0x07,
   depth_grid = 0x08,
+  ground = 0x09,
   // robot -> firmware
   set_trigger_rate = 0x80,
   set_exposure = 0x81,
@@ -223,6 +224,30 @@ struct DepthGrid {
   friend bool operator==(const DepthGrid&, const DepthGrid&) = default;
 };
 
+// The ground under the rig (the ground stage, docs/vision.md), in the rectified left camera's
+// frame: its height above the ground, and its pitch and roll against it. Version 7.
+inline constexpr std::uint8_t kGroundFound = 1u << 0;  // flags: else the other fields are 0
+struct Ground {
+  static constexpr MessageType kType = MessageType::ground;
+  static constexpr const char* kName = "ground";
+  std::uint32_t frame = 0;
+  std::uint8_t flags = 0;
+  std::uint16_t height_mm = 0;         // the camera's centre above the ground
+  std::int16_t pitch_cdeg = 0;         // the optical axis below the horizontal: looking down > 0
+  std::int16_t roll_cdeg = 0;          // the image's right side lower > 0
+  std::uint16_t inliers_permille = 0;  // of the pixels with a disparity, those on the ground
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("frame", m.frame);
+    io("flags", m.flags);
+    io("height_mm", m.height_mm);
+    io("pitch_cdeg", m.pitch_cdeg);
+    io("roll_cdeg", m.roll_cdeg);
+    io("inliers_permille", m.inliers_permille);
+  }
+  friend bool operator==(const Ground&, const Ground&) = default;
+};
+
 struct Point {
   std::uint16_t u_x16 = 0, v_x16 = 0;         // rectified left image position x 16
   std::int32_t x_mm = 0, y_mm = 0, z_mm = 0;  // left camera frame
@@ -363,7 +388,7 @@ struct Record {
 
 using Message =
     std::variant<Health, FrameSummary, Detections, Obstacles, Points, CalibrationHealth, CommandAck,
-                 SetTriggerRate, SetExposure, SetStages, Snapshot, DepthGrid, Record>;
+                 SetTriggerRate, SetExposure, SetStages, Snapshot, DepthGrid, Record, Ground>;
 
 MessageType type_of(const Message& message);
 const char* name_of(MessageType type);

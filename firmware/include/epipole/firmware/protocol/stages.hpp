@@ -20,8 +20,9 @@ enum class Stage : std::uint8_t {
   disparity = 3,
   sparse = 4,
   detect = 5,
-  publish = 6,
-  total = 7,
+  ground = 6,
+  publish = 7,
+  total = 8,
 };
 
 using StageMask = std::uint16_t;
@@ -46,13 +47,14 @@ struct StageInfo {
   StageMask needs;  // stages whose results it reads: it is skipped when they did not run
 };
 
-inline constexpr std::array<StageInfo, 8> kStages{{
+inline constexpr std::array<StageInfo, 9> kStages{{
     {Stage::capture, "capture", "capture_us", StageKind::always, 0},
     {Stage::rectify, "rectify", "rectify_us", StageKind::switchable, 0},
     {Stage::corners, "corners", "corners_us", StageKind::switchable, 0},
     {Stage::disparity, "disparity", "disparity_us", StageKind::switchable, 0},
     {Stage::sparse, "sparse", "sparse_us", StageKind::switchable, stage_bit(Stage::corners)},
     {Stage::detect, "detect", "detect_us", StageKind::switchable, 0},
+    {Stage::ground, "ground", "ground_us", StageKind::switchable, stage_bit(Stage::disparity)},
     {Stage::publish, "publish", "publish_us", StageKind::always, 0},
     {Stage::total, "total", "total_us", StageKind::sum, 0},
 }};
