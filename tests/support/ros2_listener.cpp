@@ -148,6 +148,7 @@ int main(int argc, char** argv) {
       {ns + "/features", &sensor_msgs_msg_dds__PointCloud2__desc, "sensor_msgs/msg/PointCloud2"},
       {"/diagnostics", &diagnostic_msgs_msg_dds__DiagnosticArray__desc,
        "diagnostic_msgs/msg/DiagnosticArray"},
+      {"/tf", &tf2_msgs_msg_dds__TFMessage__desc, "tf2_msgs/msg/TFMessage"},
       {"/tf_static", &tf2_msgs_msg_dds__TFMessage__desc, "tf2_msgs/msg/TFMessage", true},
   };
   for (Topic& t : topics) {

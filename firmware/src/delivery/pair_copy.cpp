@@ -59,6 +59,10 @@ void PairCopy::copy_from(const FrameResult& r, const PairStamp& pair_stamp) {
     copy_within(r.detection_depths, detection_depths);
   }
   if (parts_ & kCorners) copy_within(r.corners_left, corners);
+  ground.reset();
+  if (r.ground != nullptr) ground = *r.ground;
+  ground_plane.reset();
+  if (r.ground_plane != nullptr) ground_plane = *r.ground_plane;
 }
 
 std::size_t PairCopy::working_set_bytes() const {

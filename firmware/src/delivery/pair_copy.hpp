@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "epipole/core/image.hpp"
@@ -56,6 +57,9 @@ class PairCopy {
   std::vector<vision::Detection> detections;
   std::vector<DetectionDepth> detection_depths;  // one per detection
   std::vector<vision::Corner> corners;           // of the left image, at most corners.max_corners
+  // The ground stage's result, whenever it ran (whatever the parts), and its plane when found.
+  std::optional<protocol::Ground> ground;
+  std::optional<GroundPlane> ground_plane;
 
  private:
   PairParts parts_;

@@ -37,6 +37,7 @@ struct Rates {
   int depth = 1;
   int points = 1;
   int features = 1;
+  int ground = 1;  // the ground's transform on /tf, when one is found
 };
 
 struct Ros2Settings final : OutputSettings {
@@ -45,6 +46,7 @@ struct Ros2Settings final : OutputSettings {
   ros2::DdsNetwork network{{"lo"}, false, {"127.0.0.1"}};
   int depth = 5;
   int points_step = 4;
+  bool points_above_ground = false;  // the ground stage's floor left out of `points`
   Rates every;
   std::unique_ptr<OutputSettings> clone() const override {
     return std::make_unique<Ros2Settings>(*this);
@@ -59,7 +61,8 @@ std::vector<std::string> texts(const yaml::Fields& f, const YAML::Node& n, const
 }
 
 void read_rates(const YAML::Node& n, const yaml::Fields& f, const std::string& path, Rates& r) {
-  f.only_keys(n, path, {"images", "camera_info", "disparity", "depth", "points", "features"});
+  f.only_keys(n, path,
+              {"images", "camera_info", "disparity", "depth", "points", "features", "ground"});
   const auto rate = [&](const char* key, int& out) {
     f.if_present(n, path, key, [&](const YAML::Node& v, const std::string& k) {
       out = f.integer_in(v, k, 0, 1000);
@@ -71,6 +74,7 @@ void read_rates(const YAML::Node& n, const yaml::Fields& f, const std::string& p
   rate("depth", r.depth);
   rate("points", r.points);
   rate("features", r.features);
+  rate("ground", r.ground);
 }
 
 std::unique_ptr<OutputSettings> read_settings(const YAML::Node& n, const yaml::Fields& f) {
@@ -79,7 +83,7 @@ std::unique_ptr<OutputSettings> read_settings(const YAML::Node& n, const yaml::F
   const std::string path = "outputs.ros2";
   f.only_keys(n, path,
               {"domain", "namespace", "frame_prefix", "interfaces", "multicast", "peers", "depth",
-               "points_step", "every"});
+               "points_step", "points_above_ground", "every"});
   f.if_present(n, path, "domain", [&](const YAML::Node& v, const std::string& k) {
     s->domain = f.integer_in(v, k, 0, 232);
   });
@@ -106,6 +110,9 @@ std::unique_ptr<OutputSettings> read_settings(const YAML::Node& n, const yaml::F
   });
   f.if_present(n, path, "points_step", [&](const YAML::Node& v, const std::string& k) {
     s->points_step = f.integer_in(v, k, 1, 64);
+  });
+  f.if_present(n, path, "points_above_ground", [&](const YAML::Node& v, const std::string& k) {
+    s->points_above_ground = f.boolean(v, k);
   });
   f.if_present(n, path, "every",
                [&](const YAML::Node& v, const std::string& k) { read_rates(v, f, k, s->every); });
@@ -203,7 +210,7 @@ class Ros2Output final : public Output {
     const Rates& e = settings_.every;
     const std::uint32_t f = result.frame;
     if (due(e.images, f) || due(e.camera_info, f) || due(e.disparity, f) || due(e.depth, f) ||
-        due(e.points, f) || due(e.features, f)) {
+        due(e.points, f) || due(e.features, f) || (result.ground_plane && due(e.ground, f))) {
       delivery_.offer(result, stamp);
     }
   }
@@ -235,6 +242,7 @@ class Ros2Output final : public Output {
     depth_writer_ = writer("depth", &sensor_msgs_msg_dds__Image__desc);
     points_ = writer("points", &sensor_msgs_msg_dds__PointCloud2__desc);
     features_writer_ = writer("features", &sensor_msgs_msg_dds__PointCloud2__desc);
+    tf_ = writer("/tf", &tf2_msgs_msg_dds__TFMessage__desc);
     tf_static_ = participant_->writer("rt" + settings_.names.topic("/tf_static"),
                                       &tf2_msgs_msg_dds__TFMessage__desc, 1,
                                       ros2::Durability::transient_local);
@@ -261,6 +269,19 @@ class Ros2Output final : public Output {
     tf2_msgs_msg_dds__TFMessage_ m{};
     borrow(m.transforms, transforms.data(), transforms.size());
     write(tf_static_, &m);
+  }
+
+  // The ground's frame under the left optical frame, on /tf (tf2 looks it up at the pair's stamp).
+  void publish_ground(ros::Time t, const GroundPlane& ground) {
+    const ros::GroundTransform g = ros::ground_transform(ground.plane);
+    geometry_msgs_msg_dds__TransformStamped_ transform{};
+    set_header(transform.header, t, rig_.left_optical);
+    transform.child_frame_id = text(rig_.ground);
+    transform.transform.translation = {g.translation[0], g.translation[1], g.translation[2]};
+    transform.transform.rotation = {g.rotation[0], g.rotation[1], g.rotation[2], g.rotation[3]};
+    tf2_msgs_msg_dds__TFMessage_ m{};
+    borrow(m.transforms, &transform, 1);
+    write(tf_, &m);
   }
 
   void publish_camera_info(dds_entity_t writer, ros::Time t, const std::string& frame,
@@ -336,12 +357,14 @@ class Ros2Output final : public Output {
     }
     if (pair.has_disparity && due(e.points, pair.frame)) {
       const int step = settings_.points_step;
+      const bool above = settings_.points_above_ground && pair.ground_plane;
       ros::organised_points(pair.disparity.view(),
                             pair.has_rectified ? pair.left.view() : GrayView(), *triangulator_,
-                            step, cloud_.data());
+                            step, cloud_.data(), above ? &pair.ground_plane->clear : nullptr);
       publish_cloud(points_, t, static_cast<std::size_t>(w / step),
                     static_cast<std::size_t>(h / step), cloud_.data(), false);
     }
+    if (pair.ground_plane && due(e.ground, pair.frame)) publish_ground(t, *pair.ground_plane);
     if (due(e.features, pair.frame)) {
       const std::size_t n = std::min(pair.points.size(), features_.size() / 4);
       ros::feature_points(std::span(pair.points).first(n),
@@ -387,7 +410,7 @@ class Ros2Output final : public Output {
   std::array<diagnostic_msgs_msg_dds__KeyValue_, ros::kMaxHealthFields> key_values_{};
   dds_entity_t left_rect_ = 0, right_rect_ = 0, left_info_ = 0, right_info_ = 0;
   dds_entity_t disparity_writer_ = 0, depth_writer_ = 0, points_ = 0, features_writer_ = 0;
-  dds_entity_t tf_static_ = 0, diagnostics_ = 0;
+  dds_entity_t tf_ = 0, tf_static_ = 0, diagnostics_ = 0;
   std::uint32_t dropped_before_ = 0;  // health's `dropped` in the message before
   PairDelivery delivery_;             // last: its thread stops before the rest goes
 };

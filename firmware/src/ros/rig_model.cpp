@@ -27,7 +27,8 @@ RigModel::RigModel(const RosNames& names,
                    const std::optional<calib::StereoCalibration>& calibration, int max_disparity)
     : left_body(names.frame_prefix + "left"),
       left_optical(names.frame_prefix + "left_optical_frame"),
-      right_optical(names.frame_prefix + "right_optical_frame") {
+      right_optical(names.frame_prefix + "right_optical_frame"),
+      ground(names.frame_prefix + "ground") {
   if (!calibration) return;
   calibrated = true;
   left = rectified_left(*calibration);

@@ -37,6 +37,7 @@ struct RigModel {
   RigModel(const RosNames& names, const std::optional<calib::StereoCalibration>& calibration,
            int max_disparity);
   std::string left_body, left_optical, right_optical;
+  std::string ground;  // the ground stage's plane under the rig (ros::ground_transform)
   bool calibrated = false;
   RectifiedCamera left, right;
   double baseline_m = 0;                // metres, from the right camera's P

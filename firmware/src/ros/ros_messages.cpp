@@ -1,5 +1,7 @@
 #include "ros/ros_messages.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -277,8 +279,13 @@ void feature_points(std::span<const SparsePoint> points, GrayView left, float* o
 }
 
 void organised_points(ImageView<const std::int16_t> disparity16, GrayView left,
-                      const calib::Triangulator& triangulator, int step, float* out) {
+                      const calib::Triangulator& triangulator, int step, float* out,
+                      const PixelHalfSpace* keep) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
+  const auto kept = [keep](int x, int y, double d) {
+    return keep == nullptr ||
+           keep->u_factor * x + keep->v_factor * y + keep->d_factor * d + keep->constant >= 0;
+  };
   for (int j = 0; j < disparity16.height() / step; ++j) {
     const int y = j * step;
     for (int i = 0; i < disparity16.width() / step; ++i) {
@@ -286,7 +293,9 @@ void organised_points(ImageView<const std::int16_t> disparity16, GrayView left,
       const int d = disparity16.row(y)[x];
       const double none = std::numeric_limits<double>::quiet_NaN();
       Eigen::Vector3d p(none, none, none);
-      if (d != vision::kInvalidDisparity && d > 0) p = triangulator.point(x, y, d / 16.0);
+      if (d != vision::kInvalidDisparity && d > 0 && kept(x, y, d / 16.0)) {
+        p = triangulator.point(x, y, d / 16.0);
+      }
       const bool finite = p.allFinite();
       *out++ = finite ? static_cast<float>(p.x()) : nan;
       *out++ = finite ? static_cast<float>(p.y()) : nan;
@@ -294,6 +303,21 @@ void organised_points(ImageView<const std::int16_t> disparity16, GrayView left,
       *out++ = intensity_at(left, x, y);
     }
   }
+}
+
+GroundTransform ground_transform(const calib::MetricPlane& ground) {
+  const Eigen::Vector3d up = -ground.normal;
+  // The optical axis along the ground; a camera looking straight down has none: its image's up.
+  Eigen::Vector3d forward = Eigen::Vector3d::UnitZ() - up * up.z();
+  if (forward.norm() < 1e-6) forward = -Eigen::Vector3d::UnitY() - up * -up.y();
+  forward.normalize();
+  Eigen::Matrix3d axes;  // the ground frame's axes in the optical frame, as columns
+  axes.col(0) = forward;
+  axes.col(1) = up.cross(forward);
+  axes.col(2) = up;
+  const Eigen::Quaterniond q(axes);
+  const Eigen::Vector3d origin = ground.normal * ground.distance;
+  return {{origin.x(), origin.y(), origin.z()}, {q.x(), q.y(), q.z(), q.w()}};
 }
 
 void write_depth_image(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,

@@ -12,8 +12,10 @@
 #include <vector>
 
 #include "epipole/calib/calibration.hpp"
+#include "epipole/calib/disparity_plane.hpp"
 #include "epipole/calib/triangulation.hpp"
 #include "epipole/core/image.hpp"
+#include "epipole/firmware/depth_cells.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/firmware/sparse_points.hpp"
 
@@ -49,6 +51,16 @@ RectifiedCamera rectified_left(const calib::StereoCalibration& calibration);
 RectifiedCamera rectified_right(const calib::StereoCalibration& calibration);
 // K: the left 3x3 of P, row-major.
 std::array<double, 9> camera_k(const RectifiedCamera& camera);
+
+// The ground's frame seen from the camera's optical frame (a transform parent: optical, child:
+// ground): its origin the foot of the camera on the ground (distance along the normal), z up
+// (against the downward normal), x the optical axis along the ground (the camera's heading), y
+// to its left (REP 103). Rotation as x y z w.
+struct GroundTransform {
+  std::array<double, 3> translation{};
+  std::array<double, 4> rotation{};
+};
+GroundTransform ground_transform(const calib::MetricPlane& ground);
 
 // The rotation of a body frame (x forward, y left, z up) to its optical frame (z forward, x
 // right, y down), REP 103, as x y z w.
@@ -90,8 +102,11 @@ void depth_pixels(ImageView<const std::int16_t> disparity16,
 void feature_points(std::span<const SparsePoint> points, GrayView left, float* out);
 // The organised cloud of every `step`th pixel of every `step`th row: x y z (metres, NaN where
 // the disparity has none) and intensity, 4 floats a point; (width / step) x (height / step).
+// With `keep`, points whose pixel is outside it are NaN too (the ground's PixelHalfSpace: only
+// what stands clear of the ground).
 void organised_points(ImageView<const std::int16_t> disparity16, GrayView left,
-                      const calib::Triangulator& triangulator, int step, float* out);
+                      const calib::Triangulator& triangulator, int step, float* out,
+                      const PixelHalfSpace* keep = nullptr);
 
 void write_image(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
                  GrayView image);

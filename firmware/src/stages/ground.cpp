@@ -135,8 +135,9 @@ class GroundStage final : public PipelineStage {
       message.inliers_permille =
           static_cast<std::uint16_t>(fit.valid > 0 ? fit.inliers * 1000 / fit.valid : 0);
       const Eigen::Vector4d form = calib::clearance_form(Q_, *plane, settings_.clearance_m);
-      above_ = {form(0), form(1), form(2), form(3)};
-      above = &above_;
+      plane_ = {*plane, {form(0), form(1), form(2), form(3)}};
+      above = &plane_.clear;
+      r.ground_plane = &plane_;
     }
     r.ground = &message;
     r.stage_messages[static_cast<std::size_t>(protocol::Stage::ground)] = &message_;
@@ -161,7 +162,7 @@ class GroundStage final : public PipelineStage {
   Eigen::Matrix4d Q_ = Eigen::Matrix4d::Zero();
   std::unique_ptr<vision::GroundPlaneFinder> finder_;
   protocol::Message message_{protocol::Ground{}};
-  PixelHalfSpace above_;
+  GroundPlane plane_;
   PairWork* work_ = nullptr;
   Task task_{*this};
 };

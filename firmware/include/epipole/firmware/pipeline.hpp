@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "epipole/calib/calibration.hpp"
+#include "epipole/calib/disparity_plane.hpp"
 #include "epipole/calib/health.hpp"
 #include "epipole/calib/triangulation.hpp"
 #include "epipole/core/image.hpp"
@@ -39,6 +40,14 @@ class PipelineStage;
 using protocol::stage_bit;
 using protocol::StageMask;
 
+// The ground the ground stage found under the rig (stages/ground.cpp): the plane in the
+// rectified left camera's frame, and the pixels (u, v, disparity) of what stands at least the
+// board's ground.clearance_m above it.
+struct GroundPlane {
+  calib::MetricPlane plane;
+  PixelHalfSpace clear;
+};
+
 // What the stages made of one frame pair. Views and spans point into the pipeline's own
 // buffers and stay valid until the next process() call.
 struct FrameResult {
@@ -51,7 +60,8 @@ struct FrameResult {
   ImageView<const std::int16_t> disparity;  // x16, vision::kInvalidDisparity; empty when off
   ImageView<const std::uint8_t> disparity_confidence;  // when the board's filters ask for it
   int valid_disparity_permille = 0;
-  const protocol::Ground* ground = nullptr;  // the ground stage's (its flags say if one was found)
+  const protocol::Ground* ground = nullptr;   // the ground stage's (its flags say if one was found)
+  const GroundPlane* ground_plane = nullptr;  // when it found one
   const protocol::Obstacles* obstacles = nullptr;   // null without disparity or calibration
   const protocol::DepthGrid* depth_grid = nullptr;  // the same, or without the board's grid
   std::span<const vision::SparseMatch> matches;     // sparse matches along the rows
