@@ -198,8 +198,10 @@ HomographyFit find_homography(Points from, Points to, const HomographyOptions& o
     const double all_in = std::pow(w, 4);
     needed = all_in >= 1 ? 0 : std::log(1 - options.confidence) / std::log(1 - all_in);
   }
+  require(best.has_value(), "homography: no four of the ", n,
+          " points determine one (coincident, or three of four on a line)");
   // Four points always agree with their own homography: with more, one more must confirm it.
-  require(best.has_value() && best_count >= std::min(n, 5), "homography: of ", n,
+  require(best_count >= std::min(n, 5), "homography: of ", n,
           " correspondences, no more than a sample of four agree on one");
   // The DLT on every inlier of the best sample, then its own inliers refined.
   std::vector<int> use;

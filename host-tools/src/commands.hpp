@@ -22,5 +22,6 @@ void add_cascade_compile_command(CLI::App& app, const GlobalOptions& global);
 void add_bench_command(CLI::App& app, const GlobalOptions& global);
 void add_eval_disparity_command(CLI::App& app, const GlobalOptions& global);
 void add_view_command(CLI::App& app, const GlobalOptions& global);
+void add_measure_command(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace epipole::tools

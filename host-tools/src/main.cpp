@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   tools::add_cascade_compile_command(app, global);
   tools::add_bench_command(app, global);
   tools::add_view_command(app, global);
+  tools::add_measure_command(app, global);
   // The same exit statuses for every subcommand, said in every --help.
   constexpr const char* kExitStatus =
       "Exit status: 0 success, 1 failure (one line on standard error says why), 2 usage error.";
