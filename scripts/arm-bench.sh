@@ -2,8 +2,9 @@
 # ARM instruction counts without a board: a cross build's epipole-bench under qemu-user with the
 # project's instruction-counting plugin (tests/arm_counts/insn_count_plugin), each side alone (Epipole's
 # stages with their NEON kernels; Debian's OpenCV for the same ISA doing the same work), one
-# thread, on the simulated board's Aloe pair, for the rows of tests/arm_counts/rows (each stage
-# alone, with some keys of the board set, and the whole pipeline). Per pair: the count of 2N
+# thread, on the simulated board's Aloe pair (or the scene a row names), for the rows of
+# tests/arm_counts/rows (each stage alone, with some keys of the board set, and the whole
+# pipeline). Per pair: the count of 2N
 # pairs minus that of N (the set-up cancels out), divided by N. Counts do not depend on the
 # machine's load. The detection rows need the compiled cascades the host build writes into the
 # data cache; without them those rows are left out, with the reason.
@@ -39,11 +40,13 @@ trap 'rm -f "$count_file"' EXIT
 count() {
   local name=$1 n=$2 side=--no-opencv stages=$4
   [[ $3 == opencv ]] && side=--opencv-only
-  local args=()
+  local args=() scene=aloe
   [[ $stages != all ]] && args+=(--stages "$stages")
-  for setting in "${@:5}"; do args+=(--set "$setting"); done
+  for setting in "${@:5}"; do
+    if [[ $setting == scene=* ]]; then scene=${setting#scene=}; else args+=(--set "$setting"); fi
+  done
   "$build/run-on-target" -plugin "$plugin,out=$count_file" "$bench" --board board/sim \
-    --scene aloe --threads 1 --warmup 0 -n "$n" "$side" "${args[@]}" --json \
+    --scene "$scene" --threads 1 --warmup 0 -n "$n" "$side" "${args[@]}" --json \
     >"$out/bench-$name-$3-$n.json"
   cat "$count_file"
 }

@@ -13,15 +13,24 @@
 string(REPLACE "|" ";" emulator "${EMULATOR}")
 set(tolerance_permille 50)
 
-# count(VAR PAIRS STAGES [KEY=VALUE...]): the guest instructions of one whole epipole-bench run.
+# count(VAR PAIRS STAGES [KEY=VALUE...] [scene=NAME]): the guest instructions of one whole
+# epipole-bench run (of the Aloe pair unless the row names another scene).
 function(count var pairs stages)
-  set(args --board ${BOARD} --scene aloe --threads 1 --warmup 0 -n ${pairs} --no-opencv --json)
+  set(scene aloe)
+  set(settings)
+  foreach(setting ${ARGN})
+    if(setting MATCHES "^scene=(.+)$")
+      set(scene ${CMAKE_MATCH_1})
+    else()
+      list(APPEND settings --set ${setting})
+    endif()
+  endforeach()
+  set(args --board ${BOARD} --scene ${scene} --threads 1 --warmup 0 -n ${pairs} --no-opencv
+           --json)
   if(NOT stages STREQUAL "all")
     list(APPEND args --stages ${stages})
   endif()
-  foreach(setting ${ARGN})
-    list(APPEND args --set ${setting})
-  endforeach()
+  list(APPEND args ${settings})
   set(file ${OUT}/arm-instructions-${pairs})
   file(REMOVE ${file})
   execute_process(COMMAND ${emulator} -plugin ${PLUGIN},out=${file} ${BENCH} ${args}
