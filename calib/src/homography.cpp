@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/splitmix.hpp"
 
 namespace epipole::calib {
 
@@ -72,14 +73,6 @@ void check_input(Points from, Points to) {
 
 double error_px(const Eigen::Matrix3d& H, const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
   return (apply_homography(H, from) - to).norm();
-}
-
-// SplitMix64: the same samples on every target.
-std::uint64_t next_random(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
 }
 
 // Levenberg-Marquardt on the eight parameters of H (H(2,2) = 1) minimising the reprojection
@@ -164,7 +157,7 @@ HomographyFit find_homography(Points from, Points to, const HomographyOptions& o
           "homography: RANSAC needs a positive inlier distance, iterations and a confidence "
           "below 1");
   const auto n = static_cast<int>(from.size());
-  std::uint64_t state = options.seed;
+  SplitMix64 random(options.seed);
   HomographyFit fit;
   std::optional<Eigen::Matrix3d> best;
   int best_count = 0;
@@ -183,7 +176,7 @@ HomographyFit find_homography(Points from, Points to, const HomographyOptions& o
     for (int k = 0; k < 4; ++k) {
       bool repeated = true;
       while (repeated) {
-        sample[k] = static_cast<int>(next_random(state) % static_cast<std::uint64_t>(n));
+        sample[k] = static_cast<int>(random.below(static_cast<std::uint64_t>(n)));
         repeated = std::find(sample, sample + k, sample[k]) != sample + k;
       }
     }
@@ -196,7 +189,9 @@ HomographyFit find_homography(Points from, Points to, const HomographyOptions& o
     // The samples needed for one of inliers only with the given confidence, at this ratio.
     const double w = static_cast<double>(count) / n;
     const double all_in = std::pow(w, 4);
-    needed = all_in >= 1 ? 0 : std::log(1 - options.confidence) / std::log(1 - all_in);
+    // log1p: for a small ratio, 1 - w^4 rounds to 1 and log() to 0.
+    const double samples = std::log1p(-options.confidence) / std::log1p(-all_in);
+    needed = all_in >= 1 ? 0 : std::isfinite(samples) ? samples : options.max_iterations;
   }
   require(best.has_value(), "homography: no four of the ", n,
           " points determine one (coincident, or three of four on a line)");

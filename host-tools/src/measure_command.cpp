@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 
 #include "commands.hpp"
@@ -88,10 +89,11 @@ void write_unwarped(const GrayImage& image, const Eigen::Matrix3d& plane_to_imag
   const Eigen::Vector2d extent = high - low;
   require(extent.minCoeff() > 0, "--unwarp: the points span no area of the plane");
   if (scale <= 0) scale = 1000 / extent.maxCoeff();
-  const int width = static_cast<int>(std::ceil(extent.x() * scale));
-  const int height = static_cast<int>(std::ceil(extent.y() * scale));
-  require(width >= 1 && height >= 1 && width <= 20000 && height <= 20000, "--unwarp: ", width, "x",
-          height, " pixels at ", scale, " a unit; give another --scale");
+  const double across = std::ceil(extent.x() * scale), down = std::ceil(extent.y() * scale);
+  require(across >= 1 && down >= 1 && across <= 20000 && down <= 20000, "--unwarp: ", across, "x",
+          down, " pixels at ", scale, " a unit; give another --scale");
+  const int width = static_cast<int>(across);
+  const int height = static_cast<int>(down);
   // Output pixel -> plane -> image, for cv::warpPerspective's inverse map.
   Eigen::Matrix3d to_plane;
   to_plane << 1 / scale, 0, low.x(), 0, 1 / scale, low.y(), 0, 0, 1;
@@ -131,8 +133,17 @@ void run_measure(const MeasureOptions& o) {
   const Eigen::Matrix3d image_to_plane = fit.H.inverse();
   const std::vector<Eigen::Vector2d> measured =
       o.measure.empty() ? pixels : parse_points(o.measure, "--measure");
+  // The plane's horizon: image points on or beyond it (where the plane's w changes sign from the
+  // reference points') are no points of the plane.
+  const double side = (image_to_plane * pixels.front().homogeneous()).z();
   std::vector<Eigen::Vector2d> on_plane;
-  for (const auto& p : measured) on_plane.push_back(calib::apply_homography(image_to_plane, p));
+  for (std::size_t i = 0; i < measured.size(); ++i) {
+    const double w = (image_to_plane * measured[i].homogeneous()).z();
+    require(w * side > 0 && std::abs(w) > 1e-12 * std::abs(side), "--measure: point ", i + 1, " (",
+            measured[i].x(), ", ", measured[i].y(),
+            ") is on or beyond the plane's horizon: no point of the plane");
+    on_plane.push_back(calib::apply_homography(image_to_plane, measured[i]));
+  }
   std::vector<double> distances;
   for (std::size_t i = 0; i + 1 < on_plane.size(); ++i) {
     distances.push_back((on_plane[i + 1] - on_plane[i]).norm());

@@ -153,7 +153,7 @@ struct Robot {
       }
       if (Steady::now() < next_command) continue;
       next_command += std::chrono::milliseconds(100);
-      const StageMask all = 0x7F;
+      const StageMask all = protocol::kAllStages;
       switch (round++ % 6) {
         case 0:
           send(protocol::SetExposure{4000, 300}, sequence++);

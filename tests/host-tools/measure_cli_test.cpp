@@ -112,6 +112,12 @@ TEST(MeasureCli, BadPointsAreClearErrors) {
       {"--points 10,10,20,x,20,20,10,20 --world 0,0,1,0,1,1,0,1", "'x' is not a number"},
       {"--points 10,10,20,10,30,10,40,10 --world 0,0,1,0,1,1,0,1", "on a line"},
       {"--points 10,10,20,10,20,20,10,9999 --world 0,0,1,0,1,1,0,1", "outside the 640x480 image"},
+      // A floor seen in perspective (its far edge shorter): its horizon lies above the points.
+      {"--points 200,300,440,300,600,470,40,470 --world 0,0,1,0,1,1,0,1 --measure 320,20",
+       "beyond the plane's horizon"},
+      {"--points 200,300,440,300,600,470,40,470 --world 0,0,1,0,1,1,0,1 --unwarp " +
+           (photo.dir.path() / "x.png").string() + " --scale 1e300",
+       "give another --scale"},
   };
   for (const auto& c : cases) {
     const test::ToolResult r = test::run_tool("measure " + image + " " + c.arguments);

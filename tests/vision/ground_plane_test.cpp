@@ -72,7 +72,7 @@ double ground_disparity(const Rig& rig, double u, double v) {
 }
 
 // The ground, a box standing on it, a wall far behind, matching noise, holes and wrong pixels.
-Image<std::int16_t> scene_disparity(const Rig& rig, std::uint32_t seed) {
+Image<std::int16_t> scene_disparity(const Rig& rig, std::uint32_t seed, double offset = 0) {
   Image<std::int16_t> disparity(kWidth, kHeight);
   std::mt19937 random(seed);
   std::uniform_real_distribution<double> noise(-0.3, 0.3), unit(0, 1), any(1, kDisparities - 1);
@@ -89,7 +89,7 @@ Image<std::int16_t> scene_disparity(const Rig& rig, std::uint32_t seed) {
           box_d > d) {
         d = box_d;
       }
-      d += noise(random);
+      d += noise(random) - offset;
       const double fate = unit(random);
       if (fate < 0.03) d = any(random);  // a wrong match
       std::int16_t value = static_cast<std::int16_t>(std::lround(d * 16));
@@ -152,6 +152,83 @@ INSTANTIATE_TEST_SUITE_P(Rigs, GroundFits,
                          ::testing::Values(Rig{0.5, 10, 0}, Rig{0.3, 25, 8}, Rig{1.2, 5, -12},
                                            Rig{2.0, 35, 20}, Rig{0.15, 2, 3}, Rig{0.8, -5, 0},
                                            Rig{0.6, 15, -25}, Rig{2.8, 40, 0}));
+
+// Rectified principal points apart (cx - cx' = 9 px): every disparity measured 9 px less than
+// the geometry's. Told the offset, the finder admits the same grounds and returns the measured
+// disparities' plane.
+TEST(GroundFinder, TakesQsDisparityOffsetOut) {
+  constexpr double kOffset = 9;
+  const Rig rig{1.5, 20, -6};
+  GroundPlaneConfig config = finder_config();
+  config.disparity_offset = kOffset;
+  GroundPlaneFinder finder(config, best_simd_path());
+  const Image<std::int16_t> disparity = scene_disparity(rig, 4, kOffset);
+  const GroundPlaneFit& fit = finder.find(disparity.view());
+  ASSERT_TRUE(fit.found);
+  for (const double u : {100.0, 330.0, 600.0}) {
+    for (const double v : {300.0, 470.0}) {
+      EXPECT_NEAR(fit.a * u + fit.b * v + fit.c, ground_disparity(rig, u, v) - kOffset, 0.25);
+    }
+  }
+}
+
+// A tilted table top at 1 m fills the lower half of the view, and the room is seen beyond the
+// plane it lies in: a plane, but not the ground.
+TEST(GroundFinder, APlaneWithTheRoomSeenThroughItIsNoGround) {
+  const Rig table{0.6, 35, 10};  // the table's plane as a ground would be seen
+  Image<std::int16_t> disparity(kWidth, kHeight);
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      const double d = ground_disparity(table, u, v);
+      // The table's top ends at row 300; beyond its edge the room, 4 m away.
+      disparity(u, v) = static_cast<std::int16_t>(
+          std::lround((v > 300 || d <= 0 ? kFocal * kBaseline / 4.0 : d) * 16));
+    }
+  }
+  for (int v = 0; v <= 300; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      disparity(u, v) = static_cast<std::int16_t>(
+          std::lround(std::max(ground_disparity(table, u, v), kFocal * kBaseline / 4.0) * 16));
+    }
+  }
+  GroundPlaneFinder finder(finder_config(), best_simd_path());
+  const GroundPlaneFit& fit = finder.find(disparity.view());
+  EXPECT_FALSE(fit.found) << fit.inliers << " inliers of " << fit.valid << ", " << fit.beyond
+                          << " beyond";
+  EXPECT_GT(fit.beyond, 0);
+  // The same plane down to the bottom of the view, nothing beyond it: a ground.
+  for (int v = 301; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      disparity(u, v) = static_cast<std::int16_t>(std::lround(ground_disparity(table, u, v) * 16));
+    }
+  }
+  EXPECT_TRUE(finder.find(disparity.view()).found);
+}
+
+// A ground that only a sliver of the view shows (its last 40 rows, under a wall 0.8 m ahead) is
+// found as a plane but is too small a share of what is seen to be sure of.
+TEST(GroundFinder, TooFewPixelsOnAPlaneAreNoGround) {
+  const Rig rig{0.5, 0, 0};
+  Image<std::int16_t> disparity(kWidth, kHeight);
+  const double wall = kFocal * kBaseline / 0.8;
+  std::mt19937 random(8);
+  std::uniform_real_distribution<double> rough(-1.5, 1.5);
+  for (int v = 0; v < kHeight; ++v) {
+    for (int u = 0; u < kWidth; ++u) {
+      const double value = v >= kHeight - 40 ? ground_disparity(rig, u, v) : wall + rough(random);
+      disparity(u, v) = static_cast<std::int16_t>(std::lround(value * 16));
+    }
+  }
+  GroundPlaneConfig config = finder_config();
+  config.max_tilt = std::tan(radians(5));  // a rig that does not roll: a narrow band of candidates
+  GroundPlaneFinder finder(config, best_simd_path());
+  const GroundPlaneFit& fit = finder.find(disparity.view());
+  EXPECT_FALSE(fit.found);
+  EXPECT_GT(fit.inliers, 300);
+  EXPECT_LT(fit.inliers, fit.valid * config.min_inlier_share);
+  EXPECT_NEAR(fit.a * 330 + fit.b * 470 + fit.c, ground_disparity(rig, 330, 470), 0.2)
+      << fit.inliers << " inliers of " << fit.valid;
+}
 
 TEST(GroundFinder, ReportsNoGroundWhereThereIsNone) {
   GroundPlaneFinder finder(finder_config(), best_simd_path());

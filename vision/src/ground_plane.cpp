@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/splitmix.hpp"
 #include "ground_plane_kernels.hpp"
 #include "kernel_set.hpp"
 
@@ -26,14 +27,6 @@ namespace {
 
 constexpr KernelSet<kernels::VDisparityRow> kRowKernels{kernels::v_disparity_row_ref,
                                                         kernels::v_disparity_row_neon, nullptr};
-
-// SplitMix64: the same numbers on every target and standard library.
-std::uint64_t next_random(std::uint64_t& state) {
-  std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
 
 // Solves the 3x3 system m x = r by Cramer's rule; false when it is (nearly) singular.
 bool solve3(const double m[3][3], const double r[3], double x[3]) {
@@ -70,9 +63,11 @@ GroundPlaneFinder::GroundPlaneFinder(const GroundPlaneConfig& config, SimdPath p
   require(std::isfinite(c.min_slope) && std::isfinite(c.max_slope) && c.min_slope > 0 &&
               c.max_slope > c.min_slope,
           "ground: slopes ", c.min_slope, "..", c.max_slope, " are not a positive range");
-  require(
-      std::isfinite(c.min_horizon) && std::isfinite(c.max_horizon) && c.max_horizon > c.min_horizon,
-      "ground: horizons ", c.min_horizon, "..", c.max_horizon, " are not a range");
+  require(std::isfinite(c.min_horizon) && std::isfinite(c.max_horizon) &&
+              c.max_horizon > c.min_horizon &&
+              std::isfinite(c.horizon_bins / (c.max_horizon - c.min_horizon)),
+          "ground: horizons ", c.min_horizon, "..", c.max_horizon, " are not a range");
+  require(std::isfinite(c.disparity_offset), "ground: the disparity offset is not a number");
   require(
       c.slope_bins >= 2 && c.slope_bins <= 1024 && c.horizon_bins >= 2 && c.horizon_bins <= 4096,
       "ground: ", c.slope_bins, "x", c.horizon_bins, " Hough bins is outside 2..1024 x 2..4096");
@@ -151,10 +146,10 @@ void GroundPlaneFinder::vote() {
     for (int d = 1; d < config_.max_disparity; ++d) {
       const std::uint32_t count = counts[d];
       if (count < static_cast<std::uint32_t>(config_.min_votes)) continue;
-      const double centre = d + 0.5;  // the bin holds d .. d + 1
+      const double centre = d + 0.5 + config_.disparity_offset;  // the bin holds d .. d + 1
       for (std::size_t k = 0; k < slopes; ++k) {
         const double horizon = (y - centre * inverse_slopes_[k] - config_.min_horizon) * per_bin;
-        if (horizon < 0 || horizon >= bins) continue;
+        if (!(horizon >= 0 && horizon < bins)) continue;  // NaN too
         accumulator_[k * static_cast<std::size_t>(bins) + static_cast<std::size_t>(horizon)] +=
             count;
       }
@@ -191,7 +186,7 @@ void GroundPlaneFinder::gather(ImageView<const std::int16_t> disparity) {
     for (int x = step / 2; x < config_.width; x += step) {
       if (row[x] < 0) continue;
       ++valid;
-      const double d = row[x] / 16.0;
+      const double d = row[x] / 16.0 + config_.disparity_offset;
       const double band =
           config_.band_px + config_.band_share * line + tilt * std::abs(x - config_.centre_column);
       if (line <= 0 || std::abs(d - line) > band) continue;
@@ -211,10 +206,11 @@ int GroundPlaneFinder::count_beyond(ImageView<const std::int16_t> disparity, int
   for (int y = step / 2; y < config_.height; y += step) {
     const std::int16_t* row = disparity.row(y);
     for (int x = step / 2; x < config_.width; x += step) {
-      const double plane = fit_.a * x + fit_.b * y + fit_.c;
+      const double plane = fit_.a * x + fit_.b * y + fit_.c + config_.disparity_offset;
       if (row[x] < 0 || plane <= 0) continue;
       ++in_front;
-      beyond += row[x] / 16.0 < plane - 2 * config_.inlier_px - 0.1 * plane ? 1 : 0;
+      const double d = row[x] / 16.0 + config_.disparity_offset;
+      beyond += d < plane - 2 * config_.inlier_px - 0.1 * plane ? 1 : 0;
     }
   }
   return beyond;
@@ -269,13 +265,13 @@ bool GroundPlaneFinder::least_squares(const Plane& around, double within, Plane&
 void GroundPlaneFinder::fit() {
   const int n = fit_.candidates;
   if (n < 3) return;
-  std::uint64_t state = config_.seed;
+  SplitMix64 random(config_.seed);
   Plane best;
   int best_inliers = 0;
   for (int i = 0; i < config_.iterations; ++i) {
     const Candidate* s[3];
     for (auto& pick : s) {
-      pick = &candidates_[static_cast<std::size_t>(next_random(state) % static_cast<unsigned>(n))];
+      pick = &candidates_[static_cast<std::size_t>(random.below(static_cast<unsigned>(n)))];
     }
     double m[3][3], r[3];
     for (int j = 0; j < 3; ++j) {
@@ -303,7 +299,7 @@ void GroundPlaneFinder::fit() {
   }
   fit_.a = best.a;
   fit_.b = best.b;
-  fit_.c = best.c;
+  fit_.c = best.c - config_.disparity_offset;  // the measured disparities' plane
   fit_.inliers = count_inliers(best);
   fit_.found = fit_.inliers >= 3 && fit_.inliers >= config_.min_inlier_share * fit_.valid;
 }

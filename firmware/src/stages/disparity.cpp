@@ -1,5 +1,6 @@
 // The dense disparity: the matcher's row stripes on the pool; the stripe that ends last ends it
-// (speckles, the depth's outputs: obstacle sectors and the depth grid), so no worker waits.
+// (speckles, the depth's outputs: the depth grid, and the obstacle sectors unless the ground stage
+// runs on the pair and measures them above the ground), so no worker waits.
 #include <atomic>
 
 #include "epipole/vision/stereo.hpp"

@@ -71,9 +71,9 @@ double radians(double degrees) {
 }
 
 // The Hough transform's lines for the rigs the board admits. The ground's disparity is
-// d = baseline / height * (n . (u - cx, v - cy, f)) with n its downward normal: rows slope by
-// baseline * n_y / height, n_y = cos(pitch) cos(roll), and d is 0 at the horizon,
-// cy - f tan(pitch) / cos(roll) (Q's disparity offset, cx - cx', shifts it a little: margins).
+// d = baseline / height * (n . (u - cx, v - cy, f)) with n its downward normal, once Q's offset
+// (cx - cx') is taken out: rows slope by baseline * n_y / height, n_y = cos(pitch) cos(roll), and
+// d is 0 at the horizon, cy - f tan(pitch) / cos(roll); a margin for the bins.
 vision::GroundPlaneConfig finder_config(const BoardConfig& board, const GroundSettings& s,
                                         const Eigen::Matrix4d& Q) {
   const double f = Q(2, 3), cx = -Q(0, 3), cy = -Q(1, 3);
@@ -89,6 +89,7 @@ vision::GroundPlaneConfig finder_config(const BoardConfig& board, const GroundSe
   c.min_horizon = cy - reach;
   c.max_horizon = cy + reach;
   c.horizon_bins = std::clamp(static_cast<int>((c.max_horizon - c.min_horizon) / 4), 32, 1024);
+  c.disparity_offset = Q(3, 3) / Q(3, 2);
   c.centre_column = cx;
   c.max_tilt = std::tan(roll);
   c.iterations = s.iterations;

@@ -19,6 +19,7 @@
 
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
+#include "epipole/core/splitmix.hpp"
 #include "epipole/core/text_file.hpp"
 
 namespace epipole::hal {
@@ -353,7 +354,7 @@ Image<float> render_world_view(const SimWorld& world, const std::vector<WorldSur
 // differs between standard libraries).
 class SensorNoise {
  public:
-  explicit SensorNoise(std::uint64_t seed) : state_(seed) {}
+  explicit SensorNoise(std::uint64_t seed) : random_(seed) {}
 
   double gaussian() {
     if (has_spare_) {
@@ -370,15 +371,9 @@ class SensorNoise {
   }
 
  private:
-  std::uint64_t next() {
-    std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
+  double uniform() { return random_.uniform(); }  // [0, 1)
 
-  std::uint64_t state_;
+  SplitMix64 random_;
   double spare_ = 0;
   bool has_spare_ = false;
 };

@@ -40,6 +40,10 @@ struct GroundPlaneConfig {
   int horizon_bins = 256;
   // A v-disparity cell votes when at least this many pixels of its row have its disparity.
   int min_votes = 8;
+  // What makes the measured disparities those of the geometry (0 at infinity): Q's disparity
+  // offset, Q(3,3) / Q(3,2), when the rectified principal points differ (cx - cx'). The ground's
+  // horizon is where the disparity plus this is 0; the fit returned is the measured one's.
+  double disparity_offset = 0;
   // The principal point's column, and the largest |a| / b a plane may have (tan of the largest
   // roll): the band of candidates around the Hough line widens with it away from the centre.
   double centre_column = 0;
@@ -75,7 +79,7 @@ struct GroundPlaneFit {
 
 class GroundPlaneFinder {
  public:
-  // Throws Error for a bad configuration (sizes, ranges, max_disparity above 4095, a width
+  // Throws Error for a bad configuration (sizes, ranges, max_disparity above 4096, a width
   // above 65535).
   GroundPlaneFinder(const GroundPlaneConfig& config, SimdPath path);
 
