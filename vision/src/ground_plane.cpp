@@ -247,7 +247,9 @@ bool GroundPlaneFinder::least_squares(const Plane& around, double within, Plane&
   double r[3] = {};
   int used = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const double u = candidates_[i].u, v = candidates_[i].v, d = candidates_[i].d;
+    const Candidate& q = candidates_[i];
+    const auto u = static_cast<double>(q.u), v = static_cast<double>(q.v);
+    const auto d = static_cast<double>(q.d);
     if (std::abs(around.a * u + around.b * v + around.c - d) > within) continue;
     const double row[3] = {u - cu, v - cv, 1.0};
     for (int j = 0; j < 3; ++j) {
@@ -275,10 +277,10 @@ void GroundPlaneFinder::fit() {
     }
     double m[3][3], r[3];
     for (int j = 0; j < 3; ++j) {
-      m[j][0] = s[j]->u;
-      m[j][1] = s[j]->v;
+      m[j][0] = static_cast<double>(s[j]->u);
+      m[j][1] = static_cast<double>(s[j]->v);
       m[j][2] = 1;
-      r[j] = s[j]->d;
+      r[j] = static_cast<double>(s[j]->d);
     }
     double x[3];
     if (!solve3(m, r, x)) continue;  // the same pixel twice, or three in a line
