@@ -94,13 +94,17 @@ TEST(ViewOutput, FoxglovesClientGetsEveryChannelAsThePipelineComputedIt) {
   EXPECT_EQ(counts["/tf_static"], 1) << "latched: sent once, when subscribed";
   const RosChecks checks = check_ros_messages(out["messages"], served.observed.kept,
                                               *served.fw->calibration(), served.rig);
-  EXPECT_EQ(checks.unmatched, 0);
   EXPECT_GT(checks.depths, 0);
   EXPECT_GT(checks.points, 0);
   EXPECT_GT(checks.features, 0);
   EXPECT_GT(checks.boxes, 0) << "the detections, drawn and labelled";
   ASSERT_NE(served.view(), nullptr);
   EXPECT_EQ(served.view()->failures, 0u);
+  // Each channel keeps its freshest message for a client that is behind: a pair's image can be
+  // replaced by the next pair's while the pair's depth already went out (a loaded machine). A
+  // message without its pair's image only then.
+  EXPECT_LE(static_cast<std::uint64_t>(checks.unmatched), served.view()->dropped)
+      << "messages of pairs whose image never came, with no message replaced";
 }
 
 // A client that subscribes to everything and then stops reading: the frame loop goes on, 600
