@@ -3,15 +3,9 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
-#include <numbers>
+#include "epipole/core/angles.hpp"
 
 namespace epipole::calib {
-
-namespace {
-double degrees(double radians) {
-  return radians * 180.0 / std::numbers::pi;
-}
-}  // namespace
 
 // On the plane, p . (u, v, d, 1) = 0 with p = (a, b, -1, c); a point X (homogeneous) is Q times
 // its pixel, so the plane of X is pi = Q^-T p.

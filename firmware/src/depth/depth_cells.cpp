@@ -2,19 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
+#include "epipole/core/angles.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/vision/stereo.hpp"
 
 namespace epipole::firmware {
-
-namespace {
-double degrees(double radians) {
-  return radians * 180.0 / std::numbers::pi;
-}
-}  // namespace
 
 DepthCells::Axis DepthCells::split(int first, int end, int cells, double focal, double centre) {
   const auto angle = [&](double u) { return degrees(std::atan((u - centre) / focal)); };

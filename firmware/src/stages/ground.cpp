@@ -7,9 +7,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
-#include <numbers>
 
 #include "epipole/calib/disparity_plane.hpp"
+#include "epipole/core/angles.hpp"
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/vision/ground_plane.hpp"
@@ -64,10 +64,6 @@ std::unique_ptr<StageSettings> read_settings(const YAML::Node& n, const yaml::Fi
     s->inlier_px = f.number_in(v, k, 0.1, 8);
   });
   return s;
-}
-
-double radians(double degrees) {
-  return degrees * std::numbers::pi / 180;
 }
 
 // The Hough transform's lines for the rigs the board admits. The ground's disparity is

@@ -17,6 +17,8 @@
 #include <utility>
 #include <vector>
 
+#include "epipole/calib/disparity_plane.hpp"
+#include "epipole/core/angles.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/core/splitmix.hpp"
@@ -26,7 +28,6 @@ namespace epipole::hal {
 
 namespace {
 
-constexpr double kWorldRadiansPerDegree = std::numbers::pi / 180;
 constexpr double kWorldNearestHit = 1e-9;  // along a ray: nearer hits are none
 constexpr double kWorldMinCosine = 0.05;   // bounds a grazing surface's stretch of a footprint
 constexpr double kWorldFarTexels = 1e12;   // beyond: a photo's mean (its pyramid's top)
@@ -41,9 +42,9 @@ struct WorldView {
 };
 
 WorldView left_camera_view(const RigPose& pose) {
-  const double yaw = pose.yaw_deg * kWorldRadiansPerDegree;
-  const double pitch = pose.pitch_deg * kWorldRadiansPerDegree;
-  const double roll = pose.roll_deg * kWorldRadiansPerDegree;
+  const double yaw = radians(pose.yaw_deg);
+  const double pitch = radians(pose.pitch_deg);
+  const double roll = radians(pose.roll_deg);
   const Eigen::Vector3d up(0.0, 1.0, 0.0);
   const Eigen::Vector3d heading(std::sin(yaw), 0.0, std::cos(yaw));
   const Eigen::Vector3d right(std::cos(yaw), 0.0, -std::sin(yaw));
@@ -466,10 +467,10 @@ GroundTruth ground_truth(const RigPose& pose, const calib::StereoCalibration& ri
   GroundTruth truth;
   truth.normal_down = (rig.left.rectification * (view.to_world.transpose() * down)).normalized();
   truth.height_m = std::abs(view.centre.y());
-  truth.pitch_deg =
-      std::asin(std::clamp(truth.normal_down.z(), -1.0, 1.0)) / kWorldRadiansPerDegree;
-  truth.roll_deg =
-      std::atan2(truth.normal_down.x(), truth.normal_down.y()) / kWorldRadiansPerDegree;
+  // The firmware's own definitions of a ground's pitch and roll (calib/disparity_plane.hpp).
+  const calib::MetricPlane floor{truth.normal_down, truth.height_m};
+  truth.pitch_deg = calib::pitch_deg(floor);
+  truth.roll_deg = calib::roll_deg(floor);
   return truth;
 }
 
