@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/resident.hpp"
 #include "mcap_format.hpp"
 
 namespace epipole::mcap {
@@ -160,16 +161,12 @@ Writer::Writer(std::vector<Schema> schemas, std::vector<Channel> channels, std::
       message_counts_(channels_.size(), 0) {
   require(zstd_ != nullptr, "mcap: cannot make a zstd context");
   require(channels_.size() <= kMaxChannels, "mcap: more than ", kMaxChannels, " channels");
-  chunks_.reserve(kMaxChunks);
-  chunk_.reserve(chunk_bytes + largest_message + 1024);
-  compressed_.reserve(ZSTD_compressBound(chunk_.capacity()));
-  index_.reserve(4096);
-  scratch_.reserve(compressed_.capacity() + 64 * 1024);  // a chunk's record and its indexes
-  // Touched now: the memory they hold is resident from the start, not as chunks first fill it.
-  for (std::vector<std::uint8_t>* buffer : {&chunk_, &compressed_, &scratch_}) {
-    buffer->resize(buffer->capacity());
-    buffer->clear();
-  }
+  reserve_resident(chunks_, kMaxChunks);
+  reserve_resident(chunk_, chunk_bytes + largest_message + 1024);
+  reserve_resident(compressed_, ZSTD_compressBound(chunk_.capacity()));
+  reserve_resident(index_, 4096);
+  // A chunk's record and its indexes.
+  reserve_resident(scratch_, compressed_.capacity() + 64 * 1024);
 }
 
 Writer::~Writer() {

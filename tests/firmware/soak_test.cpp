@@ -3,9 +3,9 @@
 // that succeed: a failing one throws an Error, whose message allocates; frame_loop_tests cover
 // those) and the robot's commands every 100 ms, a snapshot among them, for
 // EPIPOLE_SOAK_SECONDS of wall time (20 unless set; the test command sets 300, docs/testing.md
-// has longer runs by hand). After the warm-up (a tenth of the run, at least 5 s): resident memory
-// grows by at most 1 MiB, the open file descriptors stay the same, nothing is allocated in any
-// thread, and every health message accounts for every trigger.
+// has longer runs by hand). After the warm-up (a tenth of the run, at least 5 s): anonymous
+// resident memory grows by at most 1 MiB, the open file descriptors stay the same, nothing is
+// allocated in any thread, and every health message accounts for every trigger.
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -38,21 +38,28 @@ int soak_seconds() {
   return seconds > 0 ? seconds : 20;
 }
 
-// Resident memory from /proc/self/statm, read without allocating.
-std::size_t resident_bytes() {
+// Resident memory from /proc/self/statm, read without allocating: the anonymous part (heap,
+// stacks) and the file-backed part (code and data of the binaries, paged in as rarely taken
+// paths first run, and given back under pressure). Only the anonymous part can be a leak.
+struct Resident {
+  std::size_t anonymous = 0, file = 0;
+};
+Resident resident_bytes() {
   const int fd = ::open("/proc/self/statm", O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return 0;
+  if (fd < 0) return {};
   char text[128] = {};
   const ssize_t n = ::read(fd, text, sizeof text - 1);
   ::close(fd);
-  if (n <= 0) return 0;
-  // "size resident shared ...", in pages.
+  if (n <= 0) return {};
+  // "size resident shared ...", in pages; shared is the file-backed and shared-memory part.
+  std::array<std::size_t, 3> pages{};
   const char* p = text;
-  while (*p >= '0' && *p <= '9') ++p;
-  while (*p == ' ') ++p;
-  std::size_t resident = 0;
-  for (; *p >= '0' && *p <= '9'; ++p) resident = resident * 10 + static_cast<std::size_t>(*p - '0');
-  return resident * static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+  for (std::size_t& field : pages) {
+    while (*p == ' ') ++p;
+    for (; *p >= '0' && *p <= '9'; ++p) field = field * 10 + static_cast<std::size_t>(*p - '0');
+  }
+  const auto page = static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
+  return {(pages[1] - std::min(pages[1], pages[2])) * page, pages[2] * page};
 }
 
 // Open file descriptors, probed one by one (listing /proc/self/fd would allocate), but for the
@@ -79,7 +86,8 @@ struct Watch final : FrameObserver {
   std::atomic<bool>* warmed = nullptr;  // told when the warm-up ends
   bool warm = false;
   std::size_t allocations_warm = 0, allocations_last = 0;
-  std::size_t resident_warm = 0, resident_last = 0, resident_peak = 0;
+  Resident resident_warm, resident_last;
+  std::size_t anonymous_peak = 0;
   int descriptors_warm = 0, descriptors_last = 0;
   std::uint64_t frames = 0, frames_warm = 0;
   std::optional<std::uint32_t> newest;
@@ -100,7 +108,7 @@ struct Watch final : FrameObserver {
     allocations_last = test::allocations_in_all_threads();
     if (frames % 64 == 0) {
       resident_last = resident_bytes();
-      resident_peak = std::max(resident_peak, resident_last);
+      anonymous_peak = std::max(anonymous_peak, resident_last.anonymous);
       descriptors_last = open_descriptors();
     }
   }
@@ -237,7 +245,8 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
   std::printf(
       "soak: %d s, %llu pairs (%llu after the warm-up), %llu health messages; triggers: %llu "
       "published, %llu stale, %llu one side, %llu both sides, %llu corrupt; %llu camera reopens; "
-      "resident %zu KiB at the warm-up, %zu at the end, peak %zu; %d descriptors; acks %llu ok, "
+      "resident anonymous %zu KiB at the warm-up, %zu at the end, peak %zu (file-backed %zu, %zu); "
+      "%d descriptors; acks %llu ok, "
       "%llu rejected, %llu duplicate\n",
       seconds, static_cast<unsigned long long>(s.frames),
       static_cast<unsigned long long>(s.frames - watch.frames_warm),
@@ -245,9 +254,10 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
       static_cast<unsigned long long>(t.published), static_cast<unsigned long long>(t.stale),
       static_cast<unsigned long long>(t.one_side), static_cast<unsigned long long>(t.both_sides),
       static_cast<unsigned long long>(t.corrupt),
-      static_cast<unsigned long long>(s.faults.camera_reopens), watch.resident_warm / 1024,
-      watch.resident_last / 1024, watch.resident_peak / 1024, watch.descriptors_last,
-      static_cast<unsigned long long>(robot.acks_ok.load()),
+      static_cast<unsigned long long>(s.faults.camera_reopens),
+      watch.resident_warm.anonymous / 1024, watch.resident_last.anonymous / 1024,
+      watch.anonymous_peak / 1024, watch.resident_warm.file / 1024, watch.resident_last.file / 1024,
+      watch.descriptors_last, static_cast<unsigned long long>(robot.acks_ok.load()),
       static_cast<unsigned long long>(robot.acks_rejected.load()),
       static_cast<unsigned long long>(robot.acks_duplicate.load()));
 
@@ -255,7 +265,8 @@ TEST(Soak, EveryStageAndFaultsForMinutesWithoutGrowingOrLosingCount) {
   EXPECT_GT(s.frames - watch.frames_warm, 100u);
   EXPECT_EQ(watch.allocations_last - watch.allocations_warm, 0u)
       << "operator new calls after the warm-up, in any thread";
-  EXPECT_LE(watch.resident_peak, watch.resident_warm + (1u << 20)) << "resident memory grew";
+  EXPECT_LE(watch.anonymous_peak, watch.resident_warm.anonymous + (1u << 20))
+      << "anonymous resident memory grew";
   EXPECT_EQ(watch.descriptors_last, watch.descriptors_warm);
   EXPECT_GT(watch.health_checked, 5u);
   EXPECT_EQ(watch.health_wrong, 0u) << "health messages that did not account for every trigger";

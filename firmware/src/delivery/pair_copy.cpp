@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "epipole/core/resident.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
 
 namespace epipole::firmware::outputs {
@@ -36,12 +37,16 @@ PairCopy::PairCopy(const BoardConfig& board, PairParts parts) : parts_(parts) {
     right_raw = GrayImage(w, h);
   }
   if (parts & kDisparity) disparity = Image<std::int16_t>(w, h);
-  if (parts & kPoints) points.reserve(static_cast<std::size_t>(board.sparse.max_matches));
-  if (parts & kDetections) {
-    detections.reserve(protocol::kMaxDetections);
-    detection_depths.reserve(protocol::kMaxDetections);
+  if (parts & kPoints) {
+    reserve_resident(points, static_cast<std::size_t>(board.sparse.max_matches));
   }
-  if (parts & kCorners) corners.reserve(static_cast<std::size_t>(board.corners.max_corners));
+  if (parts & kDetections) {
+    reserve_resident(detections, protocol::kMaxDetections);
+    reserve_resident(detection_depths, protocol::kMaxDetections);
+  }
+  if (parts & kCorners) {
+    reserve_resident(corners, static_cast<std::size_t>(board.corners.max_corners));
+  }
 }
 
 void PairCopy::copy_from(const FrameResult& r, const PairStamp& pair_stamp) {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "epipole/calib/triangulation.hpp"
+#include "epipole/core/resident.hpp"
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/journal.hpp"
 #include "output_files.hpp"
@@ -163,7 +164,7 @@ class ViewOutput final : public Output {
     for (const view::Channel& c : channels(context.board, settings_)) {
       largest = std::max(largest, c.largest);
     }
-    message_.reserve(largest);
+    reserve_resident(message_, largest);
     server_.serve_http([this](mg_connection* conn) { return pages_.serve(conn); });
     if (calibration_) {
       triangulator_.emplace(*calibration_);

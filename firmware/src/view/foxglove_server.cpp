@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "epipole/core/error.hpp"
+#include "epipole/core/resident.hpp"
 #include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/thread_roles.hpp"
 #include "steady_time.hpp"
@@ -71,13 +72,13 @@ FoxgloveServer::FoxgloveServer(ServerSettings settings, std::vector<Channel> cha
     client->subscription.assign(channels_.size(), -1);
     client->pending.resize(channels_.size());
     for (std::size_t c = 0; c < channels_.size(); ++c) {
-      client->pending[c].frame.reserve(kFrameHeader + channels_[c].largest);
+      reserve_resident(client->pending[c].frame, kFrameHeader + channels_[c].largest);
     }
-    client->sending.reserve(kFrameHeader + largest);
+    reserve_resident(client->sending, kFrameHeader + largest);
     clients_.push_back(std::move(client));
   }
   for (std::size_t c = 0; c < channels_.size(); ++c) {
-    if (channels_[c].latched) latched_[c].reserve(channels_[c].largest);
+    if (channels_[c].latched) reserve_resident(latched_[c], channels_[c].largest);
   }
 }
 

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <string_view>
 
+#include "epipole/core/resident.hpp"
 #include "epipole/firmware/protocol/fields.hpp"
 #include "steady_time.hpp"
 #include "view/disparity_colours.hpp"
@@ -54,10 +55,10 @@ ViewPages::ViewPages(const BoardConfig& board, PageSettings settings)
       rgb_(static_cast<std::size_t>(board.width()) * board.height() * 3) {
   for (std::vector<std::uint8_t>* picture :
        {&left_jpeg_, &disparity_jpeg_, &left_spare_, &disparity_spare_}) {
-    picture->reserve(encoder_.working_set_bytes());
+    reserve_resident(*picture, encoder_.working_set_bytes());
   }
-  health_json_.reserve(4096);
-  health_spare_.reserve(4096);
+  reserve_resident(health_json_, 4096);
+  reserve_resident(health_spare_, 4096);
 }
 
 std::size_t ViewPages::working_set_bytes() const {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <new>
 #include <numeric>
@@ -85,6 +86,9 @@ class Image {
     const std::size_t bytes = static_cast<std::size_t>(stride_) * height * sizeof(T);
     if (bytes > 0) {
       pixels_.reset(static_cast<T*>(::operator new (bytes, std::align_val_t{kRowAlignment})));
+      // Zeroed: the pages are resident from the start, not faulted in when a pair first
+      // writes them (core/resident.hpp), and the padding past each row is defined.
+      std::memset(static_cast<void*>(pixels_.get()), 0, bytes);
     }
   }
 
