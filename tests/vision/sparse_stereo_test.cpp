@@ -79,7 +79,9 @@ TEST(SparseStereoKernels, Box5EqualsReference) {
 // A textured scene: the left view and a right view whose pixel x shows the left's x + d
 // (linear interpolation between pixels for half-pixel d).
 struct ShiftedPair {
-  ShiftedPair(int width, int height, double d) : left(width, height), right(width, height) {
+  // rows: the right view also lower by this many rows (a drifted rig).
+  ShiftedPair(int width, int height, double d, int rows = 0)
+      : left(width, height), right(width, height) {
     const int source_width = width + 40;
     GrayImage source(source_width, height);
     test::fill(source.view(), test::Pattern::blobs, 11);
@@ -98,8 +100,9 @@ struct ShiftedPair {
         const double s = x + 8 + d;
         const int i = static_cast<int>(std::floor(s));
         const double f = s - i;
+        const int from = std::clamp(y - rows, 0, height - 1);
         right.view()(x, y) = static_cast<std::uint8_t>(
-            std::lround((1 - f) * smooth.view()(i, y) + f * smooth.view()(i + 1, y)));
+            std::lround((1 - f) * smooth.view()(i, from) + f * smooth.view()(i + 1, from)));
       }
     }
   }
@@ -171,6 +174,36 @@ TEST(SparseStereo, BoundsAndRangeAreRespected) {
   EXPECT_FALSE(matcher.truncated());
 }
 
+// A rig drifted by 4 rows: along the rows (tolerance 1) the true partners are out of reach; the
+// band of 6 rows finds them, 4 rows lower, and leaves match()'s matches as they were.
+TEST(SparseStereo, TheBandFindsMatchesRowsApart) {
+  const ShiftedPair pair(160, 96, 9.0, 4);
+  const auto left = corners_of(pair.left.view());
+  const auto right = corners_of(pair.right.view());
+  for (const SimdPath path : available_simd_paths()) {
+    SparseStereoMatcher matcher({.width = 160, .height = 96, .max_disparity = 32, .band_rows = 6},
+                                path);
+    const auto along = matcher.match(pair.left.view(), left, pair.right.view(), right);
+    const std::vector<SparseMatch> before(along.begin(), along.end());
+    int along_right = 0;
+    for (const SparseMatch& m : along) along_right += std::abs(m.disparity - 9.0f) < 0.5f ? 1 : 0;
+    const auto band = matcher.match_band(pair.left.view(), pair.right.view());
+    ASSERT_GT(band.size(), 20u) << to_string(path);
+    int four_rows = 0;
+    for (const SparseMatch& m : band) {
+      EXPECT_LE(std::abs(m.yr - m.yl), 6.0f);
+      four_rows += m.yr - m.yl == 4.0f && std::abs(m.disparity - 9.0f) < 0.5f ? 1 : 0;
+    }
+    EXPECT_GE(four_rows, static_cast<int>(band.size()) * 9 / 10) << to_string(path);
+    EXPECT_LT(along_right, four_rows / 4) << to_string(path);
+    ASSERT_EQ(before.size(), along.size());
+    for (std::size_t i = 0; i < before.size(); ++i) EXPECT_EQ(along[i].xl, before[i].xl);
+  }
+  SparseStereoMatcher no_band({.width = 160, .height = 96});
+  no_band.match(pair.left.view(), left, pair.right.view(), right);
+  EXPECT_THROW(no_band.match_band(pair.left.view(), pair.right.view()), Error);
+}
+
 TEST(SparseStereo, BadInputIsAClearError) {
   EXPECT_NE(error_of([] {
               SparseStereoMatcher m({.width = 64, .height = 48, .max_disparity = 64});
@@ -187,6 +220,12 @@ TEST(SparseStereo, BadInputIsAClearError) {
                   {.width = 64, .height = 48, .max_disparity = 16, .row_tolerance = 40});
             }).find("row tolerance 40"),
             std::string::npos);
+  EXPECT_NE(
+      error_of([] {
+        SparseStereoMatcher m(
+            {.width = 64, .height = 48, .max_disparity = 16, .row_tolerance = 2, .band_rows = 1});
+      }).find("band rows 1 must be 0 or in 2..64"),
+      std::string::npos);
   GrayImage a(64, 48), b(64, 47);
   test::fill(a.view(), test::Pattern::noise, 1);
   test::fill(b.view(), test::Pattern::noise, 2);

@@ -77,6 +77,9 @@ SparseStereoMatcher::SparseStereoMatcher(const SparseStereoConfig& config, SimdP
           config.max_corners, " must be in 1..1000000");
   require(config.max_matches >= 1 && config.max_matches <= 1'000'000, "maximum matches ",
           config.max_matches, " must be in 1..1000000");
+  require(
+      config.band_rows == 0 || (config.band_rows >= config.row_tolerance && config.band_rows <= 64),
+      "band rows ", config.band_rows, " must be 0 or in ", config.row_tolerance, "..64");
   require(simd_path_available(path), "kernel path ", to_string(path),
           " is not available on this CPU");
 
@@ -108,10 +111,12 @@ SparseStereoMatcher::SparseStereoMatcher(const SparseStereoConfig& config, SimdP
     side->partner.assign(corners, -2);
   }
   matches_.resize(static_cast<std::size_t>(config.max_matches));
+  if (config.band_rows > 0) band_matches_.resize(matches_.size());
 }
 
 std::size_t SparseStereoMatcher::working_set_bytes() const {
-  std::size_t n = bytes_of(pattern_) + bytes_of(distances_) + bytes_of(matches_);
+  std::size_t n =
+      bytes_of(pattern_) + bytes_of(distances_) + bytes_of(matches_) + bytes_of(band_matches_);
   for (const Side* side : {&left_, &right_}) {
     n += bytes_of(side->box) + bytes_of(side->descriptors) + bytes_of(side->x) + bytes_of(side->y) +
          bytes_of(side->row_start) + bytes_of(side->order) + bytes_of(side->partner);
@@ -185,7 +190,7 @@ SparseStereoMatcher::Best SparseStereoMatcher::best_match(const Side& from, int 
   int best = -1;
   int best_distance = kBits + 1;
   int second = kBits + 1;
-  const int t = config_.row_tolerance;
+  const int t = tolerance_;
   for (int row = std::max(0, y - t); row <= std::min(config_.height - 1, y + t); ++row) {
     const auto xs = to.x.begin();
     const auto row_begin = xs + to.row_start[static_cast<std::size_t>(row)];
@@ -273,13 +278,32 @@ std::span<const SparseMatch> SparseStereoMatcher::match(GrayView left,
           left.width(), "x", left.height(), " but the sparse matcher is configured for ",
           config_.width, "x", config_.height);
   truncated_ = false;
-  match_count_ = 0;
   prepare(left_, left, left_corners);
   prepare(right_, right, right_corners);
+  match_count_ = collect(left, right, config_.row_tolerance, matches_);
+  return {matches_.data(), static_cast<std::size_t>(match_count_)};
+}
+
+std::span<const SparseMatch> SparseStereoMatcher::match_band(GrayView left, GrayView right) {
+  require(config_.band_rows > 0, "the sparse matcher has no band (band_rows 0)");
+  require(
+      same_size(left, right) && left.width() == config_.width && left.height() == config_.height,
+      "images are not the sparse matcher's ", config_.width, "x", config_.height);
+  for (Side* side : {&left_, &right_}) {
+    std::fill_n(side->partner.begin(), side->count, -2);
+  }
+  const int n = collect(left, right, config_.band_rows, band_matches_);
+  return {band_matches_.data(), static_cast<std::size_t>(n)};
+}
+
+int SparseStereoMatcher::collect(GrayView left, GrayView right, int tolerance,
+                                 std::vector<SparseMatch>& out) {
+  tolerance_ = tolerance;
+  int count = 0;
   for (int i = 0; i < left_.count; ++i) {
     const int j = partner_of(left_, i, right_, 1);
     if (j < 0 || partner_of(right_, j, left_, -1) != i) continue;
-    if (match_count_ == config_.max_matches) {
+    if (count == config_.max_matches) {
       truncated_ = true;
       break;
     }
@@ -289,7 +313,7 @@ std::span<const SparseMatch> SparseStereoMatcher::match(GrayView left,
     const int yl = left_.y[ui];
     const int xr = right_.x[uj];
     const int yr = right_.y[uj];
-    SparseMatch& m = matches_[static_cast<std::size_t>(match_count_++)];
+    SparseMatch& m = out[static_cast<std::size_t>(count++)];
     m.xl = static_cast<float>(xl);
     m.yl = static_cast<float>(yl);
     m.disparity = refine(left, right, xl, yl, xr, yr);
@@ -299,7 +323,7 @@ std::span<const SparseMatch> SparseStereoMatcher::match(GrayView left,
                          right_.descriptors.data() + uj * kDescriptorBytes, 1, distances_.data());
     m.distance = distances_[0];
   }
-  return {matches_.data(), static_cast<std::size_t>(match_count_)};
+  return count;
 }
 
 }  // namespace epipole::vision

@@ -2,8 +2,10 @@
 // files).
 #include <functional>
 
+#include "epipole/calib/camera_turn.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
+#include "sim/sim_drift.hpp"
 #include "sim/sim_files.hpp"
 #include "sim/sim_scene.hpp"
 #include "sim/sim_settings.hpp"
@@ -43,13 +45,8 @@ StereoImages synthesized(const SimScene& scene, const std::string& key, int w, i
   return images;
 }
 
-}  // namespace
-
-bool can_load_scenes() {
-  return true;
-}
-
-StereoImages load_scene(const SimScene& scene, int w, int h) {
+// The scene's images as its files hold them (or rendered), before any drift.
+StereoImages files_of(const SimScene& scene, int w, int h) {
   const std::string key = "sim.scenes." + scene.name;
   VideoOptions video;
   video.max_frames = scene.max_frames;
@@ -59,7 +56,10 @@ StereoImages load_scene(const SimScene& scene, int w, int h) {
     // Rendered through the rig's calibration, of the cameras' size (never letterboxed).
     try {
       require(!scene.calibration.empty(), "a world scene needs its rig's calibration");
-      return render_world(*scene.world, calib::load_calibration(scene.calibration), w, h);
+      // A drift is rendered: the right camera where the turn put it (exact, unlike a warp).
+      calib::StereoCalibration rig = calib::load_calibration(scene.calibration);
+      if (scene.drift) rig = calib::with_right_camera_turned(rig, drift_rotation(*scene.drift));
+      return render_world(*scene.world, rig, w, h);
     } catch (const Error& e) {
       throw Error(cat(key, ".world: ", e.what()));
     }
@@ -96,6 +96,24 @@ StereoImages load_scene(const SimScene& scene, int w, int h) {
   }
   require(!images.left.empty(), "scene ", scene.name, ": no images");
   return images;
+}
+
+}  // namespace
+
+StereoImages load_scene(const SimScene& scene, int w, int h) {
+  StereoImages images = files_of(scene, w, h);
+  if (scene.drift && !scene.world) {
+    try {
+      drift_right_images(images, calib::load_calibration(scene.calibration), *scene.drift);
+    } catch (const Error& e) {
+      throw Error(cat("sim.scenes.", scene.name, ".drift: ", e.what()));
+    }
+  }
+  return images;
+}
+
+bool can_load_scenes() {
+  return true;
 }
 
 }  // namespace epipole::hal

@@ -13,13 +13,25 @@ namespace {
 
 constexpr const char* kSection = "sim";
 
+SimDrift read_drift(const yaml::Fields& f, const YAML::Node& m, const std::string& p) {
+  f.only_keys(m, p, {"pitch_deg", "roll_deg", "yaw_deg"});
+  SimDrift d;
+  for (auto [key, angle] : {std::pair{"pitch_deg", &d.pitch_deg},
+                            std::pair{"roll_deg", &d.roll_deg}, std::pair{"yaw_deg", &d.yaw_deg}}) {
+    f.if_present(m, p, key, [&, angle = angle](const YAML::Node& n, const std::string& k) {
+      *angle = f.number_in(n, k, -10, 10);
+    });
+  }
+  return d;
+}
+
 SimScene read_scene(const yaml::Fields& f, const std::string& name, const YAML::Node& m) {
   SimScene s;
   s.name = name;
   const std::string p = cat(kSection, ".scenes.", name);
   f.only_keys(m, p,
               {"left", "right", "side_by_side", "synthesize", "disparity", "recording", "world",
-               "max_frames", "calibration"});
+               "max_frames", "calibration", "drift"});
   f.if_present(m, p, "max_frames", [&](const YAML::Node& n, const std::string& k) {
     s.max_frames = f.integer_in(n, k, 1, 100'000);
   });
@@ -57,6 +69,12 @@ SimScene read_scene(const yaml::Fields& f, const std::string& name, const YAML::
   } else if (s.world) {
     f.fail(p + ".calibration",
            "a world scene needs its rig's calibration (the raw images are rendered through it)");
+  }
+  if (const YAML::Node d = f.optional_child(m, p, "drift"); d.IsDefined()) {
+    s.drift = read_drift(f, d, p + ".drift");
+    if (s.calibration.empty()) {
+      f.fail(p + ".drift", "a drift needs the scene's calibration (the right camera's lens)");
+    }
   }
   return s;
 }

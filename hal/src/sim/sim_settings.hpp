@@ -14,6 +14,12 @@
 
 namespace epipole::hal {
 
+// The right camera turned about its own axes after the calibration (degrees; the axes and signs
+// of calib::CameraTurn): the scene's right images are those the turned camera would see.
+struct SimDrift {
+  double pitch_deg = 0, roll_deg = 0, yaw_deg = 0;
+};
+
 // A scene the simulated cameras replay (the board file's sim.scenes.NAME).
 struct SimScene {
   std::string name;
@@ -24,6 +30,7 @@ struct SimScene {
   int synthesize_disparity = 0;              // from it at this disparity (pixels)
   std::filesystem::path recording;           // or: an MCAP recording's raw pairs
   std::optional<SimWorld> world;             // or: a world rendered through the calibration
+  std::optional<SimDrift> drift;             // the right camera turned since the calibration
   int max_frames = 300;                      // a video or recording of more frames is refused
   std::filesystem::path calibration;         // the rig's, overriding the board's (a
                                              // recording's own when it is replayed; a

@@ -20,6 +20,7 @@ struct SparseStereoConfig {
   int max_distance = 64;   // Hamming distance of the 256-bit descriptors (0..256)
   int max_corners = 4000;  // per image; corners beyond are ignored (truncated())
   int max_matches = 2000;  // the output's bound (truncated())
+  int band_rows = 0;       // match_band()'s rows, 0 (none) or row_tolerance..64
 };
 
 // A match of a left corner with a right corner of a rectified pair. disparity = xl - xr, with
@@ -61,6 +62,12 @@ class SparseStereoMatcher {
   std::span<const SparseMatch> match(GrayView left, std::span<const Corner> left_corners,
                                      GrayView right, std::span<const Corner> right_corners);
 
+  // After match(): the same corners matched again, on rows y - band_rows .. y + band_rows (wider
+  // than row_tolerance: a drifted rig's matches are rows apart), by the same tests; yr is the
+  // right corner's row, the disparity refined as match()'s. The span stays valid until the next
+  // call; match()'s stays valid too. Throws Error when band_rows is 0.
+  std::span<const SparseMatch> match_band(GrayView left, GrayView right);
+
   // True when the last call ignored corners beyond max_corners or matches beyond max_matches.
   bool truncated() const { return truncated_; }
   std::size_t working_set_bytes() const;
@@ -87,6 +94,8 @@ class SparseStereoMatcher {
   Best best_match(const Side& from, int i, const Side& to, int direction);
   int partner_of(Side& from, int i, const Side& to, int direction);
   float refine(GrayView left, GrayView right, int xl, int yl, int xr, int yr) const;
+  // The left corners' mutual best matches on rows +-tolerance, into `out`: their count.
+  int collect(GrayView left, GrayView right, int tolerance, std::vector<SparseMatch>& out);
 
   SparseStereoConfig config_;
   SimdPath path_;
@@ -94,6 +103,8 @@ class SparseStereoMatcher {
   std::vector<std::uint16_t> distances_;
   Side left_, right_;
   std::vector<SparseMatch> matches_;
+  std::vector<SparseMatch> band_matches_;
+  int tolerance_ = 0;  // best_match()'s rows either side
   int match_count_ = 0;
   bool truncated_ = false;
 };
