@@ -12,29 +12,12 @@
 #include "epipole/core/temporary_folder.hpp"
 #include "epipole/core/yaml_fields.hpp"
 #include "error_of.hpp"
+#include "ideal_rig.hpp"
 #include "sim/sim_drift.hpp"
 #include "sim/sim_settings.hpp"
 
 namespace epipole::hal {
 namespace {
-
-// Ideal cameras, 320x240, f = 300 pixels, the centre at (160, 120); `k1` for the right lens.
-calib::StereoCalibration drift_rig(double k1 = 0) {
-  calib::StereoCalibration rig;
-  rig.width = 320;
-  rig.height = 240;
-  rig.left.id = "left";
-  rig.right.id = "right";
-  rig.left.camera.intrinsics = {300, 300, 160, 120};
-  rig.right.camera.intrinsics = {300, 300, 160, 120};
-  rig.right.camera.distortion.k1 = k1;
-  rig.left.projection << 300, 0, 160, 0, 0, 300, 120, 0, 0, 0, 1, 0;
-  rig.right.projection << 300, 0, 160, -30, 0, 300, 120, 0, 0, 0, 1, 0;
-  rig.T = Eigen::Vector3d(-0.1, 0.0, 0.0);
-  rig.Q = calib::disparity_to_depth(rig.left.projection, rig.right.projection);
-  calib::validate(rig);
-  return rig;
-}
 
 // A pair whose right image is a ramp: its value at (x, y) is x / 2 + 10 (across) or y / 2 + 10
 // (down), so a picture moved by (dx, dy) reads (x - dx) / 2 + 10.
@@ -57,7 +40,7 @@ double source_of(const StereoImages& images, int x, int y) {
 }
 
 TEST(SimDrift, EachTurnMovesThePictureByFocalLengthTimesItsTangent) {
-  const calib::StereoCalibration rig = drift_rig();
+  const calib::StereoCalibration rig = test::ideal_rig();
   const double shift = 300 * std::tan(radians(1.5));  // 7.85 pixels
   {  // pitch: the view raised, the picture lower; the centre shows what was above it
     StereoImages images = ramp_pair(false);
@@ -88,7 +71,7 @@ TEST(SimDrift, EachTurnMovesThePictureByFocalLengthTimesItsTangent) {
 TEST(SimDrift, ALensWithoutATurnKeepsItsPicture) {
   StereoImages images = ramp_pair(true);
   const GrayImage before = images.right.front().clone();
-  drift_right_images(images, drift_rig(-0.2), {});
+  drift_right_images(images, test::ideal_rig(-0.2), {});
   int differ = 0;
   for (int y = 0; y < 240; ++y) {
     for (int x = 0; x < 320; ++x) differ += images.right.front()(x, y) != before(x, y) ? 1 : 0;
@@ -101,7 +84,7 @@ TEST(SimDrift, ImagesOfAnotherSizeAreAnError) {
   images.left.emplace_back(160, 120);
   images.right.emplace_back(160, 120);
   EXPECT_NE(test::error_of([&] {
-              drift_right_images(images, drift_rig(), {.pitch_deg = 1});
+              drift_right_images(images, test::ideal_rig(), {.pitch_deg = 1});
             }).find("a drift needs images of the calibration's size, 320x240; these are 160x120"),
             std::string::npos);
 }

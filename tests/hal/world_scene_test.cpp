@@ -17,6 +17,7 @@
 #include "epipole/core/temporary_folder.hpp"
 #include "epipole/core/yaml_fields.hpp"
 #include "error_of.hpp"
+#include "ideal_rig.hpp"
 #include "random_image.hpp"
 #include "sim/sim_settings.hpp"
 #include "sim/world_scene.hpp"
@@ -26,22 +27,7 @@ namespace {
 
 constexpr double kDegree = std::numbers::pi / 180;
 
-// Two ideal cameras (no distortion), already rectified, 0.1 m apart: 320x240, f = 300 pixels.
-calib::StereoCalibration ideal_rig() {
-  calib::StereoCalibration rig;
-  rig.width = 320;
-  rig.height = 240;
-  rig.left.id = "left";
-  rig.right.id = "right";
-  rig.left.camera.intrinsics = {300, 300, 160, 120};
-  rig.right.camera.intrinsics = {300, 300, 160, 120};
-  rig.left.projection << 300, 0, 160, 0, 0, 300, 120, 0, 0, 0, 1, 0;
-  rig.right.projection << 300, 0, 160, -30, 0, 300, 120, 0, 0, 0, 1, 0;
-  rig.T = Eigen::Vector3d(-0.1, 0.0, 0.0);
-  rig.Q = calib::disparity_to_depth(rig.left.projection, rig.right.projection);
-  calib::validate(rig);
-  return rig;
-}
+using test::ideal_rig;
 
 // Photos of noise in a temporary folder: the textures, no data files needed.
 class WorldPhotos {
