@@ -1,6 +1,7 @@
 // A processed pair's results as protocol messages: every field in the protocol's units, counts
 // saturating, depths past the field's range unknown, messages only for what ran.
 #include "epipole/firmware/pair_messages.hpp"
+#include "epipole/core/angles.hpp"
 
 #include <gtest/gtest.h>
 
@@ -153,14 +154,37 @@ TEST(PairMessages, TheStagesOwnMessagesComeWithThePairInTheStagesOrder) {
       << "the disparity runs before the sparse matching";
 }
 
-TEST(PairMessages, CalibrationHealthInHundredthsOfAPixel) {
-  const protocol::CalibrationHealth c = calibration_health_message({812, 0.184, 0.4449, -0.1});
-  EXPECT_EQ(c, (protocol::CalibrationHealth{812, 18, 44}));
-  const protocol::CalibrationHealth far = calibration_health_message({70'000, 700.0, 1e9, 0});
-  EXPECT_EQ(far, (protocol::CalibrationHealth{65'535, 65'535, 65'535})) << "saturates";
+TEST(PairMessages, CalibrationHealthInHundredthsOfAPixelAndThousandthsOfADegree) {
+  // matches, median |offset|, p90 |offset|, signed median
+  const protocol::CalibrationHealth c =
+      calibration_health_message({812, 0.184, 0.4449, -0.126}, std::nullopt);
+  EXPECT_EQ(c, (protocol::CalibrationHealth{812, -13, 44}));
+  const protocol::CalibrationHealth far =
+      calibration_health_message({70'000, 700.0, 1e9, -700.0}, std::nullopt);
+  EXPECT_EQ(far, (protocol::CalibrationHealth{65'535, -32'768, 65'535})) << "saturates";
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(calibration_health_message({0, nan, nan, nan}), (protocol::CalibrationHealth{}))
+  EXPECT_EQ(calibration_health_message({0, nan, nan, nan}, std::nullopt),
+            (protocol::CalibrationHealth{}))
       << "no finite match: no figure";
+
+  calib::DriftEstimate drift;
+  drift.valid = true;
+  drift.pairs = 30;
+  drift.pitch = radians(0.3004);
+  drift.roll = radians(-0.2);
+  drift.pitch_sigma = radians(0.0021);
+  drift.roll_sigma = radians(0.0436);
+  const protocol::CalibrationHealth d = calibration_health_message({500, 3.1, 4.2, 3.05}, drift);
+  EXPECT_EQ(d.flags, protocol::kDriftEstimated);
+  EXPECT_EQ(d.window_pairs, 30);
+  EXPECT_EQ(d.pitch_mdeg, 300);
+  EXPECT_EQ(d.roll_mdeg, -200);
+  EXPECT_EQ(d.pitch_sigma_mdeg, 2);
+  EXPECT_EQ(d.roll_sigma_mdeg, 44);
+  drift.valid = false;  // too few pairs yet: none of it
+  const protocol::CalibrationHealth none = calibration_health_message({500, 3.1, 4.2, 3.05}, drift);
+  EXPECT_EQ(none.flags, 0);
+  EXPECT_EQ(none.pitch_mdeg, 0);
 }
 
 }  // namespace

@@ -125,7 +125,7 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
           detections,
           obstacles,
           points,
-          CalibrationHealth{12, 34, 56},
+          CalibrationHealth{12, -34, 56, kDriftEstimated, 30, 300, -200, 2, 44},
           CommandAck{4242, AckStatus::rejected, AckReason::timing},
           SetTriggerRate{30'000},
           SetExposure{5000, 120},
@@ -372,7 +372,7 @@ TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays)
   // 3 x u32, u16, 2 x u32, 9 x u32 stage times, 4 x u32 dropped by cause, 8 x u32 counters,
   // u16 flags, 2 x u32 waits, u16 busy, 2 x u32 trigger glitches, 2 x u32 outputs.
   ASSERT_EQ(h.size(), kHeaderSize + 134 + kCrcSize);
-  EXPECT_EQ(h[0], 7) << "version";
+  EXPECT_EQ(h[0], 8) << "version";
   EXPECT_EQ(h[kHeaderSize + 106], 0x01);
   EXPECT_EQ(h[kHeaderSize + 107], 0xA5);
   for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 108 + i], i + 1) << i;

@@ -76,7 +76,9 @@ void native_seeds(const fs::path& dir) {
   append(commands, protocol::SetStages{0x3F}, 3);
   append(commands, protocol::Snapshot{}, 4);
   append(commands, protocol::CommandAck{4, protocol::AckStatus::ok}, 5);
-  append(commands, protocol::CalibrationHealth{12, 34, 56}, 6);
+  append(commands,
+         protocol::CalibrationHealth{12, -34, 56, protocol::kDriftEstimated, 30, 300, -200, 2, 44},
+         6);
   write(dir / "commands", commands);
 
   Bytes garbage{0x13, 0x37, 0xFF, 0x00};

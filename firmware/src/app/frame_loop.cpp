@@ -378,6 +378,7 @@ FrameLoop::Verdict FrameLoop::set_exposure(const protocol::SetExposure& command)
 
 void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool trigger_from_capture) {
   if (r.calibration_health) last_calibration_health_ = r.calibration_health;
+  if (r.drift) last_drift_ = r.drift;
   publish_link(r, latency, trigger_from_capture);
   // After the link's messages: the outputs' copies never delay what the robot steers by.
   if (outputs_ != nullptr) outputs_->publish(r, latency);
@@ -501,7 +502,7 @@ void FrameLoop::publish_health() {
   }
   send(*h);
   if (last_calibration_health_ && last_calibration_health_->matches > 0) {
-    send(calibration_health_message(*last_calibration_health_));
+    send(calibration_health_message(*last_calibration_health_, last_drift_));
   }
 }
 

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "epipole/core/angles.hpp"
 #include "wire_units.hpp"
 
 namespace epipole::firmware {
@@ -89,15 +90,28 @@ PairMessages pair_messages(const FrameResult& r, hal::Nanoseconds latency,
   return m;
 }
 
-protocol::CalibrationHealth calibration_health_message(const calib::HealthFigure& figure) {
-  const auto centipx = [](double px) {
-    const double centi = std::clamp(px * 100, 0.0, 65535.0);
-    return static_cast<std::uint16_t>(std::lround(std::isnan(centi) ? 0.0 : centi));
+protocol::CalibrationHealth calibration_health_message(
+    const calib::HealthFigure& figure, const std::optional<calib::DriftEstimate>& drift) {
+  // A number in units of `unit`, rounded and saturated to T's range (NaN: 0).
+  const auto in_units = []<typename T>(double value, double unit, T) {
+    const double v = value / unit;
+    if (std::isnan(v)) return T{0};
+    return static_cast<T>(std::lround(std::clamp(v, double{std::numeric_limits<T>::min()},
+                                                 double{std::numeric_limits<T>::max()})));
   };
   protocol::CalibrationHealth c;
   c.matches = saturate<std::uint16_t>(static_cast<std::uint64_t>(std::max(figure.matches, 0)));
-  c.median_offset_centipx = centipx(figure.median_px);
-  c.p90_offset_centipx = centipx(figure.p90_px);
+  c.median_offset_centipx = in_units(figure.median_signed_px, 0.01, std::int16_t{});
+  c.p90_offset_centipx = in_units(figure.p90_px, 0.01, std::uint16_t{});
+  if (drift && drift->valid) {
+    constexpr double kMilliDegree = radians(0.001);
+    c.flags |= protocol::kDriftEstimated;
+    c.window_pairs = saturate<std::uint16_t>(static_cast<std::uint64_t>(drift->pairs));
+    c.pitch_mdeg = in_units(drift->pitch, kMilliDegree, std::int16_t{});
+    c.roll_mdeg = in_units(drift->roll, kMilliDegree, std::int16_t{});
+    c.pitch_sigma_mdeg = in_units(drift->pitch_sigma, kMilliDegree, std::uint16_t{});
+    c.roll_sigma_mdeg = in_units(drift->roll_sigma, kMilliDegree, std::uint16_t{});
+  }
   return c;
 }
 

@@ -65,6 +65,7 @@ class BoardReader {
     read_corners(root, c);
     read_stereo(root, c);
     read_sparse(root, c);
+    read_calibration_health(root, c);
     read_detector(root, c);
     read_obstacles(root, c);
     read_depth_grid(root, c);
@@ -316,6 +317,17 @@ class BoardReader {
     integer(n, "sparse", "max_matches", c.sparse.max_matches, 1, 100'000);
   }
 
+  void read_calibration_health(const YAML::Node& root, BoardConfig& c) {
+    const YAML::Node n = section(root, "calibration_health", {"band_rows", "window_pairs"});
+    integer(n, "calibration_health", "band_rows", c.calibration_health.band_rows, 1, 64);
+    integer(n, "calibration_health", "window_pairs", c.calibration_health.window_pairs, 3, 1000);
+    if (c.calibration_health.band_rows < c.sparse.row_tolerance) {
+      f_.fail("calibration_health.band_rows",
+              cat(c.calibration_health.band_rows, " is narrower than sparse.row_tolerance ",
+                  c.sparse.row_tolerance));
+    }
+  }
+
   void read_detector(const YAML::Node& root, BoardConfig& c) {
     const YAML::Node n = section(
         root, "detector", {"cascade", "scale_factor", "min_neighbors", "min_size", "max_size"});
@@ -426,25 +438,16 @@ class BoardReader {
   }
 
   void only_known_keys(const YAML::Node& root) const {
-    std::vector<std::string_view> known = {"version",
-                                           "name",
-                                           "cameras",
-                                           "trigger",
-                                           "pairing",
-                                           "serial",
-                                           "calibration",
-                                           "stages",
-                                           "corners",
-                                           "stereo",
-                                           "sparse",
-                                           "detector",
-                                           "obstacles",
-                                           "depth_grid",
-                                           "threads",
-                                           "memory_budget_mb",
-                                           "snapshot_directory",
-                                           "snapshot_limit",
-                                           "snapshot_min_free_mb",
+    std::vector<std::string_view> known = {"version",          "name",
+                                           "cameras",          "trigger",
+                                           "pairing",          "serial",
+                                           "calibration",      "stages",
+                                           "corners",          "stereo",
+                                           "sparse",           "calibration_health",
+                                           "detector",         "obstacles",
+                                           "depth_grid",       "threads",
+                                           "memory_budget_mb", "snapshot_directory",
+                                           "snapshot_limit",   "snapshot_min_free_mb",
                                            "outputs"};
     for (const hal::SectionBackend& section : hal::BackendRegistry::builtin().sections()) {
       known.push_back(section.name);

@@ -1,11 +1,14 @@
 // Sparse matching: the corners' descriptors matched along the rows (once the corners are
 // there), their 3-D points with a calibration (the most distinctive first), and how well the
-// rectification holds (the matches' vertical offsets).
+// rectification holds (the corners matched on a band of rows, their offsets to a fraction of a
+// pixel, the right camera's turn over a window of pairs).
 #include <algorithm>
 #include <vector>
 
+#include "epipole/calib/drift_estimator.hpp"
 #include "epipole/calib/health.hpp"
 #include "epipole/firmware/sparse_points.hpp"
+#include "epipole/vision/patch_alignment.hpp"
 #include "epipole/vision/sparse_stereo.hpp"
 #include "stage_files.hpp"
 
@@ -23,6 +26,14 @@ vision::SparseStereoConfig sparse_config(const BoardConfig& board) {
   c.max_distance = board.sparse.max_distance;
   c.max_corners = board.corners.max_corners;
   c.max_matches = board.sparse.max_matches;
+  c.band_rows = board.calibration_health.band_rows;
+  return c;
+}
+
+calib::DriftEstimatorConfig drift_config(const BoardConfig& board) {
+  calib::DriftEstimatorConfig c;
+  c.max_matches = board.sparse.max_matches;
+  c.window_pairs = board.calibration_health.window_pairs;
   return c;
 }
 
@@ -35,13 +46,15 @@ class SparseStage final : public PipelineStage {
         order_(points_.size()),
         rectified_matches_(points_.size()),
         health_(c.board.sparse.max_matches),
-        max_points_(c.board.sparse.max_points) {}
+        max_points_(c.board.sparse.max_points) {
+    if (c.calibration) drift_.emplace(*c.calibration, drift_config(c.board));
+  }
 
   std::size_t working_set_bytes() const override {
     return matcher_.working_set_bytes() + points_.capacity() * sizeof(SparsePoint) +
            order_.capacity() * sizeof(std::uint32_t) +
            rectified_matches_.capacity() * sizeof(calib::RectifiedMatch) +
-           health_.working_set_bytes();
+           health_.working_set_bytes() + (drift_ ? drift_->working_set_bytes() : 0);
   }
   int add_tasks(PairWork& work) override {
     work_ = &work;
@@ -53,12 +66,22 @@ class SparseStage final : public PipelineStage {
     FrameResult& r = work.result;
     r.matches = matcher_.match(r.left, r.corners_left, r.right, r.corners_right);
     if (triangulator_ != nullptr) triangulate(r);
-    if (protocol::has_stage(work.run, protocol::Stage::rectify)) {
-      for (std::size_t i = 0; i < r.matches.size(); ++i) {
-        const vision::SparseMatch& m = r.matches[i];
-        rectified_matches_[i] = {m.xl, m.yl, m.xr, m.yr};
-      }
-      r.calibration_health = health_.measure({rectified_matches_.data(), r.matches.size()});
+    if (protocol::has_stage(work.run, protocol::Stage::rectify)) measure_rows(r);
+  }
+  // The corners matched again on a band of rows, each match's offset measured to a fraction of
+  // a pixel (a drifted rig's rows are apart; whole-pixel corners cannot show less than one).
+  void measure_rows(FrameResult& r) {
+    std::size_t n = 0;
+    for (const vision::SparseMatch& m : matcher_.match_band(r.left, r.right)) {
+      const vision::PatchOffset o = vision::align_patch(
+          r.left, static_cast<int>(m.xl), static_cast<int>(m.yl), r.right, m.xr, m.yr);
+      if (o.found) rectified_matches_[n++] = {m.xl, m.yl, m.xl + o.dx, m.yl + o.dy};
+    }
+    const std::span<const calib::RectifiedMatch> measured{rectified_matches_.data(), n};
+    r.calibration_health = health_.measure(measured);
+    if (drift_) {
+      drift_->add_pair(measured);
+      r.drift = drift_->estimate();
     }
   }
   // The matches' points; the most distinctive (smallest descriptor distance) become those sent.
@@ -87,6 +110,7 @@ class SparseStage final : public PipelineStage {
   std::vector<std::uint32_t> order_;
   std::vector<calib::RectifiedMatch> rectified_matches_;
   calib::CalibrationHealth health_;
+  std::optional<calib::DriftEstimator> drift_;  // with a calibration
   int max_points_;
   const PairWork* work_ = nullptr;
   Task task_{*this};

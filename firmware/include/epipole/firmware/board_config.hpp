@@ -97,6 +97,14 @@ struct BoardConfig {
     int max_matches = 2000;  // matches kept per frame
   } sparse;
 
+  // How well the calibration still holds (docs/calibration.md, "The drift"): the corners matched
+  // again on rows +- band_rows, their rows measured to a fraction of a pixel, the right camera's
+  // turn estimated over window_pairs pairs.
+  struct CalibrationHealth {
+    int band_rows = 8;
+    int window_pairs = 30;
+  } calibration_health;
+
   struct Detector {
     std::filesystem::path cascade;  // compiled cascade (.bin); empty: no detection
     double scale_factor = 1.1;

@@ -179,6 +179,7 @@ class FrameLoop {
   hal::Nanoseconds over_budget_at_ = 0;
   static constexpr hal::Nanoseconds kLinkFitsAgain = 10'000'000'000;
   std::optional<calib::HealthFigure> last_calibration_health_;  // of the latest matches
+  std::optional<calib::DriftEstimate> last_drift_;
 };
 
 }  // namespace epipole::firmware

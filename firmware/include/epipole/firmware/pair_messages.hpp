@@ -27,7 +27,9 @@ struct PairMessages {
 // `latency`: trigger to publish; `trigger_from_capture`: r.trigger_ns is the left frame's time.
 PairMessages pair_messages(const FrameResult& r, hal::Nanoseconds latency,
                            bool trigger_from_capture);
-protocol::CalibrationHealth calibration_health_message(const calib::HealthFigure& figure);
+// The calibration message of the last pair's figure and the drift estimate (when there is one).
+protocol::CalibrationHealth calibration_health_message(
+    const calib::HealthFigure& figure, const std::optional<calib::DriftEstimate>& drift);
 // OBSTACLE_DISTANCE for a MAVLink board: the sectors, stamped with the trigger's time, within
 // the board's depth range.
 mavlink::ObstacleDistance obstacle_distance_message(const protocol::Obstacles& obstacles,

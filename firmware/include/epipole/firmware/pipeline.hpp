@@ -11,6 +11,7 @@
 
 #include "epipole/calib/calibration.hpp"
 #include "epipole/calib/disparity_plane.hpp"
+#include "epipole/calib/drift_estimator.hpp"
 #include "epipole/calib/health.hpp"
 #include "epipole/calib/triangulation.hpp"
 #include "epipole/core/image.hpp"
@@ -69,9 +70,11 @@ struct FrameResult {
   // The matches to send as 3-D points (sparse.max_points, smallest descriptor distance first):
   // indices into `points`.
   std::span<const std::uint32_t> best_points;
-  // How well the rectification holds: the vertical offsets of the sparse matches (only when the
-  // images were rectified with a calibration).
+  // How well the rectification holds (only when the images were rectified with a calibration):
+  // the vertical offsets of the corners' matches on a band of rows, to a fraction of a pixel,
+  // and the right camera's turn since the calibration, estimated over a window of pairs.
   std::optional<calib::HealthFigure> calibration_health;
+  std::optional<calib::DriftEstimate> drift;
   // Viola-Jones detections in the rectified left image, and each one's depth (valid when the
   // disparity ran and the box holds valid disparities).
   std::span<const vision::Detection> detections;

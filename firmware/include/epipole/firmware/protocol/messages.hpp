@@ -14,7 +14,7 @@ namespace epipole::protocol {
 // fields(io, m): protocol/fields.hpp says what `io` offers) and its place in the Message variant
 // below; the codec, the decoder's checks and the host tool's JSON take all from there.
 
-inline constexpr std::uint8_t kVersion = 7;
+inline constexpr std::uint8_t kVersion = 8;
 
 enum class MessageType : std::uint8_t {
   // firmware -> robot
@@ -275,17 +275,32 @@ struct Points {
   friend bool operator==(const Points&, const Points&) = default;
 };
 
+// calibration.flags
+inline constexpr std::uint8_t kDriftEstimated = 1u << 0;  // pitch_mdeg .. roll_sigma_mdeg hold one
+
 struct CalibrationHealth {
   static constexpr MessageType kType = MessageType::calibration_health;
   static constexpr const char* kName = "calibration";
-  std::uint16_t matches = 0;
-  std::uint16_t median_offset_centipx = 0;  // |vertical offset| of matches, x 100
-  std::uint16_t p90_offset_centipx = 0;
+  std::uint16_t matches = 0;               // the last pair's matches measured
+  std::int16_t median_offset_centipx = 0;  // their vertical offset (right - left), x 100: median
+  std::uint16_t p90_offset_centipx = 0;    // and the 90th percentile of its size
+  std::uint8_t flags = 0;
+  std::uint16_t window_pairs = 0;  // pairs of the estimate's window with matches
+  std::int16_t pitch_mdeg = 0;     // the right camera's turn since the calibration, 1/1000 degree
+  std::int16_t roll_mdeg = 0;
+  std::uint16_t pitch_sigma_mdeg = 0;  // one standard deviation
+  std::uint16_t roll_sigma_mdeg = 0;
   template <class Io, class Self>
   static void fields(Io& io, Self& m) {
     io("matches", m.matches);
     io("median_offset_centipx", m.median_offset_centipx);
     io("p90_offset_centipx", m.p90_offset_centipx);
+    io("flags", m.flags);
+    io("window_pairs", m.window_pairs);
+    io("pitch_mdeg", m.pitch_mdeg);
+    io("roll_mdeg", m.roll_mdeg);
+    io("pitch_sigma_mdeg", m.pitch_sigma_mdeg);
+    io("roll_sigma_mdeg", m.roll_sigma_mdeg);
   }
   friend bool operator==(const CalibrationHealth&, const CalibrationHealth&) = default;
 };
