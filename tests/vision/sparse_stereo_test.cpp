@@ -192,7 +192,8 @@ TEST(SparseStereo, TheBandFindsMatchesRowsApart) {
     int four_rows = 0;
     for (const SparseMatch& m : band) {
       EXPECT_LE(std::abs(m.yr - m.yl), 6.0f);
-      four_rows += m.yr - m.yl == 4.0f && std::abs(m.disparity - 9.0f) < 0.5f ? 1 : 0;
+      EXPECT_EQ(m.disparity, std::round(m.disparity)) << "whole pixels";
+      four_rows += m.yr - m.yl == 4.0f && std::abs(m.disparity - 9.0f) < 1.0f ? 1 : 0;
     }
     EXPECT_GE(four_rows, static_cast<int>(band.size()) * 9 / 10) << to_string(path);
     EXPECT_LT(along_right, four_rows / 4) << to_string(path);

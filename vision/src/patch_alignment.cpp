@@ -12,16 +12,16 @@ constexpr int kMaxPixels = (2 * kMaxRadius + 1) * (2 * kMaxRadius + 1);
 
 // Zero mean and unit variance over n values; false when they are flat.
 bool normalise(float* v, int n) {
-  double sum = 0, squares = 0;
-  for (int i = 0; i < n; ++i) sum += static_cast<double>(v[i]);
-  const double mean = sum / n;
+  float sum = 0, squares = 0;
+  for (int i = 0; i < n; ++i) sum += v[i];
+  const float mean = sum / static_cast<float>(n);
   for (int i = 0; i < n; ++i) {
-    const double c = static_cast<double>(v[i]) - mean;
+    const float c = v[i] - mean;
     squares += c * c;
   }
-  if (squares <= 0) return false;
-  const double scale = std::sqrt(n / squares);
-  for (int i = 0; i < n; ++i) v[i] = static_cast<float>((static_cast<double>(v[i]) - mean) * scale);
+  if (!(squares > 0)) return false;
+  const float scale = std::sqrt(static_cast<float>(n) / squares);
+  for (int i = 0; i < n; ++i) v[i] = (v[i] - mean) * scale;
   return true;
 }
 
@@ -101,13 +101,16 @@ PatchOffset align_patch(GrayView left, int xl, int yl, GrayView right, float xr,
       }
     }
     if (!normalise(sample.data(), n)) return out;
-    double bx = 0, by = 0, correlation = 0;
+    float sum_x = 0, sum_y = 0, sum_c = 0;
     for (int k = 0; k < n; ++k) {
-      const double e = static_cast<double>(sample[k]) - static_cast<double>(t[k]);
-      bx += static_cast<double>(gx[k]) * gradient_scale * e;
-      by += static_cast<double>(gy[k]) * gradient_scale * e;
-      correlation += static_cast<double>(sample[k]) * static_cast<double>(t[k]);
+      const float e = sample[k] - t[k];
+      sum_x += gx[k] * e;
+      sum_y += gy[k] * e;
+      sum_c += sample[k] * t[k];
     }
+    const double bx = static_cast<double>(sum_x) * gradient_scale;
+    const double by = static_cast<double>(sum_y) * gradient_scale;
+    const double correlation = sum_c;
     // Inverse compositional: the template's step, undone on the right patch's position.
     const double step_x = (hyy * bx - hxy * by) / det;
     const double step_y = (hxx * by - hxy * bx) / det;

@@ -280,7 +280,7 @@ std::span<const SparseMatch> SparseStereoMatcher::match(GrayView left,
   truncated_ = false;
   prepare(left_, left, left_corners);
   prepare(right_, right, right_corners);
-  match_count_ = collect(left, right, config_.row_tolerance, matches_);
+  match_count_ = collect(left, right, config_.row_tolerance, matches_, /*refine_disparity=*/true);
   return {matches_.data(), static_cast<std::size_t>(match_count_)};
 }
 
@@ -292,12 +292,12 @@ std::span<const SparseMatch> SparseStereoMatcher::match_band(GrayView left, Gray
   for (Side* side : {&left_, &right_}) {
     std::fill_n(side->partner.begin(), side->count, -2);
   }
-  const int n = collect(left, right, config_.band_rows, band_matches_);
+  const int n = collect(left, right, config_.band_rows, band_matches_, /*refine_disparity=*/false);
   return {band_matches_.data(), static_cast<std::size_t>(n)};
 }
 
 int SparseStereoMatcher::collect(GrayView left, GrayView right, int tolerance,
-                                 std::vector<SparseMatch>& out) {
+                                 std::vector<SparseMatch>& out, bool refine_disparity) {
   tolerance_ = tolerance;
   int count = 0;
   for (int i = 0; i < left_.count; ++i) {
@@ -316,7 +316,8 @@ int SparseStereoMatcher::collect(GrayView left, GrayView right, int tolerance,
     SparseMatch& m = out[static_cast<std::size_t>(count++)];
     m.xl = static_cast<float>(xl);
     m.yl = static_cast<float>(yl);
-    m.disparity = refine(left, right, xl, yl, xr, yr);
+    m.disparity =
+        refine_disparity ? refine(left, right, xl, yl, xr, yr) : static_cast<float>(xl - xr);
     m.xr = m.xl - m.disparity;
     m.yr = static_cast<float>(yr);
     kernels::hamming_ref(left_.descriptors.data() + ui * kDescriptorBytes,

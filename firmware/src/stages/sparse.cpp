@@ -39,6 +39,10 @@ calib::DriftEstimatorConfig drift_config(const BoardConfig& board) {
 
 class SparseStage final : public PipelineStage {
  public:
+  // A pair's matches whose rows are measured: the median's error is well below the patches'
+  // noise, and the drift estimator keeps as many a pair.
+  static constexpr std::size_t kRowsMeasured = 256;
+
   explicit SparseStage(const StageContext& c)
       : matcher_(sparse_config(c.board), c.path),
         triangulator_(c.triangulator),
@@ -69,10 +73,14 @@ class SparseStage final : public PipelineStage {
     if (protocol::has_stage(work.run, protocol::Stage::rectify)) measure_rows(r);
   }
   // The corners matched again on a band of rows, each match's offset measured to a fraction of
-  // a pixel (a drifted rig's rows are apart; whole-pixel corners cannot show less than one).
+  // a pixel (a drifted rig's rows are apart; whole-pixel corners cannot show less than one): at
+  // most kRowsMeasured of them, evenly over the matches (in row order: over the image).
   void measure_rows(FrameResult& r) {
+    const std::span<const vision::SparseMatch> band = matcher_.match_band(r.left, r.right);
+    const std::size_t step = (band.size() + kRowsMeasured - 1) / kRowsMeasured;
     std::size_t n = 0;
-    for (const vision::SparseMatch& m : matcher_.match_band(r.left, r.right)) {
+    for (std::size_t i = 0; i < band.size(); i += step) {
+      const vision::SparseMatch& m = band[i];
       const vision::PatchOffset o = vision::align_patch(
           r.left, static_cast<int>(m.xl), static_cast<int>(m.yl), r.right, m.xr, m.yr);
       if (o.found) rectified_matches_[n++] = {m.xl, m.yl, m.xl + o.dx, m.yl + o.dy};

@@ -63,9 +63,10 @@ class SparseStereoMatcher {
                                      GrayView right, std::span<const Corner> right_corners);
 
   // After match(): the same corners matched again, on rows y - band_rows .. y + band_rows (wider
-  // than row_tolerance: a drifted rig's matches are rows apart), by the same tests; yr is the
-  // right corner's row, the disparity refined as match()'s. The span stays valid until the next
-  // call; match()'s stays valid too. Throws Error when band_rows is 0.
+  // than row_tolerance: a drifted rig's matches are rows apart), by the same tests; xr and yr are
+  // the right corner's (whole pixels: their sub-pixel place is the caller's to measure,
+  // vision::align_patch). The span stays valid until the next call; match()'s stays valid too.
+  // Throws Error when band_rows is 0.
   std::span<const SparseMatch> match_band(GrayView left, GrayView right);
 
   // True when the last call ignored corners beyond max_corners or matches beyond max_matches.
@@ -95,7 +96,8 @@ class SparseStereoMatcher {
   int partner_of(Side& from, int i, const Side& to, int direction);
   float refine(GrayView left, GrayView right, int xl, int yl, int xr, int yr) const;
   // The left corners' mutual best matches on rows +-tolerance, into `out`: their count.
-  int collect(GrayView left, GrayView right, int tolerance, std::vector<SparseMatch>& out);
+  int collect(GrayView left, GrayView right, int tolerance, std::vector<SparseMatch>& out,
+              bool refine_disparity);
 
   SparseStereoConfig config_;
   SimdPath path_;
