@@ -26,10 +26,14 @@ CameraTurn turn_angles(const Eigen::Matrix3d& d) {
 StereoCalibration with_right_camera_turned(const StereoCalibration& rig,
                                            const Eigen::Matrix3d& rotation) {
   StereoCalibration turned = rig;
-  turned.R = rotation.transpose() * rig.R;
-  turned.T = rotation.transpose() * rig.T;
-  turned.right.rectification = rig.right.rectification * rotation;
+  turn_right_camera(turned, rotation);
   return turned;
+}
+
+void turn_right_camera(StereoCalibration& rig, const Eigen::Matrix3d& rotation) {
+  rig.R = rotation.transpose() * rig.R;
+  rig.T = rotation.transpose() * rig.T;
+  rig.right.rectification = rig.right.rectification * rotation;
 }
 
 }  // namespace epipole::calib

@@ -60,11 +60,21 @@ FixedPointMap build_fixed_point_map(const CameraCalibration& camera, int width, 
   require(width >= 1 && height >= 1 && width <= 32767 && height <= 32767, "rectification map size ",
           width, "x", height, " is outside [1, 32767]");
   FixedPointMap map{Image<std::int16_t>(2 * width, height), Image<std::uint16_t>(width, height)};
+  fill_fixed_point_map(camera, map.xy.view(), map.fractions.view());
+  return map;
+}
+
+void fill_fixed_point_map(const CameraCalibration& camera, ImageView<std::int16_t> xy_plane,
+                          ImageView<std::uint16_t> fraction_plane) {
+  require(xy_plane.width() == 2 * fraction_plane.width() &&
+              xy_plane.height() == fraction_plane.height(),
+          "rectification map planes of ", xy_plane.width(), "x", xy_plane.height(), " and ",
+          fraction_plane.width(), "x", fraction_plane.height(), " do not make one map");
   const Eigen::Matrix3d to_ray = rectified_to_ray(camera);
-  for (int v = 0; v < height; ++v) {
-    std::int16_t* xy = map.xy.view().row(v);
-    std::uint16_t* fractions = map.fractions.view().row(v);
-    for (int u = 0; u < width; ++u) {
+  for (int v = 0; v < fraction_plane.height(); ++v) {
+    std::int16_t* xy = xy_plane.row(v);
+    std::uint16_t* fractions = fraction_plane.row(v);
+    for (int u = 0; u < fraction_plane.width(); ++u) {
       // Through float, as build_float_map(), so that the result equals RemapMap::from_float.
       const Eigen::Vector2d s = source_from_ray(camera.camera, to_ray * Eigen::Vector3d(u, v, 1));
       const int fx = to_fixed_point(static_cast<float>(s.x()), &xy[2 * u]);
@@ -72,7 +82,6 @@ FixedPointMap build_fixed_point_map(const CameraCalibration& camera, int width, 
       fractions[u] = static_cast<std::uint16_t>(fy * FixedPointMap::kFractionSteps + fx);
     }
   }
-  return map;
 }
 
 FixedPointMap build_fixed_point_map(const StereoCalibration& calibration, Side side) {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "allocation_counter.hpp"
+#include "board_scene.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "foxglove_socket.hpp"
 #include "sim_rig.hpp"
@@ -189,6 +190,29 @@ INSTANTIATE_TEST_SUITE_P(Protocols, SteadyState,
                                       ? "epipole"
                                       : "mavlink";
                          });
+
+// A correction while running allocates nothing either: the faces scene with its right camera
+// turned, online correction on and a short window; from the third pair on, the estimates, a map
+// rebuilt on its own thread and put in place, and the window started again.
+TEST(FirmwareAllocations, CorrectingADriftedRigAllocatesNothing) {
+  if (!hal::can_load_scenes()) GTEST_SKIP() << "this build replays no image files";
+  const test::BoardScene scene = test::board_scene(
+      "faces", {"sim.scenes.faces.drift={pitch_deg: 0.3, roll_deg: 0.2}",
+                "calibration_health.online_correction=true", "calibration_health.window_pairs=5"});
+  const BoardConfig& config = scene.config;
+  const hal::StereoImages& images = scene.images;
+  Pipeline pipeline(config, scene.rig);
+  RigCorrection& correction = *pipeline.rig_correction();
+  std::size_t before = 0;
+  for (std::uint32_t i = 0; i < 30; ++i) {
+    if (i == 3) before = test::allocations_in_all_threads();
+    const FrameResult& r =
+        pipeline.process(images.left[0].view(), images.right[0].view(), i, 0, config.stages);
+    if (r.drift) correction.consider(*r.drift);
+  }
+  EXPECT_GE(correction.corrections(), 1);
+  EXPECT_EQ(test::allocations_in_all_threads() - before, 0u);
+}
 
 }  // namespace
 }  // namespace epipole::firmware

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "board_scene.hpp"
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/firmware/pipeline.hpp"
@@ -21,26 +22,12 @@ namespace {
 
 using protocol::Stage;
 
-struct Scene {
-  BoardConfig config;
-  std::optional<calib::StereoCalibration> rig;
-  hal::StereoImages images;
-};
+using Scene = test::BoardScene;
 
-// The simulated board with scene `name` chosen, its calibration and (with `images`) the scene's
-// pairs.
+// The simulated board with scene `name` chosen, its calibration and (with `images`) its pairs.
 Scene sim_scene(const std::string& name, std::vector<std::string> overrides = {},
                 bool images = true) {
-  const hal::BackendOption option{"scene", name};
-  Scene s{load_board_config(std::filesystem::path(test::source_dir()) / "board" / "sim", overrides,
-                            std::span(&option, 1)),
-          {},
-          {}};
-  s.rig = load_board_calibration(s.config);
-  if (!images) return s;
-  s.images = hal::load_scene(hal::sim_settings(s.config.sections).chosen(), s.config.width(),
-                             s.config.height());
-  return s;
+  return test::board_scene(name, overrides, images);
 }
 
 double radians(double degrees) {

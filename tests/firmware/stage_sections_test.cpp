@@ -53,7 +53,7 @@ StageSections read(const std::string& yaml) {
 int clearance_of(const BoardConfig& board) {
   ThreadPool pool(1);
   const std::optional<calib::StereoCalibration> none;
-  const StageContext context{board,   none,   SimdPath::reference, nullptr, pool, nullptr,
+  const StageContext context{board,   none,   SimdPath::reference, nullptr, pool, nullptr, nullptr,
                              nullptr, nullptr};
   return settings_of<ClearanceSettings>(context, protocol::Stage::rectify).clearance_mm;
 }

@@ -81,6 +81,7 @@ TEST(ThreadRoles, TheTriggerAboveTheLinkAboveTheComputePool) {
     EXPECT_EQ(realtime_priority(ThreadRole::link), 51);
     EXPECT_EQ(realtime_priority(ThreadRole::trigger), 52);
     EXPECT_EQ(realtime_priority(ThreadRole::snapshot), 0);
+    EXPECT_EQ(realtime_priority(ThreadRole::maps), 0);
   }
   const RealtimeBase base(98);
   EXPECT_EQ(realtime_priority(ThreadRole::trigger), 99) << "capped";

@@ -149,6 +149,13 @@ Rectifier::Rectifier(const RectifierConfig& config, RemapMap map, SimdPath path)
   if (config.own_output) output_ = GrayImage(config.width, config.height);
 }
 
+void Rectifier::swap_map(RemapMap& other) {
+  require(other.width() == map_.width() && other.height() == map_.height(), "a map of ",
+          other.width(), "x", other.height(), " cannot replace the rectifier's ", map_.width(), "x",
+          map_.height());
+  std::swap(map_, other);
+}
+
 std::size_t Rectifier::working_set_bytes() const {
   return map_.size_bytes() + output_.size_bytes();
 }

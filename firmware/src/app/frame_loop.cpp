@@ -1,4 +1,5 @@
 #include "epipole/firmware/frame_loop.hpp"
+#include "epipole/core/angles.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -494,6 +495,7 @@ void FrameLoop::publish_health() {
   ++summary_.health_messages;
   if (not_calibrated_) h->flags |= protocol::kHealthNotCalibrated;
   if (no_cascade_) h->flags |= protocol::kHealthNoCascade;
+  if (corrections_said_ > 0) h->flags |= protocol::kHealthRigCorrected;
   if (trigger_quiet_) h->flags |= protocol::kHealthWaitingForTrigger;
   if (outputs_ != nullptr) outputs_->publish_health(*h);
   if (link_.protocol() == LinkProtocol::mavlink) {
@@ -502,7 +504,8 @@ void FrameLoop::publish_health() {
   }
   send(*h);
   if (last_calibration_health_ && last_calibration_health_->matches > 0) {
-    send(calibration_health_message(*last_calibration_health_, last_drift_));
+    send(calibration_health_message(*last_calibration_health_, last_drift_,
+                                    pipeline_.rig_correction()));
   }
 }
 
@@ -638,6 +641,7 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
                                            trigger.ns, stages_, &ahead_);
   const hal::Nanoseconds t1 = steady_now();
   publish(r, clock.now() - trigger.ns, trigger.from_capture);
+  follow_correction(r);
   const hal::Nanoseconds t2 = steady_now();
   StageTimes times = r.times;
   times[static_cast<std::size_t>(Stage::capture)] = captured;
@@ -652,6 +656,55 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   }
   if (observer_ != nullptr) observer_->on_frame(r);
   ++summary_.frames;
+}
+
+// The rig corrected while running: each correction said when it starts and once it is in
+// place; the window's estimate considered (calibration_health.online_correction), a refusal
+// said when its reason is new.
+void FrameLoop::follow_correction(const FrameResult& r) {
+  using Outcome = RigCorrection::Outcome;
+  RigCorrection* correction = pipeline_.rig_correction();
+  if (correction == nullptr) return;
+  if (correction->corrections() != corrections_said_) {
+    corrections_said_ = correction->corrections();
+    const calib::CameraTurn total = correction->total();
+    journal(Priority::notice,
+            "calibration: corrected (%d): the right camera's map rebuilt; the rig is now %+.3f "
+            "degrees of pitch and %+.3f of roll from its file",
+            corrections_said_, degrees(total.pitch), degrees(total.roll));
+  }
+  if (!r.drift) return;
+  const Outcome outcome = correction->consider(*r.drift);
+  if (outcome == Outcome::none || outcome == Outcome::busy || outcome == Outcome::no_estimate ||
+      outcome == last_outcome_) {
+    return;
+  }
+  last_outcome_ = outcome;
+  const calib::DriftEstimate& e = *r.drift;
+  switch (outcome) {
+    case Outcome::started:
+      journal(Priority::notice,
+              "calibration: the right camera turned %+.3f degrees of pitch and %+.3f of roll "
+              "(rows %.2f px off, %.2f px once undone): rebuilding its map",
+              degrees(e.pitch), degrees(e.roll), e.median_offset_px, e.median_corrected_px);
+      last_outcome_ = Outcome::none;  // each correction is said
+      break;
+    case Outcome::would_not_lower:
+      journal(Priority::warning,
+              "calibration: rows %.2f px off, but undoing the estimated turn (%+.3f, %+.3f "
+              "degrees) would leave %.2f px: not corrected",
+              e.median_offset_px, degrees(e.pitch), degrees(e.roll), e.median_corrected_px);
+      break;
+    case Outcome::out_of_range:
+      journal(Priority::warning,
+              "calibration: the right camera turned %+.3f degrees of pitch and %+.3f of roll, "
+              "beyond calibration_health.max_correction_deg from its file: not corrected "
+              "(calibrate the rig again)",
+              degrees(e.pitch), degrees(e.roll));
+      break;
+    default:
+      break;
+  }
 }
 
 void FrameLoop::add_memory(MemoryReport& report) const {

@@ -91,7 +91,8 @@ PairMessages pair_messages(const FrameResult& r, hal::Nanoseconds latency,
 }
 
 protocol::CalibrationHealth calibration_health_message(
-    const calib::HealthFigure& figure, const std::optional<calib::DriftEstimate>& drift) {
+    const calib::HealthFigure& figure, const std::optional<calib::DriftEstimate>& drift,
+    const RigCorrection* correction) {
   // A number in units of `unit`, rounded and saturated to T's range (NaN: 0).
   const auto in_units = []<typename T>(double value, double unit, T) {
     const double v = value / unit;
@@ -111,6 +112,14 @@ protocol::CalibrationHealth calibration_health_message(
     c.roll_mdeg = in_units(drift->roll, kMilliDegree, std::int16_t{});
     c.pitch_sigma_mdeg = in_units(drift->pitch_sigma, kMilliDegree, std::uint16_t{});
     c.roll_sigma_mdeg = in_units(drift->roll_sigma, kMilliDegree, std::uint16_t{});
+  }
+  if (correction != nullptr) {
+    constexpr double kMilliDegree = radians(0.001);
+    if (correction->rebuilding()) c.flags |= protocol::kRigCorrecting;
+    c.corrections = saturate<std::uint16_t>(static_cast<std::uint64_t>(correction->corrections()));
+    const calib::CameraTurn total = correction->total();
+    c.corrected_pitch_mdeg = in_units(total.pitch, kMilliDegree, std::int16_t{});
+    c.corrected_roll_mdeg = in_units(total.roll, kMilliDegree, std::int16_t{});
   }
   return c;
 }

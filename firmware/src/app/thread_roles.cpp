@@ -30,6 +30,8 @@ const char* thread_name(ThreadRole role) {
       return "epipole-snap";
     case ThreadRole::output:
       return "epipole-out";
+    case ThreadRole::maps:
+      return "epipole-maps";
   }
   return "epipole";
 }
@@ -40,7 +42,10 @@ void set_realtime_base(int priority) {
 
 int realtime_priority(ThreadRole role) {
   const int base = g_base.load();
-  if (base == 0 || role == ThreadRole::snapshot || role == ThreadRole::output) return 0;
+  if (base == 0 || role == ThreadRole::snapshot || role == ThreadRole::output ||
+      role == ThreadRole::maps) {
+    return 0;
+  }
   const int above = role == ThreadRole::trigger ? 2 : role == ThreadRole::link ? 1 : 0;
   return std::min(base + above, 99);
 }

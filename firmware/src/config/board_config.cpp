@@ -318,9 +318,15 @@ class BoardReader {
   }
 
   void read_calibration_health(const YAML::Node& root, BoardConfig& c) {
-    const YAML::Node n = section(root, "calibration_health", {"band_rows", "window_pairs"});
-    integer(n, "calibration_health", "band_rows", c.calibration_health.band_rows, 1, 64);
-    integer(n, "calibration_health", "window_pairs", c.calibration_health.window_pairs, 3, 1000);
+    const YAML::Node n = section(
+        root, "calibration_health",
+        {"band_rows", "window_pairs", "online_correction", "max_correction_deg", "min_offset_px"});
+    BoardConfig::CalibrationHealth& h = c.calibration_health;
+    integer(n, "calibration_health", "band_rows", h.band_rows, 1, 64);
+    integer(n, "calibration_health", "window_pairs", h.window_pairs, 3, 1000);
+    boolean(n, "calibration_health", "online_correction", h.online_correction);
+    number(n, "calibration_health", "max_correction_deg", h.max_correction_deg, 0, 5);
+    number(n, "calibration_health", "min_offset_px", h.min_offset_px, 0, 10);
     if (c.calibration_health.band_rows < c.sparse.row_tolerance) {
       f_.fail("calibration_health.band_rows",
               cat(c.calibration_health.band_rows, " is narrower than sparse.row_tolerance ",

@@ -54,6 +54,7 @@ Pipeline::Pipeline(const BoardConfig& board,
     // Only point() and depth() are used: no point image is needed.
     triangulator_ = std::make_unique<calib::Triangulator>(calibration->Q, 1, 1);
     make_depth_outputs(board, *calibration);
+    correction_ = std::make_unique<RigCorrection>(*calibration, board);
   }
   const stages::StageContext context{board,
                                      calibration,
@@ -62,7 +63,8 @@ Pipeline::Pipeline(const BoardConfig& board,
                                      *pool_,
                                      triangulator_.get(),
                                      obstacles_.get(),
-                                     depth_grid_.get()};
+                                     depth_grid_.get(),
+                                     correction_.get()};
   available_ = protocol::kAlwaysOnStages;
   for (const stages::StageRow& row : stages::kPipelineStages) {
     auto& stage = stages_[static_cast<std::size_t>(row.id)];

@@ -4,6 +4,7 @@
 #include <array>
 
 #include "epipole/core/error.hpp"
+#include "epipole/firmware/rig_correction.hpp"
 #include "epipole/firmware/stereo_rectification.hpp"
 #include "stage_files.hpp"
 #include "steady_time.hpp"
@@ -16,7 +17,7 @@ using detail::steady_now;
 
 class RectifyStage final : public PipelineStage {
  public:
-  explicit RectifyStage(const StageContext& c) : pool_(c.pool) {
+  explicit RectifyStage(const StageContext& c) : pool_(c.pool), correction_(c.correction) {
     if (!c.calibration) return;
     const BoardConfig& board = c.board;
     require(c.calibration->width == board.width() && c.calibration->height == board.height(),
@@ -37,13 +38,19 @@ class RectifyStage final : public PipelineStage {
     for (std::size_t slot = 0; slot < 2; ++slot) {
       images += left_[slot].size_bytes() + right_[slot].size_bytes();
     }
-    return rectifiers_->left.working_set_bytes() + rectifiers_->right.working_set_bytes() + images;
+    // With the spare map a corrected rig's is rebuilt in.
+    const std::size_t spare = correction_ != nullptr ? correction_->working_set_bytes() : 0;
+    return rectifiers_->left.working_set_bytes() + rectifiers_->right.working_set_bytes() + images +
+           spare;
   }
 
   // The pair rectified ahead when it is this one, else rectified now.
   void prepare(PairWork& work) override {
     FrameResult& r = work.result;
     hal::Nanoseconds& time = r.times[static_cast<std::size_t>(protocol::Stage::rectify)];
+    // A corrected right map, rebuilt beside: in place now, and the pair ahead (rectified with
+    // the old one) rectified again.
+    if (correction_ != nullptr && correction_->install(rectifiers_->right)) ahead_.ready = false;
     const bool was_ahead = ahead_.matches(r.left_raw, r.right_raw, r.frame);
     ahead_.ready = false;  // used now, or never
     if (was_ahead) {
@@ -143,6 +150,7 @@ class RectifyStage final : public PipelineStage {
   };
 
   ThreadPool& pool_;
+  RigCorrection* correction_;
   std::optional<StereoRectifiers> rectifiers_;
   // Two rectified images per camera: the current pair's and the one ahead.
   std::array<GrayImage, 2> left_, right_;

@@ -7,6 +7,7 @@
 
 #include "epipole/calib/drift_estimator.hpp"
 #include "epipole/calib/health.hpp"
+#include "epipole/firmware/rig_correction.hpp"
 #include "epipole/firmware/sparse_points.hpp"
 #include "epipole/vision/patch_alignment.hpp"
 #include "epipole/vision/sparse_stereo.hpp"
@@ -50,6 +51,7 @@ class SparseStage final : public PipelineStage {
         order_(points_.size()),
         rectified_matches_(points_.size()),
         health_(c.board.sparse.max_matches),
+        correction_(c.correction),
         max_points_(c.board.sparse.max_points) {
     if (c.calibration) drift_.emplace(*c.calibration, drift_config(c.board));
   }
@@ -76,6 +78,11 @@ class SparseStage final : public PipelineStage {
   // a pixel (a drifted rig's rows are apart; whole-pixel corners cannot show less than one): at
   // most kRowsMeasured of them, evenly over the matches (in row order: over the image).
   void measure_rows(FrameResult& r) {
+    // The maps were corrected: the window's matches were measured through the old ones.
+    if (drift_ && correction_ != nullptr && correction_->generation() != generation_) {
+      generation_ = correction_->generation();
+      drift_->set_rig(correction_->rig());
+    }
     const std::span<const vision::SparseMatch> band = matcher_.match_band(r.left, r.right);
     const std::size_t step = (band.size() + kRowsMeasured - 1) / kRowsMeasured;
     std::size_t n = 0;
@@ -119,6 +126,8 @@ class SparseStage final : public PipelineStage {
   std::vector<calib::RectifiedMatch> rectified_matches_;
   calib::CalibrationHealth health_;
   std::optional<calib::DriftEstimator> drift_;  // with a calibration
+  const RigCorrection* correction_;
+  std::uint32_t generation_ = 0;  // of the rig the window was measured through
   int max_points_;
   const PairWork* work_ = nullptr;
   Task task_{*this};

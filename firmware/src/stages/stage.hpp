@@ -36,6 +36,10 @@ namespace epipole::yaml {
 class Fields;
 }
 
+namespace epipole::firmware {
+class RigCorrection;  // epipole/firmware/rig_correction.hpp
+}  // namespace epipole::firmware
+
 namespace epipole::firmware::stages {
 
 // What the stages of one pipeline share, made before them.
@@ -48,6 +52,8 @@ struct StageContext {
   const calib::Triangulator* triangulator;  // null without a calibration
   ObstacleSectors* obstacles;               // the depth's outputs: null without a calibration,
   DepthGrid* depth_grid;                    // and the grid without the board's
+  RigCorrection* correction;                // the rig corrected while running (null without
+                                            // a calibration)
 };
 
 // The settings a stage read from its own section of the board file (StageDefinition::

@@ -11,8 +11,8 @@ Eigen::Matrix3d drift_rotation(const SimDrift& drift);
 
 // Turns the scene's right camera after its calibration `rig`: each right image becomes the one
 // the turned camera sees, right'(p) = right(project(D unproject(p))) through the right camera's
-// lens (for a lens without distortion, the homography K D K^-1), sampled bilinearly; what the
-// old image did not see is black. Throws Error when the images are not rig.width x rig.height.
+// lens (for a lens without distortion, the homography K D K^-1), sampled by cubic convolution; what
+// the old image did not see is black. Throws Error when the images are not rig.width x rig.height.
 void drift_right_images(StereoImages& images, const calib::StereoCalibration& rig,
                         const SimDrift& drift);
 

@@ -28,5 +28,7 @@ CameraTurn turn_angles(const Eigen::Matrix3d& rotation);
 // turned camera's images with it gives the pictures the old calibration gave the old camera's.
 StereoCalibration with_right_camera_turned(const StereoCalibration& rig,
                                            const Eigen::Matrix3d& rotation);
+// The same in place (no allocation).
+void turn_right_camera(StereoCalibration& rig, const Eigen::Matrix3d& rotation);
 
 }  // namespace epipole::calib

@@ -54,5 +54,9 @@ void build_float_map(const CameraCalibration& camera, ImageView<float> map_x,
 // * height bytes.
 FixedPointMap build_fixed_point_map(const CameraCalibration& camera, int width, int height);
 FixedPointMap build_fixed_point_map(const StereoCalibration& calibration, Side side);
+// The same into existing planes (xy twice the fractions' width, one height): no allocation, for
+// a map rebuilt while the firmware runs (a corrected rig, firmware/rig_correction.hpp).
+void fill_fixed_point_map(const CameraCalibration& camera, ImageView<std::int16_t> xy,
+                          ImageView<std::uint16_t> fractions);
 
 }  // namespace epipole::calib

@@ -103,6 +103,12 @@ struct BoardConfig {
   struct CalibrationHealth {
     int band_rows = 8;
     int window_pairs = 30;
+    // Correcting the drift while running (docs/calibration.md, "Correcting the drift"): when the
+    // window's rows are off by at least min_offset_px and undoing the estimated turn lowers
+    // them, the right camera's map is rebuilt with it, up to max_correction_deg from the file.
+    bool online_correction = false;
+    double max_correction_deg = 1.0;
+    double min_offset_px = 0.05;
   } calibration_health;
 
   struct Detector {

@@ -99,6 +99,7 @@ class FrameLoop {
   hal::Nanoseconds frame_period() const;
   // trigger_from_capture: result.trigger_ns is the left frame's time, not a trigger edge's.
   void publish(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
+  void follow_correction(const FrameResult& result);
   void publish_link(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
   void send(const protocol::Message& message);
   // The steps of run().
@@ -180,6 +181,8 @@ class FrameLoop {
   static constexpr hal::Nanoseconds kLinkFitsAgain = 10'000'000'000;
   std::optional<calib::HealthFigure> last_calibration_health_;  // of the latest matches
   std::optional<calib::DriftEstimate> last_drift_;
+  int corrections_said_ = 0;  // the rig's corrections the journal has told of
+  RigCorrection::Outcome last_outcome_ = RigCorrection::Outcome::none;
 };
 
 }  // namespace epipole::firmware

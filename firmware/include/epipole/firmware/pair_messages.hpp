@@ -8,6 +8,7 @@
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/protocol/mavlink.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
+#include "epipole/firmware/rig_correction.hpp"
 
 namespace epipole::firmware {
 
@@ -27,9 +28,11 @@ struct PairMessages {
 // `latency`: trigger to publish; `trigger_from_capture`: r.trigger_ns is the left frame's time.
 PairMessages pair_messages(const FrameResult& r, hal::Nanoseconds latency,
                            bool trigger_from_capture);
-// The calibration message of the last pair's figure and the drift estimate (when there is one).
+// The calibration message of the last pair's figure, the drift estimate (when there is one) and
+// the corrections made (with a calibration).
 protocol::CalibrationHealth calibration_health_message(
-    const calib::HealthFigure& figure, const std::optional<calib::DriftEstimate>& drift);
+    const calib::HealthFigure& figure, const std::optional<calib::DriftEstimate>& drift,
+    const RigCorrection* correction = nullptr);
 // OBSTACLE_DISTANCE for a MAVLink board: the sectors, stamped with the trigger's time, within
 // the board's depth range.
 mavlink::ObstacleDistance obstacle_distance_message(const protocol::Obstacles& obstacles,

@@ -25,6 +25,7 @@
 #include "epipole/firmware/memory_report.hpp"
 #include "epipole/firmware/obstacles.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
+#include "epipole/firmware/rig_correction.hpp"
 #include "epipole/firmware/sparse_points.hpp"
 #include "epipole/vision/cascade.hpp"
 #include "epipole/vision/corner.hpp"
@@ -141,6 +142,9 @@ class Pipeline {
   std::filesystem::path missing_cascade() const;
   const calib::Triangulator* triangulator() const { return triangulator_.get(); }
   const ObstacleSectors* obstacle_sectors() const { return obstacles_.get(); }
+  // The rig corrected while running (null without a calibration).
+  RigCorrection* rig_correction() { return correction_.get(); }
+  const RigCorrection* rig_correction() const { return correction_.get(); }
   // Every stage's buffers, one part per stage (as the table of stages names them).
   void add_memory(MemoryReport& report) const;
   // Pairs rectified ahead (NextPair), and how many of them process() then used.
@@ -155,6 +159,7 @@ class Pipeline {
   std::unique_ptr<calib::Triangulator> triangulator_;
   std::unique_ptr<ObstacleSectors> obstacles_;
   std::unique_ptr<DepthGrid> depth_grid_;
+  std::unique_ptr<RigCorrection> correction_;
   // The stages of firmware/src/stages/stage_table.hpp, by id (null: not a pipeline stage).
   std::array<std::unique_ptr<stages::PipelineStage>, protocol::kStageCount> stages_;
   StageMask available_ = 0;

@@ -15,6 +15,7 @@ enum class ThreadRole {
   trigger,   // the trigger line (a master fires its pulses from it): SCHED_FIFO P + 2
   snapshot,  // snapshot files: normal scheduling
   output,    // an output's own work (a recording, a network): normal scheduling
+  maps,      // rectification maps rebuilt for a corrected rig: normal scheduling
 };
 
 const char* thread_name(ThreadRole role);  // "epipole-work", ... (top -H, /proc/PID/task)

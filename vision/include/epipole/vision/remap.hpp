@@ -110,6 +110,9 @@ class Rectifier {
   const RectifierConfig& config() const { return config_; }
   const RemapMap& map() const { return map_; }
   SimdPath simd_path() const { return path_; }
+  // Exchanges the map for `other`, of the same size (Error otherwise), without allocating: a map
+  // rebuilt beside the one in use takes its place between two images.
+  void swap_map(RemapMap& other);
 
  private:
   // Throws Error for a source of another size than the configuration's.

@@ -43,6 +43,8 @@ inline constexpr std::uint16_t kHealthNoCascade = 1u << 1;
 // The trigger has fired no edge for three periods: externally triggered cameras wait for it (and
 // are not reopened for it); nothing is published until it fires again.
 inline constexpr std::uint16_t kHealthWaitingForTrigger = 1u << 2;
+// The rectification carries a correction made while running (calibration's corrections).
+inline constexpr std::uint16_t kHealthRigCorrected = 1u << 3;
 
 // Once a second: rates, latencies, faults.
 // Counts are totals since start, modulo 2^32 (they wrap, never stop): a reader takes
@@ -277,6 +279,7 @@ struct Points {
 
 // calibration.flags
 inline constexpr std::uint8_t kDriftEstimated = 1u << 0;  // pitch_mdeg .. roll_sigma_mdeg hold one
+inline constexpr std::uint8_t kRigCorrecting = 1u << 1;   // a corrected map is being rebuilt
 
 struct CalibrationHealth {
   static constexpr MessageType kType = MessageType::calibration_health;
@@ -290,6 +293,9 @@ struct CalibrationHealth {
   std::int16_t roll_mdeg = 0;
   std::uint16_t pitch_sigma_mdeg = 0;  // one standard deviation
   std::uint16_t roll_sigma_mdeg = 0;
+  std::uint16_t corrections = 0;          // made while running (calibration_health)
+  std::int16_t corrected_pitch_mdeg = 0;  // the rectification's correction from the file
+  std::int16_t corrected_roll_mdeg = 0;
   template <class Io, class Self>
   static void fields(Io& io, Self& m) {
     io("matches", m.matches);
@@ -301,6 +307,9 @@ struct CalibrationHealth {
     io("roll_mdeg", m.roll_mdeg);
     io("pitch_sigma_mdeg", m.pitch_sigma_mdeg);
     io("roll_sigma_mdeg", m.roll_sigma_mdeg);
+    io("corrections", m.corrections);
+    io("corrected_pitch_mdeg", m.corrected_pitch_mdeg);
+    io("corrected_roll_mdeg", m.corrected_roll_mdeg);
   }
   friend bool operator==(const CalibrationHealth&, const CalibrationHealth&) = default;
 };

@@ -1,0 +1,98 @@
+#include "epipole/firmware/rig_correction.hpp"
+
+#include <cmath>
+
+#include "epipole/calib/rectification_map.hpp"
+#include "epipole/core/angles.hpp"
+#include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/thread_roles.hpp"
+
+namespace epipole::firmware {
+
+namespace {
+
+// A share of the offsets a correction must take away (its prediction, from the window).
+constexpr double kMustLower = 0.2;
+
+}  // namespace
+
+RigCorrection::RigCorrection(const calib::StereoCalibration& rig, const BoardConfig& board)
+    : rig_(rig),
+      online_(board.calibration_health.online_correction),
+      max_correction_(radians(board.calibration_health.max_correction_deg)),
+      min_offset_px_(board.calibration_health.min_offset_px),
+      window_pairs_(board.calibration_health.window_pairs),
+      pending_right_(rig.right),
+      spare_(rig.width, rig.height),
+      builder_([this] { rebuild_maps(); }) {}
+
+RigCorrection::~RigCorrection() {
+  {
+    const std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_one();
+  builder_.join();
+}
+
+RigCorrection::Outcome RigCorrection::consider(const calib::DriftEstimate& estimate) {
+  return online_ ? decide(estimate, window_pairs_) : Outcome::none;
+}
+
+RigCorrection::Outcome RigCorrection::correct(const calib::DriftEstimate& estimate) {
+  return decide(estimate, 3);
+}
+
+RigCorrection::Outcome RigCorrection::decide(const calib::DriftEstimate& e, int min_pairs) {
+  if (state_.load(std::memory_order_acquire) != kIdle) return Outcome::busy;
+  if (!e.valid || e.pairs < min_pairs) return Outcome::no_estimate;
+  if (e.median_offset_px < min_offset_px_) return Outcome::nothing_to_correct;
+  // Undoing the turn must take away a fifth of the offsets, and the turn must stand out of the
+  // pairs' spread (a static scene's spread is 0: then the first test decides).
+  const bool stands_out =
+      std::abs(e.pitch) > 3 * e.pitch_sigma || std::abs(e.roll) > 3 * e.roll_sigma;
+  if (e.median_corrected_px > (1 - kMustLower) * e.median_offset_px || !stands_out) {
+    return Outcome::would_not_lower;
+  }
+  const Eigen::Matrix3d turn = calib::turn_rotation({e.pitch, e.roll, 0});
+  const calib::CameraTurn total = calib::turn_angles(total_ * turn);
+  if (std::abs(total.pitch) > max_correction_ || std::abs(total.roll) > max_correction_) {
+    return Outcome::out_of_range;
+  }
+  pending_ = turn;
+  pending_right_.rectification = rig_.right.rectification * turn;
+  before_px_ = e.median_offset_px;
+  after_px_ = e.median_corrected_px;
+  {
+    const std::lock_guard lock(mutex_);
+    state_.store(kRequested, std::memory_order_release);
+  }
+  wake_.notify_one();
+  return Outcome::started;
+}
+
+bool RigCorrection::install(vision::Rectifier& right) {
+  if (state_.load(std::memory_order_acquire) != kReady) return false;
+  right.swap_map(spare_);
+  calib::turn_right_camera(rig_, pending_);
+  total_ = total_ * pending_;
+  ++generation_;
+  state_.store(kIdle, std::memory_order_release);
+  return true;
+}
+
+// The thread: each request's map into the spare, then ready for install().
+void RigCorrection::rebuild_maps() {
+  enter_thread_role_or_say(ThreadRole::maps);
+  std::unique_lock lock(mutex_);
+  for (;;) {
+    wake_.wait(lock, [&] { return stopping_ || state_.load() == kRequested; });
+    if (stopping_) return;
+    lock.unlock();
+    calib::fill_fixed_point_map(pending_right_, spare_.xy(), spare_.fractions());
+    lock.lock();
+    state_.store(kReady, std::memory_order_release);
+  }
+}
+
+}  // namespace epipole::firmware
