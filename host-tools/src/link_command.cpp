@@ -62,6 +62,8 @@ Message parse_command(const std::string& text) {
     return v;
   };
   if (name == "snapshot" && value.empty()) return Snapshot{};
+  if (name == "recalibrate" && value.empty()) return Recalibrate{};
+  if (name == "save-calibration" && value.empty()) return SaveCalibration{};
   if (name == "record" && value == "stop") return Record{RecordAction::stop, 0};
   if (name == "record" && value.starts_with("start")) {
     const std::string seconds = value == "start" ? "0" : value.substr(value.find(':') + 1);
@@ -98,7 +100,7 @@ Message parse_command(const std::string& text) {
   }
   throw Error(cat("unknown command '", text,
                   "' (expected trigger-rate=HZ, exposure=US[:DB], stages=MASK, snapshot, "
-                  "record=start[:SECONDS] or record=stop)"));
+                  "record=start[:SECONDS], record=stop, recalibrate or save-calibration)"));
 }
 
 class Printer {
@@ -224,7 +226,7 @@ void add_link_command(CLI::App& app, const GlobalOptions&) {
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--send", options->send,
                   "Send a command first: trigger-rate=HZ, exposure=US[:DB], stages=MASK, snapshot, "
-                  "record=start[:SECONDS], record=stop");
+                  "record=start[:SECONDS], record=stop, recalibrate, save-calibration");
   cmd->callback([options] { run_link(*options); });
 }
 

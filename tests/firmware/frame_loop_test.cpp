@@ -1171,6 +1171,41 @@ TEST(FrameLoop, TheRobotStartsAndStopsTheRecording) {
   for (const auto& file : files) EXPECT_TRUE(ends_whole(file)) << file << " closed whole";
 }
 
+// recalibrate and save_calibration, on the rig's ideal calibration: before any window there is
+// no estimate; then nothing to correct (ok); the calibration in use written beside the board's,
+// which is kept.
+TEST(FrameLoop, RecalibrateAndSaveCalibrationAreAnsweredWithTheirResult) {
+  using protocol::AckReason;
+  using protocol::AckStatus;
+  LinkedRig linked([](const test::SimRig& r) {
+    BoardConfig c = r.parse();
+    c.stages |= protocol::stage_bit(protocol::Stage::sparse);
+    return c;
+  });
+  Recorder recorder;
+  send_at(recorder, linked, 0, {protocol::Recalibrate{}}, 1);
+  send_at(recorder, linked, 20, {protocol::Recalibrate{}, protocol::SaveCalibration{}}, 2);
+  linked.fw->frame_loop().set_observer(&recorder);
+  const std::atomic<bool> stop{false};
+  linked.fw->run(50, stop);
+  const std::vector<protocol::CommandAck> acks = linked.acks();
+  ASSERT_EQ(acks.size(), 3u);
+  EXPECT_EQ(acks[0].status, AckStatus::rejected);
+  EXPECT_EQ(acks[0].reason, AckReason::no_pairs) << "no window yet";
+  EXPECT_EQ(acks[1].status, AckStatus::ok) << "an ideal rig: nothing to correct";
+  EXPECT_EQ(acks[2].status, AckStatus::ok);
+  const std::filesystem::path original = linked.config.calibration;
+  const std::filesystem::path corrected =
+      original.parent_path() / (original.stem().string() + "-corrected.yaml");
+  ASSERT_TRUE(std::filesystem::exists(corrected));
+  EXPECT_TRUE(std::filesystem::exists(original)) << "kept";
+  const calib::StereoCalibration was = calib::load_calibration(original);
+  const calib::StereoCalibration is = calib::load_calibration(corrected);
+  EXPECT_EQ(is.R, was.R) << "nothing was corrected";
+  EXPECT_EQ(is.right.rectification, was.right.rectification);
+  EXPECT_NE(is.source.find("corrected while running"), std::string::npos) << is.source;
+}
+
 TEST(FrameLoop, RecordIsUnsupportedWithoutARecording) {
   LinkedRig linked;
   Recorder recorder;

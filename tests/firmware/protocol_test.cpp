@@ -131,6 +131,8 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
           SetExposure{5000, 120},
           SetStages{0x3F},
           Snapshot{},
+          Recalibrate{},
+          SaveCalibration{},
           grid,
           Ground{rng(), kGroundFound, u16(), -1234, static_cast<std::int16_t>(-32768), u16()}};
 }

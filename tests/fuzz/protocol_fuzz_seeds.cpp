@@ -79,6 +79,8 @@ void native_seeds(const fs::path& dir) {
   append(commands,
          protocol::CalibrationHealth{12, -34, 56, protocol::kDriftEstimated, 30, 300, -200, 2, 44},
          6);
+  append(commands, protocol::Recalibrate{}, 7);
+  append(commands, protocol::SaveCalibration{}, 8);
   write(dir / "commands", commands);
 
   Bytes garbage{0x13, 0x37, 0xFF, 0x00};

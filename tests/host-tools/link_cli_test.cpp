@@ -98,14 +98,15 @@ TEST(LinkCli, SendsCommandsAndReadsTheAnswerOnASerialDevice) {
   std::array<char, 128> name{};
   ASSERT_EQ(openpty(&master, &slave, name.data(), nullptr, nullptr), 0);
   // The slave stays open here too: a pty master with no slave open reads as hung up.
-  FILE* tool = start_tool(std::string("link ") + name.data() +
-                          " --send snapshot --send stages=0x3 --send exposure=5000:6.5"
-                          " --seconds 2 --count 1 --json");
+  FILE* tool =
+      start_tool(std::string("link ") + name.data() +
+                 " --send snapshot --send stages=0x3 --send exposure=5000:6.5"
+                 " --send recalibrate --send save-calibration --seconds 2 --count 1 --json");
   ASSERT_NE(tool, nullptr);
 
   FrameDecoder decoder;
   std::vector<Message> received;
-  for (int tries = 0; tries < 300 && received.size() < 3; ++tries) {
+  for (int tries = 0; tries < 300 && received.size() < 5; ++tries) {
     pollfd p{master, POLLIN, 0};
     if (::poll(&p, 1, 10) <= 0) continue;
     std::array<std::uint8_t, 256> buffer{};
@@ -115,10 +116,12 @@ TEST(LinkCli, SendsCommandsAndReadsTheAnswerOnASerialDevice) {
         received.push_back(m->message);
     }
   }
-  ASSERT_EQ(received.size(), 3u);
+  ASSERT_EQ(received.size(), 5u);
   EXPECT_EQ(received[0], Message(Snapshot{}));
   EXPECT_EQ(received[1], Message(SetStages{3}));
   EXPECT_EQ(received[2], Message(SetExposure{5000, 650}));
+  EXPECT_EQ(received[3], Message(Recalibrate{}));
+  EXPECT_EQ(received[4], Message(SaveCalibration{}));
 
   Bytes answer;
   append_frame(answer, CommandAck{0, AckStatus::ok}, 40);

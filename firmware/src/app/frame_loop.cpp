@@ -133,6 +133,7 @@ void FrameLoop::finish() {
   }
   // Before the link goes: the robot hears of every snapshot it asked for.
   answer_snapshots();
+  answer_corrections(/*stopping=*/true);
   if (snapshot_pending_) {  // asked for, but no pair came before the stop
     snapshot_pending_ = false;
     conclude(snapshot_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::failed});
@@ -241,9 +242,18 @@ void FrameLoop::apply_commands() {
     } else if (std::holds_alternative<protocol::Record>(c.message)) {
       v = outputs_ != nullptr ? outputs_->command(c.message, now)
                               : Verdict{AckStatus::unsupported, AckReason::none};
+    } else if (std::holds_alternative<protocol::Recalibrate>(c.message)) {
+      v = recalibrate(c.sequence);
+    } else if (std::holds_alternative<protocol::SaveCalibration>(c.message)) {
+      v = save_calibration(c.sequence);
     }
-    const bool pending = std::holds_alternative<protocol::Snapshot>(c.message) &&
-                         v.status == AckStatus::ok;  // answered once it is written
+    // Answered once done: a snapshot once written, a correction once in place, a file once
+    // written.
+    const bool pending = v.status == AckStatus::ok &&
+                         (std::holds_alternative<protocol::Snapshot>(c.message) ||
+                          (std::holds_alternative<protocol::Recalibrate>(c.message) &&
+                           recalibrate_pending_ && recalibrate_sequence_ == c.sequence) ||
+                          std::holds_alternative<protocol::SaveCalibration>(c.message));
     if (v.reason != AckReason::busy) commands_.remember(c.sequence, c.message, now, v, pending);
     if (!pending) answer(c.sequence, v);
   }
@@ -658,6 +668,83 @@ void FrameLoop::process_pair(const hal::StereoPair& pair) {
   ++summary_.frames;
 }
 
+// recalibrate: a correction from the drift's window now, whatever online_correction says.
+FrameLoop::Verdict FrameLoop::recalibrate(std::uint16_t sequence) {
+  using protocol::AckReason;
+  using protocol::AckStatus;
+  using Outcome = RigCorrection::Outcome;
+  RigCorrection* correction = pipeline_.rig_correction();
+  if (correction == nullptr) return {AckStatus::unsupported, AckReason::none};
+  if (recalibrate_pending_) return {AckStatus::rejected, AckReason::busy};
+  const Outcome outcome = correction->correct(last_drift_.value_or(calib::DriftEstimate{}));
+  switch (outcome) {
+    case Outcome::started:
+      recalibrate_pending_ = true;
+      recalibrate_sequence_ = sequence;
+      journal(Priority::notice,
+              "recalibrate: the right camera turned %+.3f degrees of pitch and %+.3f of roll "
+              "(rows %.2f px off): rebuilding its map",
+              degrees(last_drift_->pitch), degrees(last_drift_->roll),
+              last_drift_->median_offset_px);
+      return {AckStatus::ok, AckReason::none};
+    case Outcome::nothing_to_correct:
+      return {AckStatus::ok, AckReason::none};  // the rig holds: nothing to do
+    case Outcome::busy:
+      return {AckStatus::rejected, AckReason::busy};
+    case Outcome::no_estimate:
+      return {AckStatus::rejected, AckReason::no_pairs};
+    case Outcome::out_of_range:
+      return {AckStatus::rejected, AckReason::out_of_range};
+    default:  // would_not_lower
+      return {AckStatus::rejected, AckReason::failed};
+  }
+}
+
+// save_calibration: the rig in use written beside the board's calibration file by the maps'
+// thread.
+FrameLoop::Verdict FrameLoop::save_calibration(std::uint16_t sequence) {
+  using protocol::AckReason;
+  using protocol::AckStatus;
+  RigCorrection* correction = pipeline_.rig_correction();
+  if (correction == nullptr || correction->corrected_file().empty()) {
+    return {AckStatus::unsupported, AckReason::none};
+  }
+  if (save_pending_ || !correction->request_save()) return {AckStatus::rejected, AckReason::busy};
+  save_pending_ = true;
+  save_sequence_ = sequence;
+  return {AckStatus::ok, AckReason::none};
+}
+
+void FrameLoop::answer_corrections(bool stopping) {
+  RigCorrection* correction = pipeline_.rig_correction();
+  if (correction == nullptr) return;
+  if (save_pending_) {
+    if (const std::optional<bool> saved = correction->saved()) {
+      save_pending_ = false;
+      if (*saved) {
+        journal(Priority::notice, "save_calibration: %s written",
+                correction->corrected_file().c_str());
+        conclude(save_sequence_, {protocol::AckStatus::ok, protocol::AckReason::none});
+      } else {
+        journal(Priority::warning, "save_calibration: %s", correction->save_error().c_str());
+        conclude(save_sequence_, {protocol::AckStatus::rejected, protocol::AckReason::storage});
+      }
+    }
+  }
+  if (!stopping) return;  // a correction in place is answered by follow_correction()
+  const Verdict failed{protocol::AckStatus::rejected, protocol::AckReason::failed};
+  if (save_pending_) {
+    save_pending_ = false;
+    conclude(save_sequence_, failed);
+  }
+  if (recalibrate_pending_) {
+    recalibrate_pending_ = false;
+    const bool in_place = correction->corrections() != corrections_said_;
+    conclude(recalibrate_sequence_,
+             in_place ? Verdict{protocol::AckStatus::ok, protocol::AckReason::none} : failed);
+  }
+}
+
 // The rig corrected while running: each correction said when it starts and once it is in
 // place; the window's estimate considered (calibration_health.online_correction), a refusal
 // said when its reason is new.
@@ -672,6 +759,10 @@ void FrameLoop::follow_correction(const FrameResult& r) {
             "calibration: corrected (%d): the right camera's map rebuilt; the rig is now %+.3f "
             "degrees of pitch and %+.3f of roll from its file",
             corrections_said_, degrees(total.pitch), degrees(total.roll));
+    if (recalibrate_pending_) {
+      recalibrate_pending_ = false;
+      conclude(recalibrate_sequence_, {protocol::AckStatus::ok, protocol::AckReason::none});
+    }
   }
   if (!r.drift) return;
   const Outcome outcome = correction->consider(*r.drift);
@@ -721,6 +812,7 @@ RunSummary FrameLoop::run(std::uint64_t max_frames, const std::atomic<bool>& sto
          (max_frames == 0 || summary_.frames < max_frames)) {
     apply_commands();
     answer_snapshots();
+    answer_corrections(/*stopping=*/false);
     hal::PairResult got = next_pair();
     tick();  // before the new pair is recorded: the health window that ended holds those before
     if (!take_freshest(got)) continue;

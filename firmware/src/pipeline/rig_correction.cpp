@@ -1,6 +1,7 @@
 #include "epipole/firmware/rig_correction.hpp"
 
 #include <cmath>
+#include <exception>
 
 #include "epipole/calib/rectification_map.hpp"
 #include "epipole/core/angles.hpp"
@@ -24,7 +25,13 @@ RigCorrection::RigCorrection(const calib::StereoCalibration& rig, const BoardCon
       window_pairs_(board.calibration_health.window_pairs),
       pending_right_(rig.right),
       spare_(rig.width, rig.height),
-      builder_([this] { rebuild_maps(); }) {}
+      builder_([this] { rebuild_maps(); }) {
+  const std::filesystem::path& file = board.calibration;
+  if (!file.empty()) {
+    corrected_file_ =
+        file.parent_path() / (file.stem().string() + "-corrected" + file.extension().string());
+  }
+}
 
 RigCorrection::~RigCorrection() {
   {
@@ -81,17 +88,59 @@ bool RigCorrection::install(vision::Rectifier& right) {
   return true;
 }
 
-// The thread: each request's map into the spare, then ready for install().
+bool RigCorrection::request_save() {
+  if (corrected_file_.empty()) {
+    save_error_ = "the board names no calibration file to write beside";
+    return false;
+  }
+  int idle = kIdle;
+  if (!state_.compare_exchange_strong(idle, kSaveRequested, std::memory_order_acq_rel)) {
+    return false;
+  }
+  {
+    const std::lock_guard lock(mutex_);  // the thread sees the request once it waits again
+  }
+  wake_.notify_one();
+  return true;
+}
+
+std::optional<bool> RigCorrection::saved() {
+  const int state = state_.load(std::memory_order_acquire);
+  if (state != kSaved && state != kSaveFailed) return std::nullopt;
+  state_.store(kIdle, std::memory_order_release);
+  return state == kSaved;
+}
+
+// The thread: each request's map into the spare, then ready for install(); or the rig in use
+// written (no install can change it meanwhile: the state is not idle).
 void RigCorrection::rebuild_maps() {
   enter_thread_role_or_say(ThreadRole::maps);
   std::unique_lock lock(mutex_);
   for (;;) {
-    wake_.wait(lock, [&] { return stopping_ || state_.load() == kRequested; });
+    wake_.wait(lock, [&] {
+      const int state = state_.load();
+      return stopping_ || state == kRequested || state == kSaveRequested;
+    });
     if (stopping_) return;
+    const bool save = state_.load() == kSaveRequested;
     lock.unlock();
-    calib::fill_fixed_point_map(pending_right_, spare_.xy(), spare_.fractions());
+    int done = kReady;
+    if (save) {
+      try {
+        calib::StereoCalibration corrected = rig_;
+        corrected.date = calib::utc_now();
+        corrected.source = "epipole-fw: corrected while running (" + rig_.source + ")";
+        calib::save_calibration(corrected_file_, corrected);
+        done = kSaved;
+      } catch (const std::exception& e) {
+        save_error_ = e.what();
+        done = kSaveFailed;
+      }
+    } else {
+      calib::fill_fixed_point_map(pending_right_, spare_.xy(), spare_.fractions());
+    }
     lock.lock();
-    state_.store(kReady, std::memory_order_release);
+    state_.store(done, std::memory_order_release);
   }
 }
 

@@ -96,6 +96,10 @@ class FrameLoop {
   Verdict set_exposure(const protocol::SetExposure& command);
   Verdict request_snapshot(std::uint16_t sequence);
   void answer_snapshots();
+  Verdict recalibrate(std::uint16_t sequence);
+  Verdict save_calibration(std::uint16_t sequence);
+  // The recalibrate and save_calibration commands answered once done (or at the stop: failed).
+  void answer_corrections(bool stopping);
   hal::Nanoseconds frame_period() const;
   // trigger_from_capture: result.trigger_ns is the left frame's time, not a trigger edge's.
   void publish(const FrameResult& result, hal::Nanoseconds latency, bool trigger_from_capture);
@@ -156,6 +160,10 @@ class FrameLoop {
   JournalLimit refusals_said_{1'000'000'000};  // refused commands: a journal line a second
   bool snapshot_pending_ = false;
   std::uint16_t snapshot_sequence_ = 0;
+  bool recalibrate_pending_ = false;  // answered once the corrected map is in place
+  std::uint16_t recalibrate_sequence_ = 0;
+  bool save_pending_ = false;  // answered once the file is written
+  std::uint16_t save_sequence_ = 0;
   hal::Nanoseconds snapshot_asked_at_ = 0;
   // How long a snapshot asked for waits for a pair before it is refused (no_pairs).
   static constexpr hal::Nanoseconds kSnapshotWait = 2'000'000'000;

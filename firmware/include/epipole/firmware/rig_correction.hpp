@@ -7,7 +7,10 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <filesystem>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
 
 #include "epipole/calib/calibration.hpp"
@@ -49,6 +52,16 @@ class RigCorrection {
   // place of `right`'s and the rig in use follows. True then.
   bool install(vision::Rectifier& right);
 
+  // The save_calibration command (the frame loop's thread): the rig in use written to
+  // corrected_file() by the thread, through a temporary file and a rename; the board's own file
+  // is kept. False when a map is being rebuilt or a file written (busy); the result comes from
+  // saved() once written: true, or false with save_error() saying why.
+  bool request_save();
+  std::optional<bool> saved();
+  const std::string& save_error() const { return save_error_; }
+  // `<board's calibration file's stem>-corrected<its extension>`, beside it.
+  const std::filesystem::path& corrected_file() const { return corrected_file_; }
+
   // The calibration in use: the file's, its right camera turned by every correction installed.
   // Changes only in install(); generation() counts the changes.
   const calib::StereoCalibration& rig() const { return rig_; }
@@ -56,14 +69,17 @@ class RigCorrection {
   // The correction installed, relative to the file (pitch and roll; yaw 0), and how many.
   calib::CameraTurn total() const { return calib::turn_angles(total_); }
   int corrections() const { return static_cast<int>(generation_); }
-  bool rebuilding() const { return state_.load(std::memory_order_acquire) != kIdle; }
+  bool rebuilding() const {
+    const int state = state_.load(std::memory_order_acquire);
+    return state == kRequested || state == kReady;
+  }
   // The rows' median offset before and (predicted) after the correction last started.
   double offset_before_px() const { return before_px_; }
   double offset_after_px() const { return after_px_; }
   std::size_t working_set_bytes() const { return spare_.size_bytes(); }
 
  private:
-  enum State : int { kIdle, kRequested, kReady };
+  enum State : int { kIdle, kRequested, kReady, kSaveRequested, kSaved, kSaveFailed };
   Outcome decide(const calib::DriftEstimate& estimate, int min_pairs);
   void rebuild_maps();
 
@@ -78,6 +94,8 @@ class RigCorrection {
   vision::RemapMap spare_;                  // the map being rebuilt, or the one replaced
   double before_px_ = 0, after_px_ = 0;
   std::uint32_t generation_ = 0;
+  std::filesystem::path corrected_file_;
+  std::string save_error_;  // the thread's, read once saved() said false
   std::atomic<int> state_{kIdle};
   std::mutex mutex_;
   std::condition_variable wake_;

@@ -33,6 +33,8 @@ enum class MessageType : std::uint8_t {
   set_stages = 0x82,
   snapshot = 0x83,
   record = 0x84,
+  recalibrate = 0x85,
+  save_calibration = 0x86,
 };
 
 // Health flags.
@@ -410,9 +412,29 @@ struct Record {
   friend bool operator==(const Record&, const Record&) = default;
 };
 
-using Message =
-    std::variant<Health, FrameSummary, Detections, Obstacles, Points, CalibrationHealth, CommandAck,
-                 SetTriggerRate, SetExposure, SetStages, Snapshot, DepthGrid, Record, Ground>;
+// Corrects the rig now from the drift's window (docs/calibration.md), whatever the board's
+// online_correction says; answered once the corrected map is in place. Version 8.
+struct Recalibrate {
+  static constexpr MessageType kType = MessageType::recalibrate;
+  static constexpr const char* kName = "recalibrate";
+  template <class Io, class Self>
+  static void fields(Io&, Self&) {}
+  friend bool operator==(const Recalibrate&, const Recalibrate&) = default;
+};
+
+// Writes the calibration in use (with its corrections) beside the board's calibration file,
+// which is kept; answered once written. Version 8.
+struct SaveCalibration {
+  static constexpr MessageType kType = MessageType::save_calibration;
+  static constexpr const char* kName = "save_calibration";
+  template <class Io, class Self>
+  static void fields(Io&, Self&) {}
+  friend bool operator==(const SaveCalibration&, const SaveCalibration&) = default;
+};
+
+using Message = std::variant<Health, FrameSummary, Detections, Obstacles, Points, CalibrationHealth,
+                             CommandAck, SetTriggerRate, SetExposure, SetStages, Snapshot,
+                             DepthGrid, Record, Ground, Recalibrate, SaveCalibration>;
 
 MessageType type_of(const Message& message);
 const char* name_of(MessageType type);
