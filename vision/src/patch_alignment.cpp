@@ -62,7 +62,7 @@ PatchOffset align_patch(GrayView left, int xl, int yl, GrayView right, float xr,
   const double gradient_scale = std::sqrt(n / squares);
   double hxx = 0, hxy = 0, hyy = 0, raw_xx = 0, raw_xy = 0, raw_yy = 0;
   for (int k = 0; k < n; ++k) {
-    const double x = gx[k], y = gy[k];
+    const auto x = static_cast<double>(gx[k]), y = static_cast<double>(gy[k]);
     raw_xx += x * x;
     raw_xy += x * y;
     raw_yy += y * y;
@@ -110,7 +110,7 @@ PatchOffset align_patch(GrayView left, int xl, int yl, GrayView right, float xr,
     }
     const double bx = static_cast<double>(sum_x) * gradient_scale;
     const double by = static_cast<double>(sum_y) * gradient_scale;
-    const double correlation = sum_c;
+    const auto correlation = static_cast<double>(sum_c);
     // Inverse compositional: the template's step, undone on the right patch's position.
     const double step_x = (hyy * bx - hxy * by) / det;
     const double step_y = (hxx * by - hxy * bx) / det;
