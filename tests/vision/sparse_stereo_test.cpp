@@ -198,7 +198,13 @@ TEST(SparseStereo, TheBandFindsMatchesRowsApart) {
     EXPECT_GE(four_rows, static_cast<int>(band.size()) * 9 / 10) << to_string(path);
     EXPECT_LT(along_right, four_rows / 4) << to_string(path);
     ASSERT_EQ(before.size(), along.size());
-    for (std::size_t i = 0; i < before.size(); ++i) EXPECT_EQ(along[i].xl, before[i].xl);
+    for (std::size_t i = 0; i < before.size(); ++i) {
+      EXPECT_EQ(along[i].xl, before[i].xl);
+      EXPECT_EQ(along[i].yl, before[i].yl);
+      EXPECT_EQ(along[i].yr, before[i].yr);
+      EXPECT_EQ(along[i].disparity, before[i].disparity);
+      EXPECT_EQ(along[i].distance, before[i].distance);
+    }
   }
   SparseStereoMatcher no_band({.width = 160, .height = 96});
   no_band.match(pair.left.view(), left, pair.right.view(), right);

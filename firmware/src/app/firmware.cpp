@@ -46,6 +46,11 @@ bool not_there(const std::filesystem::path& file) {
 
 }  // namespace
 
+std::filesystem::path board_calibration_file(const BoardConfig& config) {
+  const std::filesystem::path file = backend_calibration(config);
+  return file.empty() ? config.calibration : file;
+}
+
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config) {
   if (const std::filesystem::path file = backend_calibration(config); !file.empty()) {
     if (mcap::is_mcap_file(file)) return record::recorded_calibration(file);

@@ -754,6 +754,9 @@ void FrameLoop::follow_correction(const FrameResult& r) {
   if (correction == nullptr) return;
   if (correction->corrections() != corrections_said_) {
     corrections_said_ = correction->corrections();
+    // The estimate was of the rig before: a recalibrate must not undo the same turn again.
+    last_drift_.reset();
+    last_outcome_ = Outcome::none;
     const calib::CameraTurn total = correction->total();
     journal(Priority::notice,
             "calibration: corrected (%d): the right camera's map rebuilt; the rig is now %+.3f "
@@ -766,8 +769,10 @@ void FrameLoop::follow_correction(const FrameResult& r) {
   }
   if (!r.drift) return;
   const Outcome outcome = correction->consider(*r.drift);
+  // A refusal is said once until a correction is made (rows hovering about min_offset_px would
+  // otherwise say it again at every crossing).
   if (outcome == Outcome::none || outcome == Outcome::busy || outcome == Outcome::no_estimate ||
-      outcome == last_outcome_) {
+      outcome == Outcome::nothing_to_correct || outcome == last_outcome_) {
     return;
   }
   last_outcome_ = outcome;
@@ -778,7 +783,6 @@ void FrameLoop::follow_correction(const FrameResult& r) {
               "calibration: the right camera turned %+.3f degrees of pitch and %+.3f of roll "
               "(rows %.2f px off, %.2f px once undone): rebuilding its map",
               degrees(e.pitch), degrees(e.roll), e.median_offset_px, e.median_corrected_px);
-      last_outcome_ = Outcome::none;  // each correction is said
       break;
     case Outcome::would_not_lower:
       journal(Priority::warning,

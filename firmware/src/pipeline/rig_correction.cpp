@@ -1,11 +1,13 @@
 #include "epipole/firmware/rig_correction.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 
 #include "epipole/calib/rectification_map.hpp"
 #include "epipole/core/angles.hpp"
 #include "epipole/firmware/board_config.hpp"
+#include "epipole/firmware/firmware.hpp"
 #include "epipole/firmware/thread_roles.hpp"
 
 namespace epipole::firmware {
@@ -14,6 +16,13 @@ namespace {
 
 // A share of the offsets a correction must take away (its prediction, from the window).
 constexpr double kMustLower = 0.2;
+
+// Where save_calibration writes: beside the file the calibration came from (a recording's too),
+// `<its stem>-corrected.yaml`; none without one.
+std::filesystem::path corrected_file_of(const std::filesystem::path& file) {
+  if (file.empty()) return {};
+  return file.parent_path() / (file.stem().string() + "-corrected.yaml");
+}
 
 }  // namespace
 
@@ -25,13 +34,8 @@ RigCorrection::RigCorrection(const calib::StereoCalibration& rig, const BoardCon
       window_pairs_(board.calibration_health.window_pairs),
       pending_right_(rig.right),
       spare_(rig.width, rig.height),
-      builder_([this] { rebuild_maps(); }) {
-  const std::filesystem::path& file = board.calibration;
-  if (!file.empty()) {
-    corrected_file_ =
-        file.parent_path() / (file.stem().string() + "-corrected" + file.extension().string());
-  }
-}
+      corrected_file_(corrected_file_of(board_calibration_file(board))),
+      builder_([this] { rebuild_maps(); }) {}
 
 RigCorrection::~RigCorrection() {
   {
@@ -43,7 +47,8 @@ RigCorrection::~RigCorrection() {
 }
 
 RigCorrection::Outcome RigCorrection::consider(const calib::DriftEstimate& estimate) {
-  return online_ ? decide(estimate, window_pairs_) : Outcome::none;
+  // Two thirds of the window's pairs with matches: a dark or blurred pair does not hold it off.
+  return online_ ? decide(estimate, std::max(3, (2 * window_pairs_ + 2) / 3)) : Outcome::none;
 }
 
 RigCorrection::Outcome RigCorrection::correct(const calib::DriftEstimate& estimate) {

@@ -50,7 +50,9 @@ class RectifyStage final : public PipelineStage {
     hal::Nanoseconds& time = r.times[static_cast<std::size_t>(protocol::Stage::rectify)];
     // A corrected right map, rebuilt beside: in place now, and the pair ahead (rectified with
     // the old one) rectified again.
-    if (correction_ != nullptr && correction_->install(rectifiers_->right)) ahead_.ready = false;
+    if (correction_ != nullptr && rectifiers_ && correction_->install(rectifiers_->right)) {
+      ahead_.ready = false;
+    }
     const bool was_ahead = ahead_.matches(r.left_raw, r.right_raw, r.frame);
     ahead_.ready = false;  // used now, or never
     if (was_ahead) {
@@ -68,8 +70,12 @@ class RectifyStage final : public PipelineStage {
     r.right = right_[static_cast<std::size_t>(slot_)].view();
   }
 
-  // A pair without rectification: the pair taken ahead will not be used.
-  void skip(PairWork& /*work*/) override { ahead_.ready = false; }
+  // A pair without rectification: the pair taken ahead will not be used; a corrected map is put
+  // in place all the same (a rebuild never waits for rectification to be switched on again).
+  void skip(PairWork& /*work*/) override {
+    ahead_.ready = false;
+    if (correction_ != nullptr && rectifiers_) correction_->install(rectifiers_->right);
+  }
 
   // The next pair, when it is there and of the images' size (one that is not is rectified, and
   // refused, when it is processed itself), into the other slot, in as many row bands per image

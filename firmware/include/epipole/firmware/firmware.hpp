@@ -25,6 +25,9 @@ namespace epipole::firmware {
 // a depth, and every health message says so (protocol::kHealthNotCalibrated). A file that is there
 // but does not read, or a backend section's that is missing, is an Error.
 std::optional<calib::StereoCalibration> load_board_calibration(const BoardConfig& config);
+// The file that calibration comes from: the one the cameras' backend names (a simulated scene's,
+// a recording), else the board's `calibration` (empty when it names none).
+std::filesystem::path board_calibration_file(const BoardConfig& config);
 
 // Scheduling the board asks for (threads: affinity, SCHED_FIFO), before any thread of the
 // firmware starts: the affinity for the calling thread, which every thread created after it

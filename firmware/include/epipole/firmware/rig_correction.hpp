@@ -42,7 +42,8 @@ class RigCorrection {
   RigCorrection& operator=(const RigCorrection&) = delete;
 
   // The frame loop's thread, after a pair. consider(): with calibration_health.online_correction
-  // on and the window full, a correction when the estimate says the rig turned (else none).
+  // on and two thirds of the window's pairs with matches, a correction when the estimate says
+  // the rig turned (else none).
   // correct(): the same now, whatever online_correction says (the recalibrate command), from a
   // window of at least 3 pairs. Neither waits.
   Outcome consider(const calib::DriftEstimate& estimate);
@@ -59,7 +60,8 @@ class RigCorrection {
   bool request_save();
   std::optional<bool> saved();
   const std::string& save_error() const { return save_error_; }
-  // `<board's calibration file's stem>-corrected<its extension>`, beside it.
+  // `<stem>-corrected.yaml` beside the file the calibration came from (firmware.hpp's
+  // board_calibration_file: a simulated scene's, a recording, the board's).
   const std::filesystem::path& corrected_file() const { return corrected_file_; }
 
   // The calibration in use: the file's, its right camera turned by every correction installed.
