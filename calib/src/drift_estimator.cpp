@@ -85,6 +85,11 @@ std::size_t DriftEstimator::working_set_bytes() const {
          slot_fit_.capacity() * sizeof(PairFit);
 }
 
+double DriftEstimator::residual(const Eigen::Matrix3d& mt, const Observation& o) {
+  const Eigen::Vector3d s = mt * Eigen::Vector3d(o.xr, o.yr, 1.0);
+  return s.y() / s.z() - o.yl;
+}
+
 DriftEstimator::PairFit DriftEstimator::least_squares(std::span<const Observation> observations,
                                                       std::span<const std::uint8_t> use, double wx,
                                                       double wz) const {
@@ -184,8 +189,7 @@ int DriftEstimator::add_pair(std::span<const RectifiedMatch> matches) {
   int inliers = 0;
   for (std::size_t i = 0; i < scratch_.size(); ++i) {
     const Observation& o = scratch_[i];
-    const Eigen::Vector3d s = mt * Eigen::Vector3d(o.xr, o.yr, 1.0);
-    inlier_[i] = std::abs(s.y() / s.z() - o.yl) < threshold;
+    inlier_[i] = std::abs(residual(mt, o)) < threshold;
     inliers += inlier_[i];
   }
   if (inliers < config_.min_matches) return 0;
@@ -234,8 +238,7 @@ DriftEstimate DriftEstimator::estimate() const {
   n = 0;
   for (std::size_t i = 0; i < window_.size(); ++i) {
     if (window_use_[i] == 0) continue;
-    const Eigen::Vector3d s = mt * Eigen::Vector3d(window_[i].xr, window_[i].yr, 1.0);
-    offsets_[n++] = std::abs(s.y() / s.z() - window_[i].yl) * fy_;
+    offsets_[n++] = std::abs(residual(mt, window_[i])) * fy_;
   }
   e.median_corrected_px = median_of({offsets_.data(), n});
   // The rectified frame's turn M back into the right camera's frame: D = R2^T M^T R2.

@@ -65,6 +65,8 @@ class DriftEstimator {
     double wx = 0, wz = 0;
     bool valid = false;
   };
+  // The exact constraint's residual (normalised rows) of a match under the turn M (mt = M^T).
+  static double residual(const Eigen::Matrix3d& mt, const Observation& o);
   PairFit fit_pair(std::span<const Observation> pair);
   // Gauss-Newton on the exact constraint from (wx, wz); the observations with inlier set.
   PairFit least_squares(std::span<const Observation> observations,
