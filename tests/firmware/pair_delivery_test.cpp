@@ -100,10 +100,10 @@ TEST(PairDelivery, HealthReachesTheOutputsThatTakeIt) {
   std::promise<std::uint32_t> got;
   PairDelivery delivery(
       "test", rig.config, kRectified, [](const PairCopy&) {},
-      [&](const protocol::Health& h) { got.set_value(h.frames); });
+      [&](const HealthReport& h) { got.set_value(h.health.frames); });
   delivery.start();
-  protocol::Health health;
-  health.frames = 42;
+  HealthReport health;
+  health.health.frames = 42;
   delivery.offer_health(health);
   EXPECT_EQ(got.get_future().get(), 42u);
   delivery.stop();
@@ -119,13 +119,13 @@ TEST(PairDelivery, PairsAndHealthAreDoneInTheOrderTheyWereOffered) {
         held(p);
         order.push_back("pair " + std::to_string(p.frame));
       },
-      [&](const protocol::Health& h) { order.push_back("health " + std::to_string(h.frames)); });
+      [&](const HealthReport& h) { order.push_back("health " + std::to_string(h.health.frames)); });
   delivery.start();
   FakePair first(64, 16, 1, 1);
   delivery.offer(first.result, {});
   held.taken.get_future().wait();
-  protocol::Health health;
-  health.frames = 7;
+  HealthReport health;
+  health.health.frames = 7;
   delivery.offer_health(health);  // behind the work, which is always behind from here on
   for (std::uint32_t frame = 2; frame <= 4; ++frame) {
     FakePair pair(64, 16, frame, 1);

@@ -75,6 +75,7 @@ TEST(Recording, AnIndependentReaderDecodesWhatThePipelineComputed) {
   const RosChecks checks = check_ros_messages(r["messages"], kept, rig_calibration, rig);
   EXPECT_GT(checks.depths, 0);
   EXPECT_GT(checks.features, 0);
+  EXPECT_GT(checks.calibration, 0) << "the calibration's health beside health";
   EXPECT_EQ(checks.unmatched, 0) << "a recording holds every message of each pair";
 }
 

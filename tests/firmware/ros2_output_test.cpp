@@ -87,14 +87,15 @@ Taken take_topics(const std::string& listener, const std::string& name) {
   fw.frame_loop().set_observer(&kept);
   Taken taken;
   RunSummary s;
-  if (listen_to(fw, listener, domain, 30, name, s, taken).empty()) return taken;
+  // Past the first health message (a second of the simulated board's clock).
+  if (listen_to(fw, listener, domain, 45, name, s, taken).empty()) return taken;
   taken.checks = check_ros_messages(taken.messages, kept, *fw.calibration(), rig);
   std::printf(
       "%s: %zu messages taken (%llu pairs published, %llu dropped); checked %d depths, "
-      "%d points, %d features\n",
+      "%d points, %d features, %d health and %d calibration statuses\n",
       name.c_str(), taken.messages.size(), static_cast<unsigned long long>(taken.output.delivered),
       static_cast<unsigned long long>(taken.output.dropped), taken.checks.depths,
-      taken.checks.points, taken.checks.features);
+      taken.checks.points, taken.checks.features, taken.checks.health, taken.checks.calibration);
   EXPECT_EQ(taken.checks.unmatched, 0) << name;
   return taken;
 }
@@ -119,6 +120,7 @@ TEST(Ros2Output, ASubscriberInAnotherProcessGetsEveryTopicAsThePipelineComputedI
   EXPECT_GT(t.checks.depths, 0);
   EXPECT_GT(t.checks.points, 0);
   EXPECT_GT(t.checks.features, 0);
+  EXPECT_GT(t.checks.calibration, 0) << "the calibration's health on /diagnostics";
 }
 
 // Another vendor's subscriber, as ROS 2's default rmw is: Fast DDS, knowing the types by name
@@ -134,6 +136,7 @@ TEST(Ros2Output, AnotherVendorsSubscriberGetsTheSameTopics) {
   }
   EXPECT_GT(t.checks.depths, 0);
   EXPECT_GT(t.checks.points, 0);
+  EXPECT_GT(t.checks.calibration, 0) << "the calibration's health on /diagnostics";
 }
 
 // The ground under the rig as a robot's ROS 2 graph takes it: the simulated floor's plane as the

@@ -56,12 +56,47 @@ struct Kept final : FrameObserver {
 
 // What was checked, value by value.
 struct RosChecks {
-  int depths = 0;     // depth pixels with a disparity
-  int points = 0;     // points of the organised cloud with a disparity
-  int features = 0;   // sparse points
-  int boxes = 0;      // detections drawn
-  int unmatched = 0;  // messages of pairs whose left image is not among the messages
+  int depths = 0;       // depth pixels with a disparity
+  int points = 0;       // points of the organised cloud with a disparity
+  int features = 0;     // sparse points
+  int boxes = 0;        // detections drawn
+  int health = 0;       // diagnostics statuses of health
+  int calibration = 0;  // and of the calibration's health
+  int unmatched = 0;    // messages of pairs whose left image is not among the messages
 };
+
+// The statuses of a DiagnosticArray: health, then the calibration's health when the sparse stage
+// has measured the rig, each field of the protocol's message a key.
+inline void check_diagnostics(const json& statuses, RosChecks& checks) {
+  ASSERT_GE(statuses.size(), 1u);
+  ASSERT_LE(statuses.size(), 2u);
+  const json& health = statuses[0];
+  EXPECT_EQ(health["name"], "epipole: health");
+  EXPECT_EQ(health["hardware_id"], "test-sim");
+  EXPECT_GT(std::stoi(health["values"]["frames"].get<std::string>()), 0);
+  EXPECT_TRUE(health["values"].contains("outputs_dropped"));
+  ++checks.health;
+  if (statuses.size() < 2) return;
+  const json& calibration = statuses[1];
+  EXPECT_EQ(calibration["name"], "epipole: calibration");
+  EXPECT_EQ(calibration["hardware_id"], "test-sim");
+  const json& v = calibration["values"];
+  for (const char* key :
+       {"matches", "median_offset_centipx", "p90_offset_centipx", "flags", "window_pairs",
+        "pitch_mdeg", "roll_mdeg", "pitch_sigma_mdeg", "roll_sigma_mdeg", "corrections",
+        "corrected_pitch_mdeg", "corrected_roll_mdeg"}) {
+    EXPECT_TRUE(v.contains(key)) << key;
+  }
+  if (!v.contains("matches") || !v.contains("median_offset_centipx")) return;
+  EXPECT_GT(std::stoi(v["matches"].get<std::string>()), 0) << "sent only with matches";
+  const int offset = std::stoi(v["median_offset_centipx"].get<std::string>());
+  EXPECT_EQ(calibration["level"], std::abs(offset) >= 50 ? 1 : 0) << "WARN from half a pixel";
+  char rows[48];
+  std::snprintf(rows, sizeof rows, "rows %+.2f px off", offset / 100.0);
+  EXPECT_TRUE(calibration["message"].get<std::string>().starts_with(rows))
+      << calibration["message"];
+  ++checks.calibration;
+}
 
 // Every message: the stamps, the frames, the values against the pipeline's.
 inline RosChecks check_ros_messages(const json& messages, const Kept& kept,
@@ -184,11 +219,7 @@ inline RosChecks check_ros_messages(const json& messages, const Kept& kept,
         ++checks.boxes;
       }
     } else if (topic == "/diagnostics") {
-      const json& status = m["status"][0];
-      EXPECT_EQ(status["name"], "epipole: health");
-      EXPECT_EQ(status["hardware_id"], "test-sim");
-      EXPECT_GT(std::stoi(status["values"]["frames"].get<std::string>()), 0);
-      EXPECT_TRUE(status["values"].contains("outputs_dropped"));
+      check_diagnostics(m["status"], checks);
     } else if (topic == "/tf_static") {
       EXPECT_EQ(m["transforms"].size(), 2u);
       if (m["transforms"].size() != 2u) continue;

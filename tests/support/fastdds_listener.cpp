@@ -142,6 +142,30 @@ json camera_info(eprosima::fastcdr::Cdr& cdr) {
           {"p", p}};
 }
 
+json diagnostics(eprosima::fastcdr::Cdr& cdr) {
+  std::uint32_t count = 0;
+  cdr >> count;
+  json status = json::array();
+  for (std::uint32_t i = 0; i < count; ++i) {
+    std::uint8_t level = 0;
+    std::string name, message, hardware_id;
+    std::uint32_t n = 0;
+    cdr >> level >> name >> message >> hardware_id >> n;
+    json values = json::object();
+    for (std::uint32_t k = 0; k < n; ++k) {
+      std::string key, value;
+      cdr >> key >> value;
+      values[key] = value;
+    }
+    status.push_back({{"level", level},
+                      {"name", name},
+                      {"message", message},
+                      {"hardware_id", hardware_id},
+                      {"values", values}});
+  }
+  return {{"status", status}};
+}
+
 json cloud(eprosima::fastcdr::Cdr& cdr) {
   std::uint32_t height = 0, width = 0, count = 0;
   cdr >> height >> width >> count;
@@ -209,6 +233,8 @@ int main(int argc, char** argv) {
        "sensor_msgs/msg/CameraInfo"},
       {ns + "/depth", "sensor_msgs::msg::dds_::Image_", "sensor_msgs/msg/Image"},
       {ns + "/points", "sensor_msgs::msg::dds_::PointCloud2_", "sensor_msgs/msg/PointCloud2"},
+      {"/diagnostics", "diagnostic_msgs::msg::dds_::DiagnosticArray_",
+       "diagnostic_msgs/msg/DiagnosticArray"},
   };
   for (Topic& t : topics) {
     fdds::TypeSupport type(new RawType(t.type));
@@ -254,6 +280,8 @@ int main(int argc, char** argv) {
               m.update(camera_info(d.cdr));
             } else if (t.name.ends_with("points")) {
               m.update(cloud(d.cdr));
+            } else if (t.name == "/diagnostics") {
+              m.update(diagnostics(d.cdr));
             } else {
               m.update(image(d.cdr));
               if (t.name.ends_with("left/image_rect")) ++left_images;

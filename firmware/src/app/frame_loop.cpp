@@ -507,16 +507,18 @@ void FrameLoop::publish_health() {
   if (no_cascade_) h->flags |= protocol::kHealthNoCascade;
   if (corrections_said_ > 0) h->flags |= protocol::kHealthRigCorrected;
   if (trigger_quiet_) h->flags |= protocol::kHealthWaitingForTrigger;
-  if (outputs_ != nullptr) outputs_->publish_health(*h);
+  HealthReport report{*h, std::nullopt};
+  if (last_calibration_health_ && last_calibration_health_->matches > 0) {
+    report.calibration = calibration_health_message(*last_calibration_health_, last_drift_,
+                                                    pipeline_.rig_correction());
+  }
+  if (outputs_ != nullptr) outputs_->publish_health(report);
   if (link_.protocol() == LinkProtocol::mavlink) {
     link_.publish_heartbeat(heartbeat_status());
     return;
   }
-  send(*h);
-  if (last_calibration_health_ && last_calibration_health_->matches > 0) {
-    send(calibration_health_message(*last_calibration_health_, last_drift_,
-                                    pipeline_.rig_correction()));
-  }
+  send(report.health);
+  if (report.calibration) send(*report.calibration);
 }
 
 // A board whose baud rate carries its summaries (the board file's check) but not every point

@@ -34,8 +34,8 @@ void Outputs::publish(const FrameResult& result, hal::Nanoseconds age) {
   for (const auto& o : outputs_) o->offer(result, stamp);
 }
 
-void Outputs::publish_health(const protocol::Health& health) {
-  for (const auto& o : outputs_) o->offer_health(health);
+void Outputs::publish_health(const HealthReport& report) {
+  for (const auto& o : outputs_) o->offer_health(report);
 }
 
 CommandVerdict Outputs::command(const protocol::Message& command, hal::Nanoseconds now) {

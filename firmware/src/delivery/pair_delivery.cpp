@@ -69,11 +69,11 @@ void PairDelivery::offer(const FrameResult& result, const PairStamp& stamp) {
   wake_.notify_one();
 }
 
-void PairDelivery::offer_health(const protocol::Health& health) {
+void PairDelivery::offer_health(const HealthReport& report) {
   if (!health_work_) return;
   {
     const std::lock_guard lock(mutex_);
-    health_ = health;
+    health_ = report;
     health_order_ = ++offered_;
   }
   wake_.notify_one();

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "delivery/pair_copy.hpp"
+#include "epipole/firmware/health_report.hpp"
 #include "epipole/firmware/journal.hpp"
-#include "epipole/firmware/protocol/messages.hpp"
 
 namespace epipole::firmware::outputs {
 
@@ -39,7 +39,7 @@ struct DeliveryCounters {
 class PairDelivery {
  public:
   using Work = std::function<void(const PairCopy&)>;
-  using HealthWork = std::function<void(const protocol::Health&)>;
+  using HealthWork = std::function<void(const HealthReport&)>;
 
   // `name` names the output in the journal; `copies` >= 2 (one in work, one waiting).
   PairDelivery(std::string name, const BoardConfig& board, PairParts parts, Work work,
@@ -54,7 +54,7 @@ class PairDelivery {
 
   // Frame loop side: never waits for the work, never allocates.
   void offer(const FrameResult& result, const PairStamp& stamp);
-  void offer_health(const protocol::Health& health);
+  void offer_health(const HealthReport& report);
 
   DeliveryCounters counters() const;
   std::size_t working_set_bytes() const;
@@ -74,9 +74,9 @@ class PairDelivery {
   std::vector<Slot> slots_;
   std::vector<std::uint64_t> order_;  // when each waiting copy was offered
   std::uint64_t offered_ = 0;
-  std::optional<protocol::Health> health_;
+  std::optional<HealthReport> health_;
   std::uint64_t health_order_ = 0;  // when it was offered, among the pairs
-  protocol::Health health_in_work_;
+  HealthReport health_in_work_;
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   bool stopping_ = false;

@@ -23,6 +23,7 @@
 #include "output_files.hpp"
 #include "record/recorded_calibration.hpp"
 #include "record/recording_ring.hpp"
+#include "ros/diagnostics.hpp"
 #include "ros/rig_model.hpp"
 #include "ros/ros_messages.hpp"
 #include "system_time.hpp"
@@ -157,7 +158,7 @@ class McapOutput final : public Output {
             "mcap", context.board,
             PairPart::kRectified | PairPart::kRaw | PairPart::kDisparity | PairPart::kPoints,
             [this](const PairCopy& pair) { record(pair); },
-            [this](const protocol::Health& health) { record_health(health); }) {
+            [this](const HealthReport& report) { record_health(report); }) {
     check_folder(settings_.directory);
   }
 
@@ -199,7 +200,7 @@ class McapOutput final : public Output {
     }
     return CommandVerdict{};
   }
-  void offer_health(const protocol::Health& health) override { delivery_.offer_health(health); }
+  void offer_health(const HealthReport& report) override { delivery_.offer_health(report); }
   DeliveryCounters counters() const override { return delivery_.counters(); }
   std::size_t working_set_bytes() const override {
     return delivery_.working_set_bytes() + writer_.working_set_bytes() +
@@ -300,14 +301,14 @@ class McapOutput final : public Output {
     }
   }
 
-  void record_health(const protocol::Health& health) {
+  void record_health(const HealthReport& report) {
     // Stopped, and every pair offered before the stop done: the file is made whole.
     if (!shared_recording_ && last_recorded_frame_ >= stop_after_frame_.load()) writer_.close();
     if (!writer_.is_open()) return;  // recorded with the pairs: a file is opened by a pair
     const std::int64_t ns = detail::system_now_ns();
     ros::write_diagnostics(begin(kDiagnostics, static_cast<std::uint64_t>(ns)), ros::time_of(ns),
-                           "epipole: health", board_.name, health, dropped_before_);
-    dropped_before_ = health.dropped;
+                           board_.name, report, dropped_before_, statuses_);
+    dropped_before_ = report.health.dropped;
     writer_.end_message();
   }
 
@@ -335,7 +336,8 @@ class McapOutput final : public Output {
   std::uint32_t session_seen_ = 0;
   std::uint32_t last_recorded_frame_ = 0;
   std::uint32_t dropped_before_ = 0;  // health's `dropped` in the message before
-  PairDelivery delivery_;             // last: its thread stops before the rest goes
+  std::array<ros::DiagnosticStatus, 2> statuses_;
+  PairDelivery delivery_;  // last: its thread stops before the rest goes
 };
 
 std::unique_ptr<Output> make(const OutputContext& context) {

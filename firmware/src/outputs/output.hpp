@@ -56,7 +56,7 @@ class Output {
   virtual void stop() = 0;
   // Frame loop side: never waits for the output's work, never allocates.
   virtual void offer(const FrameResult& result, const PairStamp& stamp) = 0;
-  virtual void offer_health(const protocol::Health& /*health*/) {}
+  virtual void offer_health(const HealthReport& /*report*/) {}
   // A command from the robot that the output takes (the recording's `record`), on the frame
   // loop's thread, never waiting; nothing when it is not one of its own. `now`: the board's clock.
   virtual std::optional<CommandVerdict> command(const protocol::Message& /*command*/,

@@ -19,6 +19,7 @@
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/journal.hpp"
 #include "output_files.hpp"
+#include "ros/diagnostics.hpp"
 #include "ros/rig_model.hpp"
 #include "ros/ros_messages.hpp"
 #include "ros2/dds_participant.hpp"
@@ -191,7 +192,7 @@ class Ros2Output final : public Output {
         delivery_(
             "ros2", context.board, kRectified | kDisparity | kPoints,
             [this](const PairCopy& pair) { publish(pair); },
-            [this](const protocol::Health& health) { publish_health(health); }) {
+            [this](const HealthReport& report) { publish_health(report); }) {
     const std::size_t pixels = static_cast<std::size_t>(board_.width()) * board_.height();
     disparity_.resize(pixels);
     if (calibration_) {
@@ -214,7 +215,7 @@ class Ros2Output final : public Output {
       delivery_.offer(result, stamp);
     }
   }
-  void offer_health(const protocol::Health& health) override { delivery_.offer_health(health); }
+  void offer_health(const HealthReport& report) override { delivery_.offer_health(report); }
   DeliveryCounters counters() const override { return delivery_.counters(); }
   std::size_t working_set_bytes() const override {
     return delivery_.working_set_bytes() + disparity_.capacity() * 4 + depth_.capacity() * 2 +
@@ -373,26 +374,29 @@ class Ros2Output final : public Output {
     }
   }
 
-  void publish_health(const protocol::Health& health) {
-    const std::size_t n = ros::health_fields(health, health_fields_);
-    for (std::size_t i = 0; i < n; ++i) {
-      key_values_[i].key = text(health_fields_[i].key);
-      key_values_[i].value = health_fields_[i].value.data();
+  void publish_health(const HealthReport& report) {
+    const std::size_t n = ros::diagnostic_statuses(report, dropped_before_, statuses_);
+    dropped_before_ = report.health.dropped;
+    std::array<diagnostic_msgs_msg_dds__DiagnosticStatus_, 2> statuses{};
+    for (std::size_t s = 0; s < n; ++s) {
+      const ros::DiagnosticStatus& from = statuses_[s];
+      auto& values = key_values_[s];
+      for (std::size_t i = 0; i < from.field_count; ++i) {
+        values[i].key = text(from.fields[i].key);
+        values[i].value = const_cast<char*>(from.fields[i].value.data());
+      }
+      statuses[s].level = from.level;
+      statuses[s].name = text(from.name);
+      statuses[s].message = const_cast<char*>(from.message.data());
+      statuses[s].hardware_id = text(board_.name);
+      borrow(statuses[s].values, values.data(), from.field_count);
     }
-    diagnostic_msgs_msg_dds__DiagnosticStatus_ status{};
-    const ros::HealthStatus level = ros::health_status(health, dropped_before_);
-    dropped_before_ = health.dropped;
-    status.level = level.level;
-    status.name = text("epipole: health");
-    status.message = text(level.message);
-    status.hardware_id = text(board_.name);
-    borrow(status.values, key_values_.data(), n);
     diagnostic_msgs_msg_dds__DiagnosticArray_ m{};
     const ros::Time t = ros::time_of(detail::system_now_ns());
     m.header.stamp.sec = t.sec;
     m.header.stamp.nanosec = t.nanosec;
     m.header.frame_id = text("");
-    borrow(m.status, &status, 1);
+    borrow(m.status, statuses.data(), n);
     write(diagnostics_, &m);
   }
 
@@ -406,8 +410,9 @@ class Ros2Output final : public Output {
   std::vector<float> disparity_;
   std::vector<std::uint16_t> depth_;
   std::vector<float> cloud_, features_;
-  std::array<ros::HealthField, ros::kMaxHealthFields> health_fields_;
-  std::array<diagnostic_msgs_msg_dds__KeyValue_, ros::kMaxHealthFields> key_values_{};
+  std::array<ros::DiagnosticStatus, 2> statuses_;  // health's, the calibration's
+  std::array<std::array<diagnostic_msgs_msg_dds__KeyValue_, ros::kMaxDiagnosticFields>, 2>
+      key_values_{};
   dds_entity_t left_rect_ = 0, right_rect_ = 0, left_info_ = 0, right_info_ = 0;
   dds_entity_t disparity_writer_ = 0, depth_writer_ = 0, points_ = 0, features_writer_ = 0;
   dds_entity_t tf_ = 0, tf_static_ = 0, diagnostics_ = 0;

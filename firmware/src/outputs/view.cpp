@@ -21,6 +21,7 @@
 #include "epipole/core/yaml_fields.hpp"
 #include "epipole/firmware/journal.hpp"
 #include "output_files.hpp"
+#include "ros/diagnostics.hpp"
 #include "ros/image_annotations.hpp"
 #include "ros/rig_model.hpp"
 #include "ros/ros_messages.hpp"
@@ -159,7 +160,7 @@ class ViewOutput final : public Output {
             PairPart::kRectified | PairPart::kDisparity | PairPart::kPoints | PairPart::kCorners |
                 PairPart::kDetections,
             [this](const PairCopy& pair) { serve(pair); },
-            [this](const protocol::Health& health) { serve_health(health); }) {
+            [this](const HealthReport& report) { serve_health(report); }) {
     std::size_t largest = 0;
     for (const view::Channel& c : channels(context.board, settings_)) {
       largest = std::max(largest, c.largest);
@@ -195,7 +196,7 @@ class ViewOutput final : public Output {
     if (!any_subscribed() && !pages_.due(detail::steady_now())) return;
     delivery_.offer(result, stamp);
   }
-  void offer_health(const protocol::Health& health) override { delivery_.offer_health(health); }
+  void offer_health(const HealthReport& report) override { delivery_.offer_health(report); }
   DeliveryCounters counters() const override {
     DeliveryCounters c = delivery_.counters();
     c.dropped += server_.counters().dropped;  // and what clients did not take in time
@@ -275,13 +276,13 @@ class ViewOutput final : public Output {
     }
   }
 
-  void serve_health(const protocol::Health& health) {
-    pages_.health(health);
+  void serve_health(const HealthReport& report) {
+    pages_.health(report.health);
     if (!server_.subscribed(kDiagnostics)) return;
     const std::int64_t ns = detail::system_now_ns();
-    ros::write_diagnostics(begin(), ros::time_of(ns), "epipole: health", board_.name, health,
-                           dropped_before_);
-    dropped_before_ = health.dropped;
+    ros::write_diagnostics(begin(), ros::time_of(ns), board_.name, report, dropped_before_,
+                           statuses_);
+    dropped_before_ = report.health.dropped;
     send(kDiagnostics, static_cast<std::uint64_t>(ns));
   }
 
@@ -297,7 +298,8 @@ class ViewOutput final : public Output {
   std::vector<std::uint8_t> message_;
   std::uint64_t pairs_ = 0;           // offered, on the frame loop's side
   std::uint32_t dropped_before_ = 0;  // health's `dropped` in the message before
-  PairDelivery delivery_;             // last: its thread stops before the rest goes
+  std::array<ros::DiagnosticStatus, 2> statuses_;
+  PairDelivery delivery_;  // last: its thread stops before the rest goes
 };
 
 std::unique_ptr<Output> make(const OutputContext& context) {

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -13,7 +12,6 @@
 
 #include "epipole/core/cdr_writer.hpp"
 #include "epipole/core/error.hpp"
-#include "epipole/firmware/protocol/fields.hpp"
 #include "epipole/vision/stereo.hpp"
 #include "ros/message_schema.hpp"
 
@@ -88,23 +86,6 @@ void point_field(CdrWriter& w, std::string_view name, std::uint32_t offset) {
   w.u8(7);  // FLOAT32
   w.u32(1);
 }
-
-// Every health field as a key and its value, in the order visited.
-struct HealthTexts {
-  std::array<HealthField, kMaxHealthFields>& out;
-  std::size_t n = 0;
-  template <typename T>
-  void operator()(const char* name, const T& value) {
-    require(n < out.size(), "health has more than ", out.size(), " fields");
-    HealthField& f = out[n++];
-    f.key = name;
-    const auto [end, ec] =
-        std::to_chars(f.value.data(), f.value.data() + f.value.size() - 1, +value);
-    *(ec == std::errc() ? end : f.value.data()) = '\0';
-  }
-  template <typename... A>
-  void list(A&&...) {}  // health has no lists
-};
 
 }  // namespace
 
@@ -198,19 +179,6 @@ RectifiedCamera rectified_right(const calib::StereoCalibration& c) {
 std::array<double, 9> camera_k(const RectifiedCamera& camera) {
   const auto& p = camera.p;
   return {p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]};
-}
-
-std::size_t health_fields(const protocol::Health& health,
-                          std::array<HealthField, kMaxHealthFields>& out) {
-  HealthTexts texts{out};
-  protocol::fields(texts, health);
-  return texts.n;
-}
-
-HealthStatus health_status(const protocol::Health& health, std::uint32_t dropped_before) {
-  if (health.flags != 0) return {1, "see flags"};
-  if (health.dropped != dropped_before) return {1, "pairs dropped"};  // counts wrap: not <
-  return {0, "running"};
 }
 
 void write_image(std::vector<std::uint8_t>& out, Time stamp, std::string_view frame,
@@ -438,26 +406,6 @@ void write_rig_transforms(std::vector<std::uint8_t>& out, Time stamp, const Fram
   header(w, stamp, frames.left_optical);
   w.string(frames.right_optical);
   for (const double v : {baseline_m, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0}) w.f64(v);
-}
-
-void write_diagnostics(std::vector<std::uint8_t>& out, Time stamp, std::string_view name,
-                       std::string_view hardware_id, const protocol::Health& health,
-                       std::uint32_t dropped_before) {
-  CdrWriter w(out);
-  header(w, stamp, "");
-  w.u32(1);
-  const HealthStatus status = health_status(health, dropped_before);
-  w.u8(status.level);
-  w.string(name);
-  w.string(status.message);
-  w.string(hardware_id);
-  std::array<HealthField, kMaxHealthFields> fields;
-  const std::size_t n = health_fields(health, fields);
-  w.u32(static_cast<std::uint32_t>(n));
-  for (std::size_t i = 0; i < n; ++i) {
-    w.string(fields[i].key);
-    w.string(fields[i].value.data());
-  }
 }
 
 }  // namespace epipole::firmware::ros

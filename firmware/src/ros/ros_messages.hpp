@@ -66,25 +66,6 @@ GroundTransform ground_transform(const calib::MetricPlane& ground);
 // right, y down), REP 103, as x y z w.
 inline constexpr std::array<double, 4> kBodyToOptical = {-0.5, 0.5, -0.5, 0.5};
 
-// Health as a diagnostic status: WARN when a flag is set or pairs were dropped since the health
-// message before (whose `dropped` was `dropped_before`), else OK.
-struct HealthStatus {
-  std::uint8_t level = 0;  // diagnostic_msgs/DiagnosticStatus: OK 0, WARN 1
-  const char* message = "running";
-};
-HealthStatus health_status(const protocol::Health& health, std::uint32_t dropped_before);
-
-// A health field as a diagnostic key and value: its name in the protocol, its value in decimal.
-struct HealthField {
-  const char* key = "";
-  std::array<char, 24> value{};
-};
-inline constexpr std::size_t kMaxHealthFields = 64;
-// Every field of `health` in the protocol's order, into `out`; returns how many (never
-// allocates).
-std::size_t health_fields(const protocol::Health& health,
-                          std::array<HealthField, kMaxHealthFields>& out);
-
 // The rig's fixed transforms: <prefix>left (x forward, y left, z up) to its optical frame (z
 // forward, x right, y down), and the left optical frame to the right one (the baseline along x).
 struct FrameNames {
@@ -136,10 +117,5 @@ void write_point_cloud(std::vector<std::uint8_t>& out, Time stamp, std::string_v
                        std::size_t width, std::size_t height, const float* points);
 void write_rig_transforms(std::vector<std::uint8_t>& out, Time stamp, const FrameNames& frames,
                           double baseline_m);
-// diagnostic_msgs/DiagnosticArray: one status named `name`, OK or WARN (health_status()), every
-// field of the health message as a key and value.
-void write_diagnostics(std::vector<std::uint8_t>& out, Time stamp, std::string_view name,
-                       std::string_view hardware_id, const protocol::Health& health,
-                       std::uint32_t dropped_before);
 
 }  // namespace epipole::firmware::ros

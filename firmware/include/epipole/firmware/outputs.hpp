@@ -9,6 +9,7 @@
 #include "epipole/calib/calibration.hpp"
 #include "epipole/firmware/board_config.hpp"
 #include "epipole/firmware/command_memory.hpp"
+#include "epipole/firmware/health_report.hpp"
 #include "epipole/firmware/memory_report.hpp"
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/protocol/messages.hpp"
@@ -47,7 +48,7 @@ class Outputs {
   // Frame loop side. `age`: how long ago, on the board's clock, the pair's trigger edge was
   // (its time on the system clock is now minus that).
   void publish(const FrameResult& result, hal::Nanoseconds age);
-  void publish_health(const protocol::Health& health);
+  void publish_health(const HealthReport& report);
   // A command for an output (`record`): the verdict of the output that takes it, unsupported
   // when none does. `now`: the board's clock.
   CommandVerdict command(const protocol::Message& command, hal::Nanoseconds now);
