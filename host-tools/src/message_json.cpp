@@ -113,6 +113,15 @@ nlohmann::json to_json(const mavlink::Frame& frame) {
       }
     }
     out["nearest_cm"] = nearest;
+  } else if (const auto v = mavlink::decode_named_value_float(frame)) {
+    out["type"] = "named_value_float";
+    out["time_boot_ms"] = v->time_boot_ms;
+    out["name"] = v->name.data();
+    out["value"] = v->value;
+  } else if (const auto t = mavlink::decode_status_text(frame)) {
+    out["type"] = "statustext";
+    out["severity"] = t->severity;
+    out["text"] = t->text.data();
   }
   return out;
 }

@@ -175,6 +175,9 @@ struct CorrectedRun {
   double median_depth_m = 0;  // of the last pair's 3-D points
   int points = 0;
   vision::DisparityQuality quality;  // of the last pair, against `truth` when given
+  // The rectified cameras (P1, P2) and Q of the rig in use are the file's: what the outputs
+  // published at start-up (camera_info, the depth's scale) stays true through corrections.
+  bool rectified_cameras_kept = false;
 };
 
 // `pairs` pairs of scene `name`, its right camera turned by `drift` ("" none), the estimate
@@ -214,6 +217,10 @@ CorrectedRun run_corrected(const std::string& name, const std::string& drift, in
   }
   run.corrections = correction.corrections();
   run.total = correction.total();
+  const calib::StereoCalibration& in_use = correction.rig();
+  run.rectified_cameras_kept = in_use.left.projection == scene.rig->left.projection &&
+                               in_use.right.projection == scene.rig->right.projection &&
+                               in_use.Q == scene.rig->Q;
   return run;
 }
 
@@ -231,6 +238,7 @@ TEST(DriftCorrection, TheFacesRigIsCorrectedAndItsPointsAreBackAtTheirDepth) {
   EXPECT_GE(corrected.corrections, 1);
   EXPECT_NEAR(degrees(corrected.total.pitch), 0.3, 0.02);
   EXPECT_NEAR(degrees(corrected.total.roll), 0.2, 0.02);
+  EXPECT_TRUE(corrected.rectified_cameras_kept) << "camera_info and Q as published";
   EXPECT_LT(std::abs(corrected.last.median_signed_px), 0.1);
   EXPECT_LT(corrected.last.p90_px, 0.3);
   ASSERT_GT(corrected.points, 20);

@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "epipole/core/error.hpp"
@@ -186,6 +187,62 @@ TEST(MavlinkStream, DecodesFramesBackToBack) {
   const StreamStats& s = decoder.stats();
   EXPECT_EQ(s.frames, 6u);
   EXPECT_EQ(s.bad_crc + s.unknown_message + s.bad_flags + s.skipped_bytes + s.lost, 0u);
+}
+
+// NAMED_VALUE_FLOAT (id 251, CRC extra 170): time_boot_ms, value, name[10], in that order on the
+// wire; trailing zeros of the name dropped.
+TEST(Mavlink, NamedValueFloatBytes) {
+  std::vector<std::uint8_t> frame(kMaxFrameSize);
+  frame.resize(encode_named_value_float("rig_rows", 1.5f, 0x01020304, {7, 196}, 3, frame));
+  ASSERT_EQ(frame.size(), 10u + 16u + 2u) << "the name's two trailing zeros dropped";
+  const std::vector<std::uint8_t> head{0xFD, 16,  0,   0,   3,   7,   196, 251,  0,
+                                       0,    4,   3,   2,   1,   0,   0,   0xC0, 0x3F,  // 1.5f
+                                       'r',  'i', 'g', '_', 'r', 'o', 'w', 's'};
+  EXPECT_EQ(std::vector<std::uint8_t>(frame.begin(), frame.end() - 2), head);
+  const std::uint16_t crc = frame_checksum(frame, 170);
+  EXPECT_EQ(frame[frame.size() - 2], crc & 0xFF);
+  EXPECT_EQ(frame[frame.size() - 1], crc >> 8);
+  const auto parsed = parse_frame(frame);
+  ASSERT_TRUE(parsed);
+  const auto v = decode_named_value_float(*parsed);
+  ASSERT_TRUE(v);
+  EXPECT_EQ(v->time_boot_ms, 0x01020304u);
+  EXPECT_EQ(v->value, 1.5f);
+  EXPECT_STREQ(v->name.data(), "rig_rows");
+  EXPECT_FALSE(decode_status_text(*parsed));
+
+  std::vector<std::uint8_t> full(kMaxFrameSize);
+  full.resize(encode_named_value_float("rig_cpitch", 0, 0, {7, 196}, 4, full));
+  const auto ten = decode_named_value_float(*parse_frame(full));
+  ASSERT_TRUE(ten);
+  EXPECT_STREQ(ten->name.data(), "rig_cpitch") << "ten characters: no NUL on the wire";
+  EXPECT_THROW(encode_named_value_float("eleven_char", 0, 0, {}, 0, full), Error);
+}
+
+// STATUSTEXT (id 253, CRC extra 83): severity, text[50], then the extensions id and chunk_seq
+// (0: one message); the text's trailing zeros dropped, a longer text cut at 50.
+TEST(Mavlink, StatusTextBytes) {
+  std::vector<std::uint8_t> frame(kMaxFrameSize);
+  frame.resize(encode_status_text(Severity::warning, "hello", {1, 196}, 9, frame));
+  const std::vector<std::uint8_t> head{0xFD, 6, 0, 0,   9,   1,   196, 253,
+                                       0,    0, 4, 'h', 'e', 'l', 'l', 'o'};
+  EXPECT_EQ(std::vector<std::uint8_t>(frame.begin(), frame.end() - 2), head);
+  const std::uint16_t crc = frame_checksum(frame, 83);
+  EXPECT_EQ(frame[frame.size() - 2], crc & 0xFF);
+  EXPECT_EQ(frame[frame.size() - 1], crc >> 8);
+  const auto t = decode_status_text(*parse_frame(frame));
+  ASSERT_TRUE(t);
+  EXPECT_EQ(t->severity, 4);
+  EXPECT_STREQ(t->text.data(), "hello");
+  EXPECT_EQ(t->id, 0);
+
+  const std::string long_text(60, 'x');
+  std::vector<std::uint8_t> cut(kMaxFrameSize);
+  cut.resize(encode_status_text(Severity::notice, long_text, {1, 196}, 10, cut));
+  EXPECT_EQ(cut.size(), 10u + 51u + 2u)
+      << "severity and 50 characters; the zero extensions dropped";
+  EXPECT_EQ(std::string(decode_status_text(*parse_frame(cut))->text.data()),
+            long_text.substr(0, 50));
 }
 
 TEST(MavlinkStream, DecodesTheMessagesFields) {

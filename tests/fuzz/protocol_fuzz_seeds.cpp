@@ -110,6 +110,12 @@ void mavlink_seeds(const fs::path& dir) {
   add(mavlink::encode_obstacle_distance(m, {1, 196}, 1, frame));
   write(dir / "heartbeat_obstacles", stream);
 
+  stream.clear();
+  add(mavlink::encode_named_value_float("rig_rows", -0.25f, 1234, {1, 196}, 5, frame));
+  add(mavlink::encode_status_text(mavlink::Severity::notice, "epipole: rig corrected", {1, 196}, 6,
+                                  frame));
+  write(dir / "calibration_values_text", stream);
+
   stream = {0xFD, 0x13, 0xFD};
   const std::size_t damaged = mavlink::encode_obstacle_distance(m, {1, 196}, 2, frame);
   frame[40] ^= 0x10;

@@ -153,12 +153,24 @@ TEST(LinkCli, DecodesAMavlinkStream) {
   frame[30] ^= 0x01;
   append(damaged, frame);
   append(mavlink::encode_obstacle_distance(m, {1, 196}, 2, frame), frame);
+  append(mavlink::encode_named_value_float("rig_rows", 0.25f, 1500, {1, 196}, 3, frame), frame);
+  append(mavlink::encode_status_text(mavlink::Severity::notice, "epipole: rig corrected", {1, 196},
+                                     4, frame),
+         frame);
   const std::string path = write_stream("epipole-link-mavlink.bin", stream);
 
   const Result r = finish(start_tool("link " + path + " --protocol mavlink --json"));
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  const auto lines = json_lines(r.out);
-  ASSERT_EQ(lines.size(), 3u) << r.out;
+  auto lines = json_lines(r.out);
+  ASSERT_EQ(lines.size(), 5u) << r.out;
+  EXPECT_EQ(lines[2]["type"], "named_value_float");
+  EXPECT_EQ(lines[2]["name"], "rig_rows");
+  EXPECT_EQ(lines[2]["value"], 0.25);
+  EXPECT_EQ(lines[2]["time_boot_ms"], 1500);
+  EXPECT_EQ(lines[3]["type"], "statustext");
+  EXPECT_EQ(lines[3]["severity"], 5);
+  EXPECT_EQ(lines[3]["text"], "epipole: rig corrected");
+  lines.erase(lines.begin() + 2, lines.begin() + 4);
   EXPECT_EQ(lines[0]["type"], "heartbeat");
   EXPECT_EQ(lines[0]["component_id"], 196);
   EXPECT_EQ(lines[1]["type"], "obstacle_distance");
@@ -170,7 +182,7 @@ TEST(LinkCli, DecodesAMavlinkStream) {
   EXPECT_EQ(lines[1]["nearest_cm"], 80);
   EXPECT_EQ(lines[2]["type"], "decoder");
   EXPECT_EQ(lines[2]["protocol"], "mavlink");
-  EXPECT_EQ(lines[2]["frames"], 2);
+  EXPECT_EQ(lines[2]["frames"], 4);
   EXPECT_EQ(lines[2]["bad_crc"], 1);
   EXPECT_EQ(lines[2]["lost"], 1);
   EXPECT_GT(lines[2]["errors"].get<int>(), 0);

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -14,6 +15,7 @@
 
 #include "epipole/core/image_io.hpp"
 #include "run_tool.hpp"
+#include "test_clients.hpp"
 #include "test_data.hpp"
 #include "test_paths.hpp"
 
@@ -232,11 +234,9 @@ TEST(SimCli, TheFirmwareRunsTheShippedSimulatedBoard) {
   EXPECT_NE(r.out.find("stopped after 10 pairs"), std::string::npos) << r.out;
 }
 
-// A board that speaks MAVLink to its flight controller: the robot's end of the link decodes
-// MAVLink 2 (HEARTBEAT at the health interval, an OBSTACLE_DISTANCE for every pair), not the
-// native protocol.
-TEST(SimCli, AMavlinkBoardsStreamIsDecodedAsMavlink) {
-  const fs::path board = fs::path(::testing::TempDir()) / "sim-mavlink";
+// A copy of board/sim named `name` speaking MAVLink, with `extra` after its board file.
+fs::path mavlink_board(const std::string& name, const std::string& extra = "") {
+  const fs::path board = fs::path(::testing::TempDir()) / name;
   fs::create_directories(board);
   for (const auto& entry : fs::directory_iterator(fs::path(source_dir()) / "board" / "sim")) {
     fs::copy_file(entry.path(), board / entry.path().filename(),
@@ -245,9 +245,19 @@ TEST(SimCli, AMavlinkBoardsStreamIsDecodedAsMavlink) {
   std::ifstream in(board / "board.yaml");
   std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string native = "protocol: epipole";
-  ASSERT_NE(yaml.find(native), std::string::npos);
-  yaml.replace(yaml.find(native), native.size(), "protocol: mavlink");
-  std::ofstream(board / "board.yaml") << yaml;
+  EXPECT_NE(yaml.find(native), std::string::npos);
+  if (yaml.find(native) != std::string::npos) {
+    yaml.replace(yaml.find(native), native.size(), "protocol: mavlink");
+  }
+  std::ofstream(board / "board.yaml") << yaml << extra;
+  return board;
+}
+
+// A board that speaks MAVLink to its flight controller: the robot's end of the link decodes
+// MAVLink 2 (HEARTBEAT at the health interval with the calibration's NAMED_VALUE_FLOATs, an
+// OBSTACLE_DISTANCE for every pair), not the native protocol; no STATUSTEXT without a correction.
+TEST(SimCli, AMavlinkBoardsStreamIsDecodedAsMavlink) {
+  const fs::path board = mavlink_board("sim-mavlink");
 
   const fs::path out = fs::path(::testing::TempDir()) / "sim-mavlink-out";
   const auto r = run_tool("sim --board '" + board.string() + "' --scene aloe --frames " +
@@ -260,7 +270,8 @@ TEST(SimCli, AMavlinkBoardsStreamIsDecodedAsMavlink) {
   EXPECT_EQ(scene["decoder"]["bad_crc"], 0) << scene.dump(2);
   EXPECT_EQ(scene["received"]["obstacle_distance"], kFrames) << scene.dump(2);
   EXPECT_GE(scene["received"]["heartbeat"].get<int>(), 1) << scene.dump(2);
-  EXPECT_EQ(scene["received"].size(), 2u) << scene.dump(2);
+  EXPECT_GE(scene["received"]["named_value_float"].get<int>(), 1) << scene.dump(2);
+  EXPECT_EQ(scene["received"].size(), 3u) << scene.dump(2);
 
   std::ifstream lines(out / "aloe" / "serial.jsonl");
   std::string line;
@@ -282,6 +293,88 @@ TEST(SimCli, AMavlinkBoardsStreamIsDecodedAsMavlink) {
   }
   EXPECT_EQ(obstacles, kFrames);
   EXPECT_EQ(near, kFrames) << "Aloe is within 20 m in every frame";
+}
+
+// The rig's drift as a flight controller and its ground station see it, read by an independent
+// MAVLink decoder (node-mavlink, tests/clients/mavlink-read.mjs): the calibration's figures as
+// NAMED_VALUE_FLOATs at each heartbeat, the correction said once as a STATUSTEXT. The faces scene
+// with its right camera turned 0.3 degrees of pitch and 0.2 of roll, corrected online.
+TEST(SimCli, AMavlinkBoardTellsTheAutopilotOfTheRigsDrift) {
+  ASSERT_TRUE(epipole::test::clients_installed()) << "the test clients: scripts/setup.sh";
+  const fs::path board = mavlink_board("sim-mavlink-drift", R"(
+calibration_health: {online_correction: true}
+)");
+  // A scene of its own among the sim's.
+  std::ifstream in(board / "board.yaml");
+  std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string faces = "    faces:";
+  ASSERT_NE(yaml.find(faces), std::string::npos);
+  yaml.insert(yaml.find(faces), R"(    drifted:
+      synthesize: ${EPIPOLE_DATA_DIR}/samples/messi5.jpg
+      disparity: 32
+      calibration: faces-rig.yaml
+      drift: {pitch_deg: 0.3, roll_deg: 0.2}
+)");
+  std::ofstream(board / "board.yaml") << yaml;
+
+  const int frames = 60;
+  const fs::path out = fs::path(::testing::TempDir()) / "sim-mavlink-drift-out";
+  const auto r = run_tool("sim --board '" + board.string() + "' --scene drifted --frames " +
+                          std::to_string(frames) + " --pictures 0 --out '" + out.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+
+  const auto read = epipole::test::run_client(
+      "mavlink-read.mjs", "'" + (out / "drifted" / "serial.bin").string() + "'");
+  ASSERT_EQ(read.exit_code, 0) << read.out;
+  const nlohmann::json got = nlohmann::json::parse(read.out);
+  EXPECT_EQ(got["crc_errors"], 0);
+  EXPECT_EQ(got["invalid"], 0);
+  EXPECT_EQ(got["unknown"], 0);
+  int distances = 0, heartbeats = 0, texts = 0;
+  std::vector<std::map<std::string, double>> values(1);  // by heartbeat: name -> value
+  bool corrected = false;
+  std::map<std::string, double> before;  // the last figures before the correction was said
+  for (const nlohmann::json& m : got["messages"]) {
+    EXPECT_EQ(m["sysid"], 1);
+    EXPECT_EQ(m["compid"], 196);
+    EXPECT_EQ(m["version"], 0xFD) << "MAVLink 2";
+    const nlohmann::json& f = m["fields"];
+    if (m["name"] == "OBSTACLE_DISTANCE") ++distances;
+    if (m["name"] == "HEARTBEAT") {
+      ++heartbeats;
+      values.emplace_back();
+    }
+    if (m["name"] == "NAMED_VALUE_FLOAT") {
+      EXPECT_GT(f["time_boot_ms"].get<double>(), 0);
+      values.back()[f["name"].get<std::string>()] = f["value"].get<double>();
+    }
+    if (m["name"] == "STATUSTEXT") {
+      ++texts;
+      EXPECT_EQ(f["severity"], 5) << "MAV_SEVERITY_NOTICE";
+      EXPECT_TRUE(f["text"].get<std::string>().starts_with("epipole: rig corrected, pitch +0.3"))
+          << f["text"];
+      corrected = true;
+      before = values.back();
+    }
+  }
+  EXPECT_EQ(distances, frames);
+  EXPECT_GE(heartbeats, 3);
+  EXPECT_EQ(texts, 1) << "said once";
+  ASSERT_TRUE(corrected) << read.out;
+  // Before: the rows a few pixels off, the right sign, the turn estimated.
+  ASSERT_TRUE(before.count("rig_rows") && before.count("rig_pitch") && before.count("rig_roll"))
+      << read.out;
+  EXPECT_GE(before["rig_rows"], 1.0);
+  EXPECT_NEAR(before["rig_pitch"], 0.3, 0.03);
+  EXPECT_NEAR(before["rig_roll"], 0.2, 0.03);
+  EXPECT_EQ(before["rig_corr"], 0);
+  // After: the last heartbeat's figures say the rig is corrected and its rows are straight.
+  std::map<std::string, double>& after = values.back();
+  ASSERT_TRUE(after.count("rig_rows") && after.count("rig_corr")) << read.out;
+  EXPECT_LT(std::abs(after["rig_rows"]), 0.1);
+  EXPECT_EQ(after["rig_corr"], 1);
+  EXPECT_NEAR(after["rig_cpitch"], 0.3, 0.03);
+  EXPECT_NEAR(after["rig_croll"], 0.2, 0.03);
 }
 
 }  // namespace

@@ -2,9 +2,12 @@
 #include "epipole/core/angles.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
+#include <string_view>
 #include <tuple>
 
 #include "epipole/core/error.hpp"
@@ -515,10 +518,44 @@ void FrameLoop::publish_health() {
   if (outputs_ != nullptr) outputs_->publish_health(report);
   if (link_.protocol() == LinkProtocol::mavlink) {
     link_.publish_heartbeat(heartbeat_status());
+    if (report.calibration) send_calibration_values(*report.calibration);
     return;
   }
   send(report.health);
   if (report.calibration) send(*report.calibration);
+}
+
+void FrameLoop::send_calibration_values(const protocol::CalibrationHealth& c) {
+  // The board's clock is the system's monotonic one: time since the board booted.
+  const auto ms =
+      static_cast<std::uint32_t>(std::max<hal::Nanoseconds>(board_.clock().now(), 0) / 1'000'000);
+  const auto value = [&](const char* name, double v) {
+    link_.publish_named_value(name, static_cast<float>(v), ms);
+  };
+  value("rig_rows", c.median_offset_centipx / 100.0);
+  value("rig_p90", c.p90_offset_centipx / 100.0);
+  if ((c.flags & protocol::kDriftEstimated) != 0) {
+    value("rig_pitch", c.pitch_mdeg / 1000.0);
+    value("rig_roll", c.roll_mdeg / 1000.0);
+    value("rig_sigma", std::max(c.pitch_sigma_mdeg, c.roll_sigma_mdeg) / 1000.0);
+  }
+  value("rig_corr", c.corrections);
+  if (c.corrections > 0) {
+    value("rig_cpitch", c.corrected_pitch_mdeg / 1000.0);
+    value("rig_croll", c.corrected_roll_mdeg / 1000.0);
+  }
+}
+
+void FrameLoop::tell_autopilot(mavlink::Severity severity, const char* format, ...) {
+  if (link_.protocol() != LinkProtocol::mavlink) return;
+  std::array<char, mavlink::kStatusTextSize + 1> text{};
+  std::va_list values;
+  va_start(values, format);
+  const int n = std::vsnprintf(text.data(), text.size(), format, values);
+  va_end(values);
+  if (n < 0) return;
+  link_.publish_status_text(
+      severity, std::string_view(text.data(), std::min<std::size_t>(n, text.size() - 1)));
 }
 
 // A board whose baud rate carries its summaries (the board file's check) but not every point
@@ -764,6 +801,8 @@ void FrameLoop::follow_correction(const FrameResult& r) {
             "calibration: corrected (%d): the right camera's map rebuilt; the rig is now %+.3f "
             "degrees of pitch and %+.3f of roll from its file",
             corrections_said_, degrees(total.pitch), degrees(total.roll));
+    tell_autopilot(mavlink::Severity::notice, "epipole: rig corrected, pitch %+.3f roll %+.3f",
+                   degrees(total.pitch), degrees(total.roll));
     if (recalibrate_pending_) {
       recalibrate_pending_ = false;
       conclude(recalibrate_sequence_, {protocol::AckStatus::ok, protocol::AckReason::none});
@@ -791,6 +830,8 @@ void FrameLoop::follow_correction(const FrameResult& r) {
               "calibration: rows %.2f px off, but undoing the estimated turn (%+.3f, %+.3f "
               "degrees) would leave %.2f px: not corrected",
               e.median_offset_px, degrees(e.pitch), degrees(e.roll), e.median_corrected_px);
+      tell_autopilot(mavlink::Severity::warning, "epipole: rows %.2f px off, not correctable",
+                     e.median_offset_px);
       break;
     case Outcome::out_of_range:
       journal(Priority::warning,
@@ -798,6 +839,7 @@ void FrameLoop::follow_correction(const FrameResult& r) {
               "beyond calibration_health.max_correction_deg from its file: not corrected "
               "(calibrate the rig again)",
               degrees(e.pitch), degrees(e.roll));
+      tell_autopilot(mavlink::Severity::warning, "epipole: rig turned past its bound: calibrate");
       break;
     default:
       break;

@@ -107,6 +107,20 @@ bool Link::publish_obstacle_distance(const mavlink::ObstacleDistance& message) {
   return enqueue({encode_buffer_.data(), n}, true);
 }
 
+bool Link::publish_named_value(std::string_view name, float value, std::uint32_t time_boot_ms) {
+  if (config_.protocol != LinkProtocol::mavlink) return false;
+  const std::size_t n = mavlink::encode_named_value_float(
+      name, value, time_boot_ms, config_.identity, mavlink_sequence_++, encode_buffer_);
+  return enqueue({encode_buffer_.data(), n}, false);
+}
+
+bool Link::publish_status_text(mavlink::Severity severity, std::string_view text) {
+  if (config_.protocol != LinkProtocol::mavlink) return false;
+  const std::size_t n = mavlink::encode_status_text(severity, text, config_.identity,
+                                                    mavlink_sequence_++, encode_buffer_);
+  return enqueue({encode_buffer_.data(), n}, true);
+}
+
 bool Link::next_command(Command& out) {
   const std::lock_guard lock(mutex_);
   if (commands_size_ > 0) {

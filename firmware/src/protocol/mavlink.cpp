@@ -14,6 +14,8 @@ namespace {
 std::optional<std::uint8_t> crc_extra_of(std::uint32_t message_id) {
   if (message_id == kHeartbeatId) return kHeartbeatCrcExtra;
   if (message_id == kObstacleDistanceId) return kObstacleDistanceCrcExtra;
+  if (message_id == kNamedValueFloatId) return kNamedValueFloatCrcExtra;
+  if (message_id == kStatusTextId) return kStatusTextCrcExtra;
   return std::nullopt;
 }
 
@@ -131,6 +133,27 @@ std::size_t encode_obstacle_distance(const ObstacleDistance& m, const Identity& 
                       out);
 }
 
+std::size_t encode_named_value_float(std::string_view name, float value, std::uint32_t time_boot_ms,
+                                     const Identity& identity, std::uint8_t sequence,
+                                     std::span<std::uint8_t> out) {
+  require(name.size() <= kNamedValueNameSize, "mavlink: NAMED_VALUE_FLOAT name \"", name,
+          "\" is longer than ", kNamedValueNameSize, " characters");
+  std::array<std::uint8_t, 18> payload{};
+  ByteWriter w(payload);
+  w.u32(time_boot_ms);
+  w.f32(value);
+  std::memcpy(payload.data() + w.size(), name.data(), name.size());  // the rest stays 0
+  return finish_frame(payload, kNamedValueFloatId, identity, sequence, out);
+}
+
+std::size_t encode_status_text(Severity severity, std::string_view text, const Identity& identity,
+                               std::uint8_t sequence, std::span<std::uint8_t> out) {
+  std::array<std::uint8_t, 54> payload{};  // id and chunk_seq (extensions) 0: not chunked
+  payload[0] = static_cast<std::uint8_t>(severity);
+  std::memcpy(payload.data() + 1, text.data(), std::min(text.size(), kStatusTextSize));
+  return finish_frame(payload, kStatusTextId, identity, sequence, out);
+}
+
 ObstacleDistance to_obstacle_distance(const protocol::Obstacles& sectors, std::uint64_t time_usec,
                                       std::uint16_t min_distance_cm,
                                       std::uint16_t max_distance_cm) {
@@ -189,6 +212,26 @@ std::optional<ObstacleDistance> decode_obstacle_distance(const Frame& frame) {
   m.increment_deg = increment_f != 0.0f ? increment_f : static_cast<float>(increment);
   m.angle_offset_deg = r.f32();
   m.frame = r.u8();
+  return m;
+}
+
+std::optional<NamedValueFloat> decode_named_value_float(const Frame& frame) {
+  if (frame.message_id != kNamedValueFloatId) return std::nullopt;
+  ByteReader r(frame.payload);
+  NamedValueFloat m;
+  m.time_boot_ms = r.u32();
+  m.value = r.f32();
+  std::memcpy(m.name.data(), frame.payload.data() + 8, kNamedValueNameSize);
+  return m;
+}
+
+std::optional<StatusText> decode_status_text(const Frame& frame) {
+  if (frame.message_id != kStatusTextId) return std::nullopt;
+  StatusText m;
+  m.severity = frame.payload[0];
+  std::memcpy(m.text.data(), frame.payload.data() + 1, kStatusTextSize);
+  m.id = static_cast<std::uint16_t>(frame.payload[51] | frame.payload[52] << 8);
+  m.chunk_seq = frame.payload[53];
   return m;
 }
 

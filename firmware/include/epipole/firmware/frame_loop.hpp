@@ -109,6 +109,11 @@ class FrameLoop {
   // The steps of run().
   void tick();
   void publish_health();
+  // MAVLink: the calibration's figures as NAMED_VALUE_FLOATs (docs/protocol.md), and an event
+  // of the rig's correction as a STATUSTEXT (`format` printf-like, cut at 50 characters).
+  void send_calibration_values(const protocol::CalibrationHealth& calibration);
+  [[gnu::format(printf, 3, 4)]] void tell_autopilot(mavlink::Severity severity, const char* format,
+                                                    ...);
   void say_device_changes();
   void say_link_capacity();
   bool trigger_quiet() const;

@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 #include <span>
+#include <string_view>
 #include <thread>
 
 #include "epipole/firmware/journal.hpp"
@@ -77,6 +78,10 @@ class Link {
   bool publish(const protocol::Message& message);
   bool publish_heartbeat(std::uint8_t system_status = mavlink::kMavStateActive);
   bool publish_obstacle_distance(const mavlink::ObstacleDistance& message);
+  // A figure a ground station plots (NAMED_VALUE_FLOAT), over the budget's reserve like the
+  // native protocol's larger messages; a rare event said (STATUSTEXT), as essential as heartbeats.
+  bool publish_named_value(std::string_view name, float value, std::uint32_t time_boot_ms);
+  bool publish_status_text(mavlink::Severity severity, std::string_view text);
   bool next_command(Command& out);
   // The robot's bytes, decoded into the command queue as the link's thread does with what it
   // reads. Only while that thread does not run (a link without a port; the fuzz target).

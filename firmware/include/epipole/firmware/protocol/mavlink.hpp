@@ -1,12 +1,14 @@
 #pragma once
 
-// MAVLink 2 output for PX4 and ArduPilot: HEARTBEAT and OBSTACLE_DISTANCE, encoded to the
-// common message set's definitions (no generated headers needed for two messages).
+// MAVLink 2 output for PX4 and ArduPilot: HEARTBEAT, OBSTACLE_DISTANCE, NAMED_VALUE_FLOAT and
+// STATUSTEXT, encoded to the common message set's definitions (no generated headers needed for
+// four messages).
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string_view>
 
 #include "epipole/firmware/protocol/messages.hpp"
 
@@ -21,6 +23,12 @@ inline constexpr std::uint32_t kHeartbeatId = 0;
 inline constexpr std::uint8_t kHeartbeatCrcExtra = 50;
 inline constexpr std::uint32_t kObstacleDistanceId = 330;
 inline constexpr std::uint8_t kObstacleDistanceCrcExtra = 23;
+inline constexpr std::uint32_t kNamedValueFloatId = 251;
+inline constexpr std::uint8_t kNamedValueFloatCrcExtra = 170;
+inline constexpr std::uint32_t kStatusTextId = 253;
+inline constexpr std::uint8_t kStatusTextCrcExtra = 83;
+inline constexpr std::size_t kNamedValueNameSize = 10;  // NAMED_VALUE_FLOAT.name, char[10]
+inline constexpr std::size_t kStatusTextSize = 50;      // STATUSTEXT.text, char[50]
 
 inline constexpr std::uint8_t kMavTypeOnboardController = 18;
 inline constexpr std::uint8_t kMavAutopilotInvalid = 8;
@@ -30,6 +38,18 @@ inline constexpr std::uint8_t kMavCompIdObstacleAvoidance = 196;
 inline constexpr std::uint8_t kMavFrameBodyFrd = 12;
 inline constexpr std::uint8_t kMavDistanceSensorUnknown = 4;
 inline constexpr std::uint16_t kUnknownDistance = 0xFFFF;
+
+// MAV_SEVERITY.
+enum class Severity : std::uint8_t {
+  emergency = 0,
+  alert = 1,
+  critical = 2,
+  error = 3,
+  warning = 4,
+  notice = 5,
+  info = 6,
+  debug = 7,
+};
 
 struct Identity {
   std::uint8_t system_id = 1;  // the vehicle's system id
@@ -51,6 +71,14 @@ struct ObstacleDistance {
 std::uint16_t crc16_x25(std::span<const std::uint8_t> bytes, std::uint16_t crc = 0xFFFF);
 
 // Each returns the frame's size; `out` must hold kMaxFrameSize bytes.
+// NAMED_VALUE_FLOAT: `name` of at most kNamedValueNameSize characters (Error beyond);
+// `time_boot_ms` the sender's time since it started.
+std::size_t encode_named_value_float(std::string_view name, float value, std::uint32_t time_boot_ms,
+                                     const Identity& identity, std::uint8_t sequence,
+                                     std::span<std::uint8_t> out);
+// STATUSTEXT: `text` cut at kStatusTextSize characters (one message; no chunks).
+std::size_t encode_status_text(Severity severity, std::string_view text, const Identity& identity,
+                               std::uint8_t sequence, std::span<std::uint8_t> out);
 std::size_t encode_heartbeat(const Identity& identity, std::uint8_t sequence,
                              std::span<std::uint8_t> out,
                              std::uint8_t system_status = kMavStateActive);
@@ -74,8 +102,8 @@ struct Frame {
   std::size_t wire_size = 0;  // the frame's bytes: header, payload, checksum (and signature)
 };
 
-// Parses one frame at the start of `bytes` (HEARTBEAT or OBSTACLE_DISTANCE: the checksum needs
-// the message's CRC extra); nullopt when it is not a valid, complete frame of those.
+// Parses one frame at the start of `bytes` (of the four messages above: the checksum needs the
+// message's CRC extra); nullopt when it is not a valid, complete frame of those.
 std::optional<Frame> parse_frame(std::span<const std::uint8_t> bytes);
 
 inline constexpr std::uint8_t kIncompatSigned = 0x01;  // a 13-byte signature follows the CRC
@@ -90,9 +118,24 @@ struct Heartbeat {
   std::uint8_t mavlink_version = 0;
 };
 
+struct NamedValueFloat {
+  std::uint32_t time_boot_ms = 0;
+  float value = 0;
+  std::array<char, kNamedValueNameSize + 1> name{};  // NUL-terminated here (not on the wire)
+};
+
+struct StatusText {
+  std::uint8_t severity = 0;
+  std::array<char, kStatusTextSize + 1> text{};  // NUL-terminated here (not on the wire)
+  std::uint16_t id = 0;                          // extensions: chunked texts (0: not chunked)
+  std::uint8_t chunk_seq = 0;
+};
+
 // The fields of a parsed frame of that message; nullopt for a frame of another message.
 std::optional<Heartbeat> decode_heartbeat(const Frame& frame);
 std::optional<ObstacleDistance> decode_obstacle_distance(const Frame& frame);
+std::optional<NamedValueFloat> decode_named_value_float(const Frame& frame);
+std::optional<StatusText> decode_status_text(const Frame& frame);
 
 // What the stream decoder has seen.
 struct StreamStats {
