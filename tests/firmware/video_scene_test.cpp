@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <functional>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -64,6 +66,49 @@ TEST(VideoScene, TheFrameLoopRunsOnAVideoDecodedAtStartUp) {
   std::vector<int> d = observer.centre_disparity;
   std::nth_element(d.begin(), d.begin() + 20, d.end());
   EXPECT_NEAR(d[20], 8 * 16, 16) << "the median centre disparity is the synthesised one";
+}
+
+// A drift on a video scene turns its right camera as on an image scene: each right frame moves
+// down by f tan(pitch) (the rig's f = 100 px: 2 degrees is 3.49 px), the left frames stay.
+TEST(VideoScene, ADriftTurnsTheRightCameraOfEveryFrame) {
+  test::SimRig rig;
+  const std::string video = test::data_file("samples/Megamind.avi").string();
+  const auto load = [&](const std::string& drift) {
+    const BoardConfig config =
+        parse_board_config(with_scene(rig, "synthesize: " + video + ", disparity: 8, " +
+                                               "calibration: rig.yaml" + drift),
+                           rig.dir.path() / "board.yaml");
+    return hal::load_scene(hal::sim_settings(config.sections).chosen(), config.width(),
+                           config.height());
+  };
+  const hal::StereoImages still = load("");
+  const hal::StereoImages turned = load(", drift: {pitch_deg: 2}");
+  ASSERT_EQ(turned.right.size(), still.right.size());
+  const double expected = 100 * std::tan(2 * std::numbers::pi / 180);
+  for (const std::size_t k : {std::size_t{100}, std::size_t{180}, std::size_t{260}}) {
+    SCOPED_TRACE(k);
+    const GrayView a = still.right[k].view(), b = turned.right[k].view();
+    // The shift that matches the turned frame to the still one best, on the rows and columns
+    // both keep (sum of absolute differences; a parabola through the best three).
+    std::vector<double> sad;
+    for (int s = 0; s <= 7; ++s) {
+      double sum = 0;
+      for (int y = 12; y < 84; ++y) {
+        for (int x = 12; x < 148; ++x) sum += std::abs(b(x, y) - a(x, y - s));
+      }
+      sad.push_back(sum);
+    }
+    const auto best =
+        static_cast<int>(std::min_element(sad.begin() + 1, sad.end() - 1) - sad.begin());
+    const double l = sad[static_cast<std::size_t>(best - 1)],
+                 c = sad[static_cast<std::size_t>(best)],
+                 r = sad[static_cast<std::size_t>(best + 1)];
+    const double shift = best + 0.5 * (l - r) / (l - 2 * c + r);
+    EXPECT_NEAR(shift, expected, 0.3) << "down, by f tan(pitch)";
+    EXPECT_TRUE(std::equal(still.left[k].view().row(0), still.left[k].view().row(0) + 160,
+                           turned.left[k].view().row(0)))
+        << "the left camera did not move";
+  }
 }
 
 TEST(VideoScene, SideBySideAndStereoVideosAndTheirErrors) {
