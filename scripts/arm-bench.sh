@@ -35,7 +35,7 @@ bench=$build/host-tools/bench/epipole-bench
 count_file=$(mktemp)
 trap 'rm -f "$count_file"' EXIT
 
-# count NAME N SIDE STAGES [KEY=VALUE...]: the guest instructions of a whole run of N pairs of
+# count NAME N SIDE STAGES [KEY=VALUE|scene=NAME|--OPTION=VALUE...]: the guest instructions of a whole run of N pairs of
 # one side.
 count() {
   local name=$1 n=$2 side=--no-opencv stages=$4
@@ -43,7 +43,13 @@ count() {
   local args=() scene=aloe
   [[ $stages != all ]] && args+=(--stages "$stages")
   for setting in "${@:5}"; do
-    if [[ $setting == scene=* ]]; then scene=${setting#scene=}; else args+=(--set "$setting"); fi
+    if [[ $setting == scene=* ]]; then
+      scene=${setting#scene=}
+    elif [[ $setting == --* ]]; then
+      args+=("$setting")
+    else
+      args+=(--set "$setting")
+    fi
   done
   "$build/run-on-target" -plugin "$plugin,out=$count_file" "$bench" --board board/sim \
     --scene "$scene" --threads 1 --warmup 0 -n "$n" "$side" "${args[@]}" --json \

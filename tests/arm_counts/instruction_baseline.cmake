@@ -13,14 +13,16 @@
 string(REPLACE "|" ";" emulator "${EMULATOR}")
 set(tolerance_permille 50)
 
-# count(VAR PAIRS STAGES [KEY=VALUE...] [scene=NAME]): the guest instructions of one whole
-# epipole-bench run (of the Aloe pair unless the row names another scene).
+# count(VAR PAIRS STAGES [KEY=VALUE...] [scene=NAME] [--OPTION=VALUE]): the guest instructions
+# of one whole epipole-bench run (of the Aloe pair unless the row names another scene).
 function(count var pairs stages)
   set(scene aloe)
   set(settings)
   foreach(setting ${ARGN})
     if(setting MATCHES "^scene=(.+)$")
       set(scene ${CMAKE_MATCH_1})
+    elseif(setting MATCHES "^--")
+      list(APPEND settings ${setting})
     else()
       list(APPEND settings --set ${setting})
     endif()

@@ -18,6 +18,7 @@
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/rig_correction.hpp"
 #include "epipole/vision/disparity_quality.hpp"
+#include "map_rebuild_wait.hpp"
 #include "sim/sim_scene.hpp"
 #include "sim/sim_settings.hpp"
 #include "test_data.hpp"
@@ -200,6 +201,7 @@ CorrectedRun run_corrected(const std::string& name, const std::string& drift, in
     const FrameResult& r = pipeline.process(images.left[k].view(), images.right[k].view(),
                                             static_cast<std::uint32_t>(i), 0, config.stages);
     if (r.drift && correction.consider(*r.drift) == RigCorrection::Outcome::started) ++run.started;
+    EXPECT_TRUE(test::wait_for_rebuilt_map(correction));
     if (i + 1 < pairs) continue;
     run.last = r.calibration_health.value_or(calib::HealthFigure{});
     run.drift = r.drift.value_or(calib::DriftEstimate{});
@@ -213,7 +215,6 @@ CorrectedRun run_corrected(const std::string& name, const std::string& drift, in
     if (truth != nullptr) {
       run.quality = vision::disparity_quality(r.disparity, truth->view(), mask->view());
     }
-    // Rebuilding takes a few pairs' time: each pair waited for here would be another test.
   }
   run.corrections = correction.corrections();
   run.total = correction.total();

@@ -16,6 +16,7 @@
 #include "board_scene.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "foxglove_socket.hpp"
+#include "map_rebuild_wait.hpp"
 #include "sim_rig.hpp"
 #include "termios/termios_serial.hpp"
 
@@ -204,13 +205,14 @@ TEST(FirmwareAllocations, CorrectingADriftedRigAllocatesNothing) {
   Pipeline pipeline(config, scene.rig);
   RigCorrection& correction = *pipeline.rig_correction();
   std::size_t before = 0;
-  // A correction comes after the 5-pair window; qemu's pairs are slow, the rebuild too.
+  // A correction comes after the 5-pair window; qemu's pairs are slow.
   const std::uint32_t pairs = EPIPOLE_UNDER_QEMU ? 16 : 30;
   for (std::uint32_t i = 0; i < pairs; ++i) {
     if (i == 3) before = test::allocations_in_all_threads();
     const FrameResult& r =
         pipeline.process(images.left[0].view(), images.right[0].view(), i, 0, config.stages);
     if (r.drift) correction.consider(*r.drift);
+    EXPECT_TRUE(test::wait_for_rebuilt_map(correction));
   }
   EXPECT_GE(correction.corrections(), 1);
   EXPECT_EQ(test::allocations_in_all_threads() - before, 0u);

@@ -26,6 +26,7 @@
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "error_of.hpp"
+#include "map_rebuild_wait.hpp"
 #include "sim_rig.hpp"
 #include "termios/termios_serial.hpp"
 #include "test_paths.hpp"
@@ -1236,6 +1237,9 @@ TEST(FrameLoop, RecalibrateCorrectsADriftedRigAndIsAnsweredOnceInPlace) {
   if (EPIPOLE_UNDER_QEMU) GTEST_SKIP() << "left to the host: 640x480 pairs take long under qemu";
   LinkedRig linked(drifted_faces, 0);
   Recorder recorder;
+  recorder.also = [&](const FrameResult&) {
+    EXPECT_TRUE(test::wait_for_rebuilt_map(*linked.fw->pipeline().rig_correction()));
+  };
   // After the first health message (15 pairs a second).
   send_at(recorder, linked, 20, {protocol::Recalibrate{}, protocol::Recalibrate{}}, 1);
   linked.fw->frame_loop().set_observer(&recorder);

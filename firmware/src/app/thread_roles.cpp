@@ -54,6 +54,14 @@ namespace {
 
 // The calling thread's scheduling for its role; what could not be done.
 std::string schedule(ThreadRole role) {
+  if (role == ThreadRole::maps) {
+    // Lowering a thread's scheduling needs no privilege: the rebuild only takes a core the
+    // pairs leave (a pool of normal scheduling would otherwise share its cores with it).
+    const sched_param param{};
+    if (sched_setscheduler(0, SCHED_IDLE, &param) == 0) return {};
+    return cat("the ", thread_name(role), " thread cannot use SCHED_IDLE: ", std::strerror(errno),
+               " (a map rebuilt for a correction may slow the pairs meanwhile)");
+  }
   // Normal scheduling is what a thread started by a real-time one gets (reset on fork), and
   // what it inherits otherwise: left as it is (a test run at idle priority stays there).
   const int priority = realtime_priority(role);

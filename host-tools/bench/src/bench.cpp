@@ -3,15 +3,21 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "epipole/calib/camera_turn.hpp"
+#include "epipole/calib/rectification_map.hpp"
+#include "epipole/core/angles.hpp"
 #include "epipole/core/error.hpp"
 #include "epipole/core/image_io.hpp"
 #include "epipole/core/thread_pool.hpp"
@@ -19,6 +25,7 @@
 #include "epipole/firmware/cascade_file.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/firmware/pipeline.hpp"
+#include "epipole/firmware/thread_roles.hpp"
 #include "epipole/tools/opencv_mat.hpp"
 #include "epipole/tools/progress.hpp"
 #include "opencv_pipeline.hpp"
@@ -68,6 +75,7 @@ struct SideTimes {
   std::vector<double> pair_ms;
   double seconds = 0;                           // the measured pairs, back to back
   std::vector<firmware::OutputReport> outputs;  // with the board's outputs on: what each did
+  std::vector<double> rebuild_ms;  // with a map rebuilt beside each pair: each rebuild's time
 
   void add(const std::array<double, protocol::kStageCount>& ms, double pair) {
     for (const protocol::StageInfo& s : protocol::kStages) {
@@ -99,6 +107,74 @@ class NextBenchPair final : public firmware::NextPair {
   const BenchImages& images_;
   int warmup_;
   int next_ = 0;
+};
+
+// The right rectification map rebuilt on a thread of its own, as a correction of the rig does
+// (firmware::RigCorrection's maps thread, SCHED_IDLE: calib::fill_fixed_point_map into a map made
+// at start-up), for the right camera turned 0.3 degrees of pitch and 0.2 of roll. Its time is
+// from the request to the map done: the time the pairs left it, as in the firmware.
+class MapRebuilder {
+ public:
+  MapRebuilder(const calib::StereoCalibration& rig, int width, int height)
+      : right_(calib::with_right_camera_turned(
+                   rig, calib::turn_rotation({radians(0.3), radians(0.2), 0}))
+                   .right),
+        map_(width, height),
+        thread_([this] { run(); }) {}
+  ~MapRebuilder() {
+    {
+      const std::lock_guard lock(mutex_);
+      stopping_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  MapRebuilder(const MapRebuilder&) = delete;
+  MapRebuilder& operator=(const MapRebuilder&) = delete;
+
+  void start() {
+    {
+      const std::lock_guard lock(mutex_);
+      requested_ = true;
+      requested_at_ = std::chrono::steady_clock::now();
+    }
+    wake_.notify_all();
+  }
+  // The rebuild's time, once it is done.
+  double wait() {
+    std::unique_lock lock(mutex_);
+    wake_.wait(lock, [&] { return !requested_; });
+    return ms_;
+  }
+
+ private:
+  void run() {
+    firmware::enter_thread_role(firmware::ThreadRole::maps);
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [&] { return stopping_ || requested_; });
+      if (stopping_) return;
+      const auto start = requested_at_;
+      lock.unlock();
+      calib::fill_fixed_point_map(right_, map_.xy(), map_.fractions());
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+              .count();
+      lock.lock();
+      ms_ = ms;
+      requested_ = false;
+      wake_.notify_all();
+    }
+  }
+
+  calib::CameraCalibration right_;
+  vision::RemapMap map_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool requested_ = false, stopping_ = false;
+  std::chrono::steady_clock::time_point requested_at_;
+  double ms_ = 0;
+  std::thread thread_;
 };
 
 std::vector<hal::BackendOption> scene_option(const std::string& scene) {
@@ -143,6 +219,11 @@ class Bench {
         // The board's outputs (outputs: in its file, or --set outputs...): the same pairs again
         // with them on, side by side.
         if (!board_.outputs.empty()) run["epipole_outputs"] = summary(epipole(threads, true));
+        if (!options_.rebuild_map.empty()) {
+          require(calibration_.has_value(), "--rebuild-map: the board has no calibration");
+          run["epipole_rebuilding"] = summary(epipole(threads, false, true));
+          run["epipole_rebuilding"]["rebuild_map"] = options_.rebuild_map;
+        }
       }
       if (opencv_pipeline_) run["opencv"] = summary(opencv(threads));
       runs.push_back(run);
@@ -166,7 +247,8 @@ class Bench {
  private:
   // `outputs`: with the board's outputs, each pair handed to them as the frame loop does (its
   // time holds the hand-off; their work runs on their own threads, beside the pool).
-  SideTimes epipole(int threads, bool outputs) {
+  // `rebuilding`: a map rebuilt for each pair (MapRebuilder, --rebuild-map beside or after).
+  SideTimes epipole(int threads, bool outputs, bool rebuilding = false) {
     firmware::BoardConfig config = board_;
     config.threads.count = threads;
     firmware::Pipeline pipeline(config, calibration_, path_);
@@ -183,9 +265,13 @@ class Bench {
     SideTimes times;
     times.stages = board_.stages & pipeline.available() & protocol::kSwitchableStages;
     NextBenchPair next(images_, options_.warmup);
+    std::optional<MapRebuilder> rebuilder;
+    if (rebuilding) rebuilder.emplace(*calibration_, board_.width(), board_.height());
     for (int i = -options_.warmup; i < options_.pairs; ++i) {
       const std::size_t k = static_cast<std::size_t>(i + options_.warmup) % images_.left.size();
       next.after(i);
+      const bool beside = rebuilder && options_.rebuild_map == "beside";
+      if (beside) rebuilder->start();
       const auto start = std::chrono::steady_clock::now();
       const firmware::FrameResult& r = pipeline.process(
           images_.left[k].view(), images_.right[k].view(),
@@ -193,8 +279,15 @@ class Bench {
           options_.rectify_ahead ? &next : nullptr);  // each pair's time holds one rectification
       if (on) on->publish(r, 0);
       const double pair = ms_since(start);
-      show(threads, outputs ? "epipole with outputs" : "epipole", i);
+      if (rebuilder && !beside) rebuilder->start();
+      const double rebuild = rebuilder ? rebuilder->wait() : 0;
+      show(threads,
+           outputs      ? "epipole with outputs"
+           : rebuilding ? "epipole with a map rebuilt"
+                        : "epipole",
+           i);
       if (i < 0) continue;
+      if (rebuilder) times.rebuild_ms.push_back(rebuild);
       std::array<double, protocol::kStageCount> ms{};
       for (std::size_t s = 0; s < ms.size(); ++s) ms[s] = static_cast<double>(r.times[s]) / 1e6;
       times.add(ms, pair);
@@ -270,6 +363,7 @@ class Bench {
     nlohmann::json out = {{"stages", stages},
                           {"pair", json(summarize(t.pair_ms))},
                           {"pairs_per_second", t.pairs_per_second()}};
+    if (!t.rebuild_ms.empty()) out["map_rebuild"] = json(summarize(t.rebuild_ms));
     for (const firmware::OutputReport& o : t.outputs) {
       out["outputs"][o.name] = {
           {"delivered", o.delivered},
@@ -357,6 +451,17 @@ void print_table(const nlohmann::json& b) {
             o["failures"].get<unsigned long long>());
       }
     }
+    if (all_sides.contains("epipole_rebuilding")) {
+      const nlohmann::json& with = all_sides["epipole_rebuilding"];
+      std::printf(
+          "  a map rebuilt %s each pair: pair %.2f / %.2f ms (%.0f %% of without), the "
+          "rebuild %.2f / %.2f ms\n",
+          with["rebuild_map"].get<std::string>().c_str(), with["pair"]["p50_ms"].get<double>(),
+          with["pair"]["p99_ms"].get<double>(),
+          100.0 * with["pair"]["p50_ms"].get<double>() /
+              run["epipole"]["pair"]["p50_ms"].get<double>(),
+          with["map_rebuild"]["p50_ms"].get<double>(), with["map_rebuild"]["p99_ms"].get<double>());
+    }
   }
 }
 
@@ -420,6 +525,12 @@ void add_bench_options(CLI::App& command, BenchOptions& options) {
                   "(MODE_SGBM)")
       ->check(CLI::IsMember({"3way", "default"}))
       ->capture_default_str();
+  cmd->add_option("--rebuild-map", options.rebuild_map,
+                  "Also run the pairs with the right rectification map rebuilt for each on a "
+                  "thread of its own, as a correction of the rig does: beside the pair (the "
+                  "pairs' times with it) or after it (the rebuild's own time; exact "
+                  "instruction counts)")
+      ->check(CLI::IsMember({"beside", "after"}));
   cmd->add_flag("--json", options.json, "Print the figures as JSON");
 }
 

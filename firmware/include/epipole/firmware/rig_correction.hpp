@@ -75,6 +75,8 @@ class RigCorrection {
     const int state = state_.load(std::memory_order_acquire);
     return state == kRequested || state == kReady;
   }
+  // A rebuilt map waits for install() (the next pair's rectification).
+  bool map_ready() const { return state_.load(std::memory_order_acquire) == kReady; }
   // The rows' median offset before and (predicted) after the correction last started.
   double offset_before_px() const { return before_px_; }
   double offset_after_px() const { return after_px_; }

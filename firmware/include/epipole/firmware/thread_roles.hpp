@@ -15,7 +15,8 @@ enum class ThreadRole {
   trigger,   // the trigger line (a master fires its pulses from it): SCHED_FIFO P + 2
   snapshot,  // snapshot files: normal scheduling
   output,    // an output's own work (a recording, a network): normal scheduling
-  maps,      // rectification maps rebuilt for a corrected rig: normal scheduling
+  maps,      // rectification maps rebuilt for a corrected rig: SCHED_IDLE, in the time the
+             // pairs leave (never delaying one), whatever the board asks
 };
 
 const char* thread_name(ThreadRole role);  // "epipole-work", ... (top -H, /proc/PID/task)

@@ -33,6 +33,11 @@ struct BenchOptions {
   bool epipole = true;  // false: OpenCV's side only (--opencv-only: one side's instruction count)
   bool opencv = true;
   std::string opencv_sgbm = "3way";  // OpenCV's SGM: StereoSGBM's mode, 3way or default
+  // The pairs again with the right rectification map rebuilt for each, as a correction of the
+  // rig does on the firmware's maps thread: "beside" the pair (do pairs slow down?), or "after"
+  // it, waited for (the rebuild's own time, and exact instruction counts under qemu: the two
+  // threads never run at once). Empty: not.
+  std::string rebuild_map;
   bool json = false;
 };
 
