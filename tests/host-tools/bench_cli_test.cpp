@@ -128,10 +128,35 @@ TEST_F(BenchCli, TableAndImagesForABoardWithoutScenes) {
   EXPECT_TRUE(b["runs"][0]["epipole"]["stages"].contains("disparity"));
 }
 
+// A correction's map rebuild, beside each pair or after it: timed apart, the pairs' times beside.
+TEST_F(BenchCli, AMapRebuiltBesideOrAfterEachPairIsTimedApart) {
+  for (const std::string mode : {"beside", "after"}) {
+    const auto r = run_tool("bench " + board("sim") +
+                            " --scene faces --stages rectify -n 2 --warmup 0 --threads 1 "
+                            "--no-opencv --json --rebuild-map " +
+                            mode);
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const auto run = nlohmann::json::parse(r.out)["runs"][0];
+    ASSERT_TRUE(run.contains("epipole_rebuilding")) << run.dump(2);
+    const auto& with = run["epipole_rebuilding"];
+    EXPECT_EQ(with["rebuild_map"], mode);
+    EXPECT_GT(with["map_rebuild"]["p50_ms"].get<double>(), 0) << with.dump(2);
+    EXPECT_GT(with["pair"]["p50_ms"].get<double>(), 0);
+    EXPECT_TRUE(with["stages"].contains("rectify"));
+    EXPECT_FALSE(run["epipole"].contains("map_rebuild")) << "only the run with it";
+  }
+  const auto table = run_tool("bench " + board("sim") +
+                              " --scene faces --stages rectify -n 1 --warmup 0 --threads 1 "
+                              "--no-opencv --rebuild-map after");
+  ASSERT_EQ(table.exit_code, 0) << table.out;
+  EXPECT_NE(table.out.find("a map rebuilt after each pair"), std::string::npos) << table.out;
+}
+
 TEST_F(BenchCli, BadArgumentsAreUsageErrorsAndBadInputOneLine) {
   for (const std::string& args :
        {std::string("--threads 0"), std::string("--threads 1,x"), std::string("-n 0"),
-        std::string("--left nowhere.png"), std::string("--left nowhere.png --right nowhere.png")}) {
+        std::string("--rebuild-map sideways"), std::string("--left nowhere.png"),
+        std::string("--left nowhere.png --right nowhere.png")}) {
     const auto r = run_tool("bench " + board("sim") + " " + args);
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.out;
   }
