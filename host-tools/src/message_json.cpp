@@ -81,6 +81,20 @@ nlohmann::json to_json(const DecodedMessage& decoded) {
   return out;
 }
 
+namespace {
+
+// A text from the wire as JSON can carry it: bytes outside printable ASCII (a flight
+// controller's own STATUSTEXT may hold any) become '?'.
+std::string printable(const char* text) {
+  std::string out(text);
+  for (char& c : out) {
+    if (c < 0x20 || c > 0x7e) c = '?';
+  }
+  return out;
+}
+
+}  // namespace
+
 nlohmann::json to_json(const mavlink::Frame& frame) {
   nlohmann::json out = {{"seq", frame.sequence},
                         {"type", "unknown"},
@@ -116,12 +130,12 @@ nlohmann::json to_json(const mavlink::Frame& frame) {
   } else if (const auto v = mavlink::decode_named_value_float(frame)) {
     out["type"] = "named_value_float";
     out["time_boot_ms"] = v->time_boot_ms;
-    out["name"] = v->name.data();
+    out["name"] = printable(v->name.data());
     out["value"] = v->value;
   } else if (const auto t = mavlink::decode_status_text(frame)) {
     out["type"] = "statustext";
     out["severity"] = t->severity;
-    out["text"] = t->text.data();
+    out["text"] = printable(t->text.data());
   }
   return out;
 }

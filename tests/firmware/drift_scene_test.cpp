@@ -18,7 +18,7 @@
 #include "epipole/firmware/pipeline.hpp"
 #include "epipole/firmware/rig_correction.hpp"
 #include "epipole/vision/disparity_quality.hpp"
-#include "map_rebuild_wait.hpp"
+#include "maps_thread_wait.hpp"
 #include "sim/sim_scene.hpp"
 #include "sim/sim_settings.hpp"
 #include "test_data.hpp"
@@ -201,7 +201,7 @@ CorrectedRun run_corrected(const std::string& name, const std::string& drift, in
     const FrameResult& r = pipeline.process(images.left[k].view(), images.right[k].view(),
                                             static_cast<std::uint32_t>(i), 0, config.stages);
     if (r.drift && correction.consider(*r.drift) == RigCorrection::Outcome::started) ++run.started;
-    EXPECT_TRUE(test::wait_for_rebuilt_map(correction));
+    EXPECT_TRUE(test::wait_for_maps_thread(correction));
     if (i + 1 < pairs) continue;
     run.last = r.calibration_health.value_or(calib::HealthFigure{});
     run.drift = r.drift.value_or(calib::DriftEstimate{});

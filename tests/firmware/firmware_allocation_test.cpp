@@ -16,7 +16,7 @@
 #include "board_scene.hpp"
 #include "epipole/firmware/firmware.hpp"
 #include "foxglove_socket.hpp"
-#include "map_rebuild_wait.hpp"
+#include "maps_thread_wait.hpp"
 #include "sim_rig.hpp"
 #include "termios/termios_serial.hpp"
 
@@ -212,7 +212,7 @@ TEST(FirmwareAllocations, CorrectingADriftedRigAllocatesNothing) {
     const FrameResult& r =
         pipeline.process(images.left[0].view(), images.right[0].view(), i, 0, config.stages);
     if (r.drift) correction.consider(*r.drift);
-    EXPECT_TRUE(test::wait_for_rebuilt_map(correction));
+    EXPECT_TRUE(test::wait_for_maps_thread(correction));
   }
   EXPECT_GE(correction.corrections(), 1);
   EXPECT_EQ(test::allocations_in_all_threads() - before, 0u);

@@ -26,7 +26,7 @@
 #include "epipole/firmware/firmware.hpp"
 #include "epipole/hal/serial_port.hpp"
 #include "error_of.hpp"
-#include "map_rebuild_wait.hpp"
+#include "maps_thread_wait.hpp"
 #include "sim_rig.hpp"
 #include "termios/termios_serial.hpp"
 #include "test_paths.hpp"
@@ -1186,6 +1186,9 @@ TEST(FrameLoop, RecalibrateAndSaveCalibrationAreAnsweredWithTheirResult) {
     return c;
   });
   Recorder recorder;
+  recorder.also = [&](const FrameResult&) {  // the file written (threads.maps: idle here)
+    EXPECT_TRUE(test::wait_for_maps_thread(*linked.fw->pipeline().rig_correction()));
+  };
   send_at(recorder, linked, 0, {protocol::Recalibrate{}}, 1);
   send_at(recorder, linked, 20, {protocol::Recalibrate{}, protocol::SaveCalibration{}}, 2);
   linked.fw->frame_loop().set_observer(&recorder);
@@ -1238,7 +1241,7 @@ TEST(FrameLoop, RecalibrateCorrectsADriftedRigAndIsAnsweredOnceInPlace) {
   LinkedRig linked(drifted_faces, 0);
   Recorder recorder;
   recorder.also = [&](const FrameResult&) {
-    EXPECT_TRUE(test::wait_for_rebuilt_map(*linked.fw->pipeline().rig_correction()));
+    EXPECT_TRUE(test::wait_for_maps_thread(*linked.fw->pipeline().rig_correction()));
   };
   // After the first health message (15 pairs a second).
   send_at(recorder, linked, 20, {protocol::Recalibrate{}, protocol::Recalibrate{}}, 1);

@@ -236,6 +236,27 @@ TEST(Mavlink, StatusTextBytes) {
   EXPECT_STREQ(t->text.data(), "hello");
   EXPECT_EQ(t->id, 0);
 
+  // A chunked text as another sender writes it (the extensions set, 50 characters: no NUL).
+  std::vector<std::uint8_t> chunked = {0xFD, 54, 0, 0, 11, 1, 1, 253, 0, 0, 2};
+  for (int i = 0; i < 50; ++i) chunked.push_back(static_cast<std::uint8_t>('a' + i % 26));
+  chunked.insert(chunked.end(), {0x34, 0x12, 7});
+  const std::uint16_t chunked_crc = frame_checksum(
+      [&] {
+        std::vector<std::uint8_t> with_room = chunked;
+        with_room.resize(chunked.size() + 2);
+        return with_room;
+      }(),
+      83);
+  chunked.push_back(static_cast<std::uint8_t>(chunked_crc));
+  chunked.push_back(static_cast<std::uint8_t>(chunked_crc >> 8));
+  const auto c = decode_status_text(*parse_frame(chunked));
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->severity, 2);
+  EXPECT_EQ(std::string(c->text.data()).size(), 50u);
+  EXPECT_EQ(c->text[49], 'a' + 49 % 26);
+  EXPECT_EQ(c->id, 0x1234);
+  EXPECT_EQ(c->chunk_seq, 7);
+
   const std::string long_text(60, 'x');
   std::vector<std::uint8_t> cut(kMaxFrameSize);
   cut.resize(encode_status_text(Severity::notice, long_text, {1, 196}, 10, cut));

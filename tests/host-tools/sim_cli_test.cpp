@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -317,7 +318,7 @@ calibration_health: {online_correction: true}
 )");
   std::ofstream(board / "board.yaml") << yaml;
 
-  const int frames = 60;
+  const int frames = 75;  // 5 s: the correction after 20 pairs, heartbeats after it
   const fs::path out = fs::path(::testing::TempDir()) / "sim-mavlink-drift-out";
   const auto r = run_tool("sim --board '" + board.string() + "' --scene drifted --frames " +
                           std::to_string(frames) + " --pictures 0 --out '" + out.string() + "'");
@@ -330,7 +331,7 @@ calibration_health: {online_correction: true}
   EXPECT_EQ(got["crc_errors"], 0);
   EXPECT_EQ(got["invalid"], 0);
   EXPECT_EQ(got["unknown"], 0);
-  int distances = 0, heartbeats = 0, texts = 0;
+  int distances = 0, heartbeats = 0, texts = 0, heartbeats_after = 0;
   std::vector<std::map<std::string, double>> values(1);  // by heartbeat: name -> value
   bool corrected = false;
   std::map<std::string, double> before;  // the last figures before the correction was said
@@ -351,11 +352,18 @@ calibration_health: {online_correction: true}
     if (m["name"] == "STATUSTEXT") {
       ++texts;
       EXPECT_EQ(f["severity"], 5) << "MAV_SEVERITY_NOTICE";
-      EXPECT_TRUE(f["text"].get<std::string>().starts_with("epipole: rig corrected, pitch +0.3"))
-          << f["text"];
+      const std::string text = f["text"];
+      double pitch = 0, roll = 0;
+      EXPECT_EQ(
+          std::sscanf(text.c_str(), "epipole: rig corrected, pitch %lf roll %lf", &pitch, &roll), 2)
+          << text;
+      EXPECT_NEAR(pitch, 0.3, 0.03) << text;
+      EXPECT_NEAR(roll, 0.2, 0.03) << text;
       corrected = true;
       before = values.back();
+      heartbeats_after = 0;
     }
+    if (m["name"] == "HEARTBEAT" && corrected) ++heartbeats_after;
   }
   EXPECT_EQ(distances, frames);
   EXPECT_GE(heartbeats, 3);
@@ -369,6 +377,7 @@ calibration_health: {online_correction: true}
   EXPECT_NEAR(before["rig_roll"], 0.2, 0.03);
   EXPECT_EQ(before["rig_corr"], 0);
   // After: the last heartbeat's figures say the rig is corrected and its rows are straight.
+  ASSERT_GE(heartbeats_after, 1) << "a heartbeat's figures after the correction";
   std::map<std::string, double>& after = values.back();
   ASSERT_TRUE(after.count("rig_rows") && after.count("rig_corr")) << read.out;
   EXPECT_LT(std::abs(after["rig_rows"]), 0.1);

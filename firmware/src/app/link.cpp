@@ -93,32 +93,40 @@ bool Link::publish(const protocol::Message& message) {
   return enqueue({encode_buffer_.data(), n}, is_essential(message));
 }
 
+// A MAVLink frame's sequence number counts the frames sent: one dropped here (the link's
+// budget) is not a frame lost on the wire.
+bool Link::enqueue_mavlink(std::span<const std::uint8_t> frame, bool essential) {
+  const bool queued = enqueue(frame, essential);
+  if (queued) ++mavlink_sequence_;
+  return queued;
+}
+
 bool Link::publish_heartbeat(std::uint8_t system_status) {
   if (config_.protocol != LinkProtocol::mavlink) return false;
-  const std::size_t n = mavlink::encode_heartbeat(config_.identity, mavlink_sequence_++,
-                                                  encode_buffer_, system_status);
-  return enqueue({encode_buffer_.data(), n}, true);
+  const std::size_t n =
+      mavlink::encode_heartbeat(config_.identity, mavlink_sequence_, encode_buffer_, system_status);
+  return enqueue_mavlink({encode_buffer_.data(), n}, true);
 }
 
 bool Link::publish_obstacle_distance(const mavlink::ObstacleDistance& message) {
   if (config_.protocol != LinkProtocol::mavlink) return false;
   const std::size_t n = mavlink::encode_obstacle_distance(message, config_.identity,
-                                                          mavlink_sequence_++, encode_buffer_);
-  return enqueue({encode_buffer_.data(), n}, true);
+                                                          mavlink_sequence_, encode_buffer_);
+  return enqueue_mavlink({encode_buffer_.data(), n}, true);
 }
 
 bool Link::publish_named_value(std::string_view name, float value, std::uint32_t time_boot_ms) {
   if (config_.protocol != LinkProtocol::mavlink) return false;
   const std::size_t n = mavlink::encode_named_value_float(
-      name, value, time_boot_ms, config_.identity, mavlink_sequence_++, encode_buffer_);
-  return enqueue({encode_buffer_.data(), n}, false);
+      name, value, time_boot_ms, config_.identity, mavlink_sequence_, encode_buffer_);
+  return enqueue_mavlink({encode_buffer_.data(), n}, false);
 }
 
 bool Link::publish_status_text(mavlink::Severity severity, std::string_view text) {
   if (config_.protocol != LinkProtocol::mavlink) return false;
   const std::size_t n = mavlink::encode_status_text(severity, text, config_.identity,
-                                                    mavlink_sequence_++, encode_buffer_);
-  return enqueue({encode_buffer_.data(), n}, true);
+                                                    mavlink_sequence_, encode_buffer_);
+  return enqueue_mavlink({encode_buffer_.data(), n}, true);
 }
 
 bool Link::next_command(Command& out) {

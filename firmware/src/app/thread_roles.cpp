@@ -15,7 +15,10 @@ namespace epipole::firmware {
 
 namespace {
 std::atomic<int> g_base{0};
-std::atomic<bool> g_said{false};
+// Each kind of problem said once for the whole process: the maps thread's (SCHED_IDLE), then the
+// real-time threads' (SCHED_FIFO), which one cannot hide the other.
+std::atomic<bool> g_said_idle{false};
+std::atomic<bool> g_said_realtime{false};
 }  // namespace
 
 const char* thread_name(ThreadRole role) {
@@ -74,8 +77,9 @@ std::string schedule(ThreadRole role) {
              " (the service needs CAP_SYS_NICE or an rtprio limit)");
 }
 
-void say_once(const std::string& problem) {
-  if (!problem.empty() && !g_said.exchange(true)) {
+void say_once(ThreadRole role, const std::string& problem) {
+  std::atomic<bool>& said = role == ThreadRole::maps ? g_said_idle : g_said_realtime;
+  if (!problem.empty() && !said.exchange(true)) {
     journal(Priority::warning, "warning: %s", problem.c_str());
   }
 }
@@ -88,7 +92,11 @@ std::string enter_thread_role(ThreadRole role) {
 }
 
 void enter_thread_role_or_say(ThreadRole role) {
-  say_once(enter_thread_role(role));
+  say_once(role, enter_thread_role(role));
+}
+
+void name_thread(ThreadRole role) {
+  pthread_setname_np(pthread_self(), thread_name(role));
 }
 
 ScopedThreadRole::ScopedThreadRole(ThreadRole role) {
@@ -98,7 +106,7 @@ ScopedThreadRole::ScopedThreadRole(ThreadRole role) {
   if (policy < 0 || sched_getparam(0, &param) != 0) return;
   policy_ = policy;
   priority_ = param.sched_priority;
-  say_once(schedule(role));
+  say_once(role, schedule(role));
 }
 
 ScopedThreadRole::~ScopedThreadRole() {

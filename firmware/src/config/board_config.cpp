@@ -395,7 +395,7 @@ class BoardReader {
 
   void read_threads(const YAML::Node& root, BoardConfig& c) {
     const YAML::Node n =
-        section(root, "threads", {"count", "affinity", "realtime_priority", "lock_memory"});
+        section(root, "threads", {"count", "affinity", "realtime_priority", "lock_memory", "maps"});
     int count = 0;  // not given: as many as the CPUs the firmware may run on
     integer(n, "threads", "count", count, 1, 64);
     if (n.IsDefined()) {
@@ -410,6 +410,13 @@ class BoardReader {
     }
     integer(n, "threads", "realtime_priority", c.threads.realtime_priority, 0, 99);
     boolean(n, "threads", "lock_memory", c.threads.lock_memory);
+    if (n.IsDefined()) {
+      f_.if_present(n, "threads", "maps", [&](const YAML::Node& v, const std::string& k) {
+        const std::string value = f_.text(v, k);
+        if (value != "idle" && value != "normal") f_.fail(k, "must be idle or normal");
+        c.threads.maps_idle = value == "idle";
+      });
+    }
     const std::set<int> listed(c.threads.affinity.begin(), c.threads.affinity.end());
     const int cpus = listed.empty() ? usable_cpus() : static_cast<int>(listed.size());
     c.threads.count = count != 0 ? count : std::clamp(cpus, 1, 64);

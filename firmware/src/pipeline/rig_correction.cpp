@@ -35,14 +35,14 @@ RigCorrection::RigCorrection(const calib::StereoCalibration& rig, const BoardCon
       pending_right_(rig.right),
       spare_(rig.width, rig.height),
       corrected_file_(corrected_file_of(board_calibration_file(board))),
+      idle_priority_(board.threads.maps_idle),
       builder_([this] { rebuild_maps(); }) {}
 
 RigCorrection::~RigCorrection() {
-  {
-    const std::lock_guard lock(mutex_);
-    stopping_ = true;
-  }
-  wake_.notify_one();
+  // A rebuild or a write under way finishes (the thread cannot be stopped inside one), then the
+  // thread sees the stop instead of storing its result.
+  state_.store(kStopping, std::memory_order_release);
+  state_.notify_all();
   builder_.join();
 }
 
@@ -75,11 +75,10 @@ RigCorrection::Outcome RigCorrection::decide(const calib::DriftEstimate& e, int 
   pending_right_.rectification = rig_.right.rectification * turn;
   before_px_ = e.median_offset_px;
   after_px_ = e.median_corrected_px;
-  {
-    const std::lock_guard lock(mutex_);
-    state_.store(kRequested, std::memory_order_release);
-  }
-  wake_.notify_one();
+  // No lock is shared with the maps thread: at its low priority it could hold one while the
+  // frame loop waits for it (an inversion of their priorities).
+  state_.store(kRequested, std::memory_order_release);
+  state_.notify_one();
   return Outcome::started;
 }
 
@@ -102,10 +101,7 @@ bool RigCorrection::request_save() {
   if (!state_.compare_exchange_strong(idle, kSaveRequested, std::memory_order_acq_rel)) {
     return false;
   }
-  {
-    const std::lock_guard lock(mutex_);  // the thread sees the request once it waits again
-  }
-  wake_.notify_one();
+  state_.notify_one();
   return true;
 }
 
@@ -119,18 +115,20 @@ std::optional<bool> RigCorrection::saved() {
 // The thread: each request's map into the spare, then ready for install(); or the rig in use
 // written (no install can change it meanwhile: the state is not idle).
 void RigCorrection::rebuild_maps() {
-  enter_thread_role_or_say(ThreadRole::maps);
-  std::unique_lock lock(mutex_);
+  if (idle_priority_) {
+    enter_thread_role_or_say(ThreadRole::maps);
+  } else {
+    name_thread(ThreadRole::maps);
+  }
   for (;;) {
-    wake_.wait(lock, [&] {
-      const int state = state_.load();
-      return stopping_ || state == kRequested || state == kSaveRequested;
-    });
-    if (stopping_) return;
-    const bool save = state_.load() == kSaveRequested;
-    lock.unlock();
+    int state = state_.load(std::memory_order_acquire);
+    while (state != kRequested && state != kSaveRequested && state != kStopping) {
+      state_.wait(state, std::memory_order_acquire);
+      state = state_.load(std::memory_order_acquire);
+    }
+    if (state == kStopping) return;
     int done = kReady;
-    if (save) {
+    if (state == kSaveRequested) {
       try {
         calib::StereoCalibration corrected = rig_;
         corrected.date = calib::utc_now();
@@ -144,8 +142,8 @@ void RigCorrection::rebuild_maps() {
     } else {
       calib::fill_fixed_point_map(pending_right_, spare_.xy(), spare_.fractions());
     }
-    lock.lock();
-    state_.store(done, std::memory_order_release);
+    // Unless the destructor asked for the stop meanwhile.
+    if (!state_.compare_exchange_strong(state, done, std::memory_order_acq_rel)) return;
   }
 }
 

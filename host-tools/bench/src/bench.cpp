@@ -110,13 +110,15 @@ class NextBenchPair final : public firmware::NextPair {
 };
 
 // The right rectification map rebuilt on a thread of its own, as a correction of the rig does
-// (firmware::RigCorrection's maps thread, SCHED_IDLE: calib::fill_fixed_point_map into a map made
-// at start-up), for the right camera turned 0.3 degrees of pitch and 0.2 of roll. Its time is
-// from the request to the map done: the time the pairs left it, as in the firmware.
+// (firmware::RigCorrection's maps thread, at SCHED_IDLE unless the board's threads.maps says
+// normal: calib::fill_fixed_point_map into a map made at start-up), for the right camera turned 0.3
+// degrees of pitch and 0.2 of roll. Its time is from the request to the map done: the time the
+// pairs left it, as in the firmware.
 class MapRebuilder {
  public:
-  MapRebuilder(const calib::StereoCalibration& rig, int width, int height)
-      : right_(calib::with_right_camera_turned(
+  MapRebuilder(const calib::StereoCalibration& rig, int width, int height, bool idle)
+      : idle_(idle),
+        right_(calib::with_right_camera_turned(
                    rig, calib::turn_rotation({radians(0.3), radians(0.2), 0}))
                    .right),
         map_(width, height),
@@ -149,7 +151,11 @@ class MapRebuilder {
 
  private:
   void run() {
-    firmware::enter_thread_role(firmware::ThreadRole::maps);
+    if (idle_) {
+      firmware::enter_thread_role(firmware::ThreadRole::maps);
+    } else {
+      firmware::name_thread(firmware::ThreadRole::maps);
+    }
     std::unique_lock lock(mutex_);
     for (;;) {
       wake_.wait(lock, [&] { return stopping_ || requested_; });
@@ -167,6 +173,7 @@ class MapRebuilder {
     }
   }
 
+  bool idle_;  // the board's threads.maps
   calib::CameraCalibration right_;
   vision::RemapMap map_;
   std::mutex mutex_;
@@ -204,6 +211,10 @@ class Bench {
     }
     images_ = bench_images(options, board_);
     calibration_ = firmware::load_board_calibration(board_);
+    if (!options.rebuild_map.empty()) {
+      require(options.epipole, "--rebuild-map times Epipole's side: not with --opencv-only");
+      require(calibration_.has_value(), "--rebuild-map: the board has no calibration");
+    }
   }
 
   nlohmann::json run() {
@@ -220,7 +231,6 @@ class Bench {
         // with them on, side by side.
         if (!board_.outputs.empty()) run["epipole_outputs"] = summary(epipole(threads, true));
         if (!options_.rebuild_map.empty()) {
-          require(calibration_.has_value(), "--rebuild-map: the board has no calibration");
           run["epipole_rebuilding"] = summary(epipole(threads, false, true));
           run["epipole_rebuilding"]["rebuild_map"] = options_.rebuild_map;
         }
@@ -266,7 +276,9 @@ class Bench {
     times.stages = board_.stages & pipeline.available() & protocol::kSwitchableStages;
     NextBenchPair next(images_, options_.warmup);
     std::optional<MapRebuilder> rebuilder;
-    if (rebuilding) rebuilder.emplace(*calibration_, board_.width(), board_.height());
+    if (rebuilding) {
+      rebuilder.emplace(*calibration_, board_.width(), board_.height(), board_.threads.maps_idle);
+    }
     for (int i = -options_.warmup; i < options_.pairs; ++i) {
       const std::size_t k = static_cast<std::size_t>(i + options_.warmup) % images_.left.size();
       next.after(i);

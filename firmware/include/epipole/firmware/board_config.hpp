@@ -144,6 +144,9 @@ struct BoardConfig {
     std::vector<int> affinity;  // CPUs for the frame loop and its workers; empty: any
     int realtime_priority = 0;  // SCHED_FIFO priority 1..99; 0: normal scheduling
     bool lock_memory = false;   // mlockall after start-up
+    // The maps thread (a corrected rig's map rebuilt) at SCHED_IDLE, in the time the pairs leave
+    // (`maps: idle`), or at the scheduling threads start with (`maps: normal`).
+    bool maps_idle = true;
   } threads;
 
   std::optional<std::size_t> memory_budget_bytes;  // start-up fails above it

@@ -102,6 +102,7 @@ class Link {
   // An essential message (link_budget.hpp) may take the whole budget; the others leave the
   // reserve for the essential ones.
   bool enqueue(std::span<const std::uint8_t> frame, bool essential);
+  bool enqueue_mavlink(std::span<const std::uint8_t> frame, bool essential);
   bool within_budget(std::size_t bytes, double reserve);
   void run();
   bool write_front();

@@ -5,10 +5,8 @@
 // by rebuilding the right camera's rectification map on a thread of its own, the new map taking
 // the old one's place between two pairs.
 #include <atomic>
-#include <condition_variable>
 #include <cstdint>
 #include <filesystem>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -77,13 +75,18 @@ class RigCorrection {
   }
   // A rebuilt map waits for install() (the next pair's rectification).
   bool map_ready() const { return state_.load(std::memory_order_acquire) == kReady; }
+  // The maps thread has a map to rebuild or a file to write, not done yet.
+  bool busy() const {
+    const int state = state_.load(std::memory_order_acquire);
+    return state == kRequested || state == kSaveRequested;
+  }
   // The rows' median offset before and (predicted) after the correction last started.
   double offset_before_px() const { return before_px_; }
   double offset_after_px() const { return after_px_; }
   std::size_t working_set_bytes() const { return spare_.size_bytes(); }
 
  private:
-  enum State : int { kIdle, kRequested, kReady, kSaveRequested, kSaved, kSaveFailed };
+  enum State : int { kIdle, kRequested, kReady, kSaveRequested, kSaved, kSaveFailed, kStopping };
   Outcome decide(const calib::DriftEstimate& estimate, int min_pairs);
   void rebuild_maps();
 
@@ -100,10 +103,9 @@ class RigCorrection {
   std::uint32_t generation_ = 0;
   std::filesystem::path corrected_file_;
   std::string save_error_;  // the thread's, read once saved() said false
+  bool idle_priority_;      // threads.maps: SCHED_IDLE, or the scheduling it starts with
+  // The frame loop and the maps thread hand work over by this alone (C++20 wait and notify).
   std::atomic<int> state_{kIdle};
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  bool stopping_ = false;
   std::thread builder_;
 };
 

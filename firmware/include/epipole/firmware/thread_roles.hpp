@@ -34,6 +34,8 @@ std::string enter_thread_role(ThreadRole role);
 
 // Calls enter_thread_role() and says a problem in the journal, once for the whole process.
 void enter_thread_role_or_say(ThreadRole role);
+// Names the calling thread after its role only; its scheduling stays as it is.
+void name_thread(ThreadRole role);
 
 // The calling thread (the frame loop's: the process's main thread, whose name is the program's)
 // scheduled as `role` for the object's life, unnamed; its scheduling as it was afterwards.
