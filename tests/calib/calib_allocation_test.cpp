@@ -5,7 +5,9 @@
 
 #include "allocation_counter.hpp"
 #include "epipole/calib/health.hpp"
+#include "epipole/calib/stereo_motion.hpp"
 #include "epipole/calib/triangulation.hpp"
+#include "motion_scenes.hpp"
 #include "sample_calibration.hpp"
 
 namespace epipole::calib {
@@ -50,6 +52,23 @@ TEST(CalibAllocations, HealthFigureAllocatesNothingPerFrame) {
   }
   EXPECT_EQ(counter.count(), 0u);
   EXPECT_GT(sink, 0.0);
+}
+
+TEST(CalibAllocations, StereoMotionAllocatesNothingPerPair) {
+  StereoMotionEstimator estimator(test::motion_rig(), {});
+  SplitMix64 random(9);
+  std::vector<test::MotionScene> scenes;
+  for (int i = 0; i < 10; ++i) {
+    const RigidMotion step{test::random_turn(random, 3), Eigen::Vector3d(0.02, 0, -0.07)};
+    scenes.push_back(test::motion_scene(random, step, 500, 0.4, 0.25));
+  }
+  int valid = 0;
+  const test::AllocationCounter counter;
+  for (const test::MotionScene& s : scenes) {
+    valid += estimator.estimate(s.matches, RigidMotion{}).valid ? 1 : 0;
+  }
+  EXPECT_EQ(counter.count(), 0u);
+  EXPECT_EQ(valid, 10);
 }
 
 }  // namespace

@@ -81,9 +81,9 @@ TEST(PairMessages, DetectionsCarryTheirDepthInMillimetres) {
 TEST(PairMessages, PointsAreTheBestMatchesInMillimetresAndSixteenthsOfAPixel) {
   FrameResult r = nothing_ran(3, 0);
   std::vector<SparsePoint> points(3);
-  points[0] = {10.5f, 20.25f, 0, 0, 4.0f, 0.1234f, -0.5f, 2.0f, 9};
-  points[1] = {1.0f, 2.0f, 0, 0, 4.0f, 3e6f, -3e6f, 1.2506f, 1};
-  points[2] = {0.03f, 0.0f, 0, 0, 4.0f, 0, 0, 1, 5};
+  points[0] = {10.5f, 20.25f, 0, 0, 4.0f, 0.1234f, -0.5f, 2.0f, 9, -1};
+  points[1] = {1.0f, 2.0f, 0, 0, 4.0f, 3e6f, -3e6f, 1.2506f, 1, -1};
+  points[2] = {0.03f, 0.0f, 0, 0, 4.0f, 0, 0, 1, 5, -1};
   const std::vector<std::uint32_t> best{1, 0};
   r.points = points;
   r.best_points = best;

@@ -323,8 +323,15 @@ int SparseStereoMatcher::collect(GrayView left, GrayView right, int tolerance,
     kernels::hamming_ref(left_.descriptors.data() + ui * kDescriptorBytes,
                          right_.descriptors.data() + uj * kDescriptorBytes, 1, distances_.data());
     m.distance = distances_[0];
+    m.left_feature = i;
   }
   return count;
+}
+
+DescribedCorners SparseStereoMatcher::left_features() const {
+  const auto n = static_cast<std::size_t>(left_.count);
+  return {std::span(left_.x).first(n), std::span(left_.y).first(n), std::span(left_.row_start),
+          std::span(left_.descriptors).first(n * kDescriptorBytes)};
 }
 
 }  // namespace epipole::vision

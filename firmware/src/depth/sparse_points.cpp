@@ -23,7 +23,8 @@ std::size_t triangulate_matches(const calib::Triangulator& triangulator,
                 static_cast<float>(p.x()),
                 static_cast<float>(p.y()),
                 static_cast<float>(p.z()),
-                m.distance};
+                m.distance,
+                m.left_feature};
   }
   return n;
 }

@@ -15,7 +15,8 @@ struct SparsePoint {
   float xr = 0, yr = 0;
   float disparity = 0;
   float x = 0, y = 0, z = 0;
-  int distance = 0;  // the match's descriptor distance: smaller is more distinctive
+  int distance = 0;       // the match's descriptor distance: smaller is more distinctive
+  int left_feature = -1;  // the match's left corner (vision::SparseMatch::left_feature)
 };
 
 // The 3-D points of sparse matches (calib::Triangulator::point at (xl, yl) with the match's

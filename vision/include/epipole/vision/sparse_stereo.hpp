@@ -29,7 +29,17 @@ struct SparseMatch {
   float xl = 0, yl = 0;
   float xr = 0, yr = 0;
   float disparity = 0;
-  int distance = 0;  // Hamming distance of the descriptors
+  int distance = 0;       // Hamming distance of the descriptors
+  int left_feature = -1;  // the left corner's index in SparseStereoMatcher::left_features()
+};
+
+// Corners with their descriptors, sorted by (y, x): row_start[y] is the first corner of row y
+// (height + 1 entries); kDescriptorBytes bytes of descriptor each, in the same order.
+struct DescribedCorners {
+  std::span<const std::int16_t> x, y;
+  std::span<const std::uint32_t> row_start;
+  std::span<const std::uint8_t> descriptors;
+  int count() const { return static_cast<int>(x.size()); }
 };
 
 // Sparse stereo: matches the corners of the left and right rectified images along the rows.
@@ -68,6 +78,11 @@ class SparseStereoMatcher {
   // vision::align_patch). The span stays valid until the next call; match()'s stays valid too.
   // Throws Error when band_rows is 0.
   std::span<const SparseMatch> match_band(GrayView left, GrayView right);
+
+  // After match(): the left corners that have a descriptor (those kBorder or more inside the
+  // image), as it prepared them; valid until the next match(). What the odometry follows from
+  // pair to pair (vision::WindowMatcher).
+  DescribedCorners left_features() const;
 
   // True when the last call ignored corners beyond max_corners or matches beyond max_matches.
   bool truncated() const { return truncated_; }

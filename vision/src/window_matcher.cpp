@@ -1,0 +1,111 @@
+#include "epipole/vision/window_matcher.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "epipole/core/error.hpp"
+#include "sparse_stereo_kernels.hpp"
+
+namespace epipole::vision {
+
+namespace {
+
+constexpr int kBits = SparseStereoMatcher::kDescriptorBytes * 8;
+
+}  // namespace
+
+WindowMatcher::WindowMatcher(const WindowMatchConfig& config, SimdPath path)
+    : config_(config), path_(path) {
+  require(config.width > 0 && config.height > 0, "window matcher: the image's size must be set");
+  require(config.max_queries >= 1 && config.max_queries <= 100000,
+          "window matcher: max_queries must be 1..100000");
+  require(config.max_corners >= 1 && config.max_corners <= 100000,
+          "window matcher: max_corners must be 1..100000");
+  require(config.radius >= 1 && config.radius <= 256, "window matcher: radius must be 1..256");
+  require(config.max_distance >= 0 && config.max_distance <= kBits,
+          "window matcher: max_distance must be 0..256");
+  require(config.ratio >= 1 && config.ratio <= 100, "window matcher: ratio must be 1..100");
+  distances_.resize(static_cast<std::size_t>(std::min(config.max_corners, config.width)));
+  holder_.resize(static_cast<std::size_t>(config.max_corners));
+  chosen_.resize(static_cast<std::size_t>(config.max_queries));
+  distance_.resize(static_cast<std::size_t>(config.max_queries));
+  matches_.resize(static_cast<std::size_t>(config.max_queries));
+}
+
+std::size_t WindowMatcher::working_set_bytes() const {
+  return sizeof(*this) + distances_.capacity() * 2 + holder_.capacity() * 4 +
+         chosen_.capacity() * 4 + distance_.capacity() * 4 +
+         matches_.capacity() * sizeof(WindowMatch);
+}
+
+std::span<const WindowMatch> WindowMatcher::match(std::span<const std::uint8_t> descriptors,
+                                                  std::span<const float> x,
+                                                  std::span<const float> y,
+                                                  const DescribedCorners& corners) {
+  constexpr std::size_t kBytes = SparseStereoMatcher::kDescriptorBytes;
+  const std::size_t queries = x.size();
+  require(y.size() == queries && descriptors.size() == queries * kBytes,
+          "window matcher: ", queries, " places but ", y.size(), " rows and ",
+          descriptors.size() / kBytes, " descriptors");
+  require(queries <= chosen_.size(), "window matcher: ", queries,
+          " queries, more than max_queries (", chosen_.size(), ")");
+  const auto count = static_cast<std::size_t>(corners.count());
+  require(count <= holder_.size(), "window matcher: ", count, " corners, more than max_corners (",
+          holder_.size(), ")");
+  require(corners.row_start.size() == static_cast<std::size_t>(config_.height) + 1 &&
+              corners.descriptors.size() == count * kBytes && corners.y.size() == count,
+          "window matcher: corners of another image size or without their descriptors");
+  std::fill_n(holder_.begin(), count, -1);
+  kernels::HammingKernel* const hamming = kernels::hamming_kernel(path_);
+  const int r = config_.radius;
+  for (std::size_t q = 0; q < queries; ++q) {
+    chosen_[q] = -1;
+    if (!std::isfinite(x[q]) || !std::isfinite(y[q])) continue;
+    const int cx = static_cast<int>(std::lround(x[q]));
+    const int cy = static_cast<int>(std::lround(y[q]));
+    if (cx < 0 || cy < 0 || cx >= config_.width || cy >= config_.height) continue;
+    const std::uint8_t* query = descriptors.data() + q * kBytes;
+    int best = -1, best_distance = kBits + 1, second = kBits + 1;
+    for (int row = std::max(0, cy - r); row <= std::min(config_.height - 1, cy + r); ++row) {
+      const auto xs = corners.x.begin();
+      const auto row_begin = xs + corners.row_start[static_cast<std::size_t>(row)];
+      const auto row_end = xs + corners.row_start[static_cast<std::size_t>(row) + 1];
+      const auto first = std::lower_bound(row_begin, row_end, static_cast<std::int16_t>(cx - r));
+      const auto last = std::upper_bound(first, row_end, static_cast<std::int16_t>(cx + r));
+      const int begin = static_cast<int>(first - xs);
+      const int n = static_cast<int>(last - first);
+      if (n == 0) continue;
+      hamming(query, corners.descriptors.data() + static_cast<std::size_t>(begin) * kBytes, n,
+              distances_.data());
+      for (int k = 0; k < n; ++k) {
+        const int d = distances_[static_cast<std::size_t>(k)];
+        if (d < best_distance) {
+          second = best_distance;
+          best_distance = d;
+          best = begin + k;
+        } else if (d < second) {
+          second = d;
+        }
+      }
+    }
+    const bool ok = best >= 0 && best_distance <= config_.max_distance &&
+                    (second > kBits || best_distance * 100 < config_.ratio * second);
+    if (!ok) continue;
+    std::int32_t& holder = holder_[static_cast<std::size_t>(best)];
+    if (holder >= 0) {
+      if (distance_[static_cast<std::size_t>(holder)] <= best_distance) continue;
+      chosen_[static_cast<std::size_t>(holder)] = -1;  // the nearer query takes it
+    }
+    holder = static_cast<std::int32_t>(q);
+    chosen_[q] = best;
+    distance_[q] = best_distance;
+  }
+  std::size_t n = 0;
+  for (std::size_t q = 0; q < queries; ++q) {
+    if (chosen_[q] < 0) continue;
+    matches_[n++] = {static_cast<int>(q), chosen_[q], distance_[q]};
+  }
+  return std::span(matches_).first(n);
+}
+
+}  // namespace epipole::vision
