@@ -10,7 +10,7 @@ namespace epipole::vision {
 
 namespace {
 
-constexpr int kBits = SparseStereoMatcher::kDescriptorBytes * 8;
+constexpr int kDescriptorBits = SparseStereoMatcher::kDescriptorBytes * 8;
 
 }  // namespace
 
@@ -22,7 +22,7 @@ WindowMatcher::WindowMatcher(const WindowMatchConfig& config, SimdPath path)
   require(config.max_corners >= 1 && config.max_corners <= 100000,
           "window matcher: max_corners must be 1..100000");
   require(config.radius >= 1 && config.radius <= 256, "window matcher: radius must be 1..256");
-  require(config.max_distance >= 0 && config.max_distance <= kBits,
+  require(config.max_distance >= 0 && config.max_distance <= kDescriptorBits,
           "window matcher: max_distance must be 0..256");
   require(config.ratio >= 1 && config.ratio <= 100, "window matcher: ratio must be 1..100");
   distances_.resize(static_cast<std::size_t>(std::min(config.max_corners, config.width)));
@@ -65,7 +65,7 @@ std::span<const WindowMatch> WindowMatcher::match(std::span<const std::uint8_t> 
     const int cy = static_cast<int>(std::lround(y[q]));
     if (cx < 0 || cy < 0 || cx >= config_.width || cy >= config_.height) continue;
     const std::uint8_t* query = descriptors.data() + q * kBytes;
-    int best = -1, best_distance = kBits + 1, second = kBits + 1;
+    int best = -1, best_distance = kDescriptorBits + 1, second = kDescriptorBits + 1;
     for (int row = std::max(0, cy - r); row <= std::min(config_.height - 1, cy + r); ++row) {
       const auto xs = corners.x.begin();
       const auto row_begin = xs + corners.row_start[static_cast<std::size_t>(row)];
@@ -89,7 +89,7 @@ std::span<const WindowMatch> WindowMatcher::match(std::span<const std::uint8_t> 
       }
     }
     const bool ok = best >= 0 && best_distance <= config_.max_distance &&
-                    (second > kBits || best_distance * 100 < config_.ratio * second);
+                    (second > kDescriptorBits || best_distance * 100 < config_.ratio * second);
     if (!ok) continue;
     std::int32_t& holder = holder_[static_cast<std::size_t>(best)];
     if (holder >= 0) {
