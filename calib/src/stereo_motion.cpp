@@ -128,6 +128,7 @@ RigidMotion StereoMotionEstimator::refine(std::span<const MotionMatch> matches,
       const Residuals r = residuals(cameras_, matches[i], m);
       if (r.count == 0) {
         sum += 2 * config_.inlier_px * config_.inlier_px;  // behind: as bad as an outlier
+        used += 2;
         continue;
       }
       Eigen::Matrix<double, 3, 6> dx;
@@ -225,7 +226,10 @@ StereoMotion StereoMotionEstimator::estimate(std::span<const MotionMatch> matche
       needed = samples_needed(best_count);
     }
   }
-  if (best_count < 3) return out;
+  if (best_count < 3) {
+    std::fill_n(inlier_.begin(), matches.size(), std::uint8_t{0});
+    return out;
+  }
   // Refined on the inliers, the inliers found again with the refined motion, refined again.
   double cost = 0;
   int residual_count = 0;
@@ -233,16 +237,25 @@ StereoMotion StereoMotionEstimator::estimate(std::span<const MotionMatch> matche
   for (int round = 0; round < 2; ++round) {
     best = refine(matches, inlier_.data(), best, cost, residual_count, information);
     best_count = classify(matches, best, inlier_.data());
-    if (best_count < 3) return out;
+    if (best_count < 3) {
+      std::fill_n(inlier_.begin(), matches.size(), std::uint8_t{0});
+      return out;
+    }
   }
   out.motion = best;
   out.inliers = best_count;
   out.rms_px = residual_count > 0 ? std::sqrt(cost / residual_count) : 0;
   const double variance = residual_count > 6 ? cost / (residual_count - 6) : 0;
+  // J^T J must be invertible (every direction of the motion observed), with residuals to
+  // spare over the 6 parameters; else no motion (and no covariance) is claimed.
   const Eigen::LDLT<Matrix6d> ldlt(information);
+  const bool observed = ldlt.info() == Eigen::Success && ldlt.isPositive() &&
+                        ldlt.vectorD().minCoeff() > 1e-12 * ldlt.vectorD().maxCoeff() &&
+                        residual_count > 6;
   out.covariance = variance * ldlt.solve(Matrix6d::Identity());
-  out.valid = best_count >= config_.min_inliers && best_count >= config_.min_inlier_ratio * n &&
-              out.covariance.allFinite() && std::isfinite(out.rms_px);
+  out.valid = observed && best_count >= config_.min_inliers &&
+              best_count >= config_.min_inlier_ratio * n && out.covariance.allFinite() &&
+              std::isfinite(out.rms_px);
   return out;
 }
 

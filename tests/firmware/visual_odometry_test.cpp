@@ -256,6 +256,28 @@ TEST(VisualOdometry, ABlankStretchIsLostTrackingNotAPose) {
   EXPECT_LT((s.pose.translation + missing - truth.translation).norm(), 0.1);
 }
 
+// A pair lost mid-leg (nothing seen in it): the next step spans both periods, is followed (not
+// refused as too fast) and gives the speed driven.
+TEST(VisualOdometry, ALostPairIsSpannedByTheNextStep) {
+  SplitMix64 random(6);
+  const Room room(random, 6000);
+  VisualOdometry odometry(rig(), kW, kH, 4000, 2000, {});
+  for (int i = 0; i < 40; ++i) {
+    const double t = 0.5 + i / 15.0;  // along the first leg, at 1 m/s
+    const PairFeatures f = features_at(room, pose_at(t), random, i == 30);
+    const OdometryState& s =
+        odometry.update(static_cast<hal::Nanoseconds>(t * 1e9), f.corners(), f.points);
+    if (i == 30) {
+      EXPECT_EQ(s.status, OdometryState::Status::lost);
+      continue;
+    }
+    ASSERT_EQ(s.status, OdometryState::Status::tracking) << i;
+    if (i < 2) continue;  // the first pair has no motion yet
+    EXPECT_NEAR(s.velocity.norm(), 1.0, 0.1) << i << ": 1 m/s";
+    EXPECT_NEAR(s.velocity.z(), 1.0, 0.1) << i << ": forward";
+  }
+}
+
 TEST(VisualOdometry, APairAllocatesNothing) {
   SplitMix64 random(5);
   const Room room(random, 6000);

@@ -130,8 +130,8 @@ TEST(MotionVsOpenCV, NoFartherFromTheTruthThanSolvePnPRansac) {
   std::printf(
       "mean error over %d steps: ours %.4f deg, %.2f mm; cv::solvePnPRansac %.4f deg, %.2f mm\n",
       steps, ours_deg / steps, 1000 * ours_m / steps, theirs_deg / steps, 1000 * theirs_m / steps);
-  EXPECT_LE(ours_deg, theirs_deg * 1.1);
-  EXPECT_LE(ours_m, theirs_m * 1.1);
+  EXPECT_LE(ours_deg, theirs_deg);
+  EXPECT_LE(ours_m, theirs_m);
 }
 
 }  // namespace

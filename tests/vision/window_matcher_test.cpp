@@ -69,18 +69,24 @@ TEST(WindowMatcher, FollowsFeaturesThatMovedTheSameOnEveryPath) {
   for (const SimdPath path : available_simd_paths()) {
     WindowMatcher matcher({.width = kW, .height = kH, .radius = 16}, path);
     const auto m = matcher.match(q.descriptors, q.x, q.y, to.features);
-    int right = 0, inside = 0;
+    // Features the shift took out of the image, or near its border, are not there.
+    int inside = 0;
+    for (int i = 0; i < from.features.count(); ++i) {
+      const int x = from.features.x[static_cast<std::size_t>(i)] + 11;
+      const int y = from.features.y[static_cast<std::size_t>(i)] - 7;
+      inside += x >= 20 && x < kW - 20 && y >= 20 && y < kH - 20 ? 1 : 0;
+    }
+    int right = 0;
     std::set<int> corners;
     for (const WindowMatch& match : m) {
       const auto qi = static_cast<std::size_t>(match.query);
       const auto c = static_cast<std::size_t>(match.corner);
       const int x = from.features.x[qi] + 11, y = from.features.y[qi] - 7;
-      // Features the shift took out of the image, or near its border, are not there.
-      inside += x >= 20 && x < kW - 20 && y >= 20 && y < kH - 20 ? 1 : 0;
       right += to.features.x[c] == x && to.features.y[c] == y ? 1 : 0;
       EXPECT_TRUE(corners.insert(match.corner).second) << "a corner taken twice";
     }
-    EXPECT_GT(static_cast<int>(m.size()), from.features.count() / 2) << to_string(path);
+    // Of the features still inside the moved image, most are found again.
+    EXPECT_GT(static_cast<int>(m.size()), inside * 6 / 10) << to_string(path) << " " << inside;
     EXPECT_GE(right, static_cast<int>(m.size()) * 95 / 100) << to_string(path);
     if (path == SimdPath::reference) {
       reference.assign(m.begin(), m.end());

@@ -25,7 +25,7 @@ WindowMatcher::WindowMatcher(const WindowMatchConfig& config, SimdPath path)
   require(config.max_distance >= 0 && config.max_distance <= kDescriptorBits,
           "window matcher: max_distance must be 0..256");
   require(config.ratio >= 1 && config.ratio <= 100, "window matcher: ratio must be 1..100");
-  distances_.resize(static_cast<std::size_t>(std::min(config.max_corners, config.width)));
+  distances_.resize(static_cast<std::size_t>(config.max_corners));
   holder_.resize(static_cast<std::size_t>(config.max_corners));
   chosen_.resize(static_cast<std::size_t>(config.max_queries));
   distance_.resize(static_cast<std::size_t>(config.max_queries));
@@ -60,10 +60,13 @@ std::span<const WindowMatch> WindowMatcher::match(std::span<const std::uint8_t> 
   const int r = config_.radius;
   for (std::size_t q = 0; q < queries; ++q) {
     chosen_[q] = -1;
-    if (!std::isfinite(x[q]) || !std::isfinite(y[q])) continue;
+    // Off the image (or not a number): nothing to find; checked before rounding.
+    if (!(x[q] > -0.5f && x[q] < static_cast<float>(config_.width) - 0.5f && y[q] > -0.5f &&
+          y[q] < static_cast<float>(config_.height) - 0.5f)) {
+      continue;
+    }
     const int cx = static_cast<int>(std::lround(x[q]));
     const int cy = static_cast<int>(std::lround(y[q]));
-    if (cx < 0 || cy < 0 || cx >= config_.width || cy >= config_.height) continue;
     const std::uint8_t* query = descriptors.data() + q * kBytes;
     int best = -1, best_distance = kDescriptorBits + 1, second = kDescriptorBits + 1;
     for (int row = std::max(0, cy - r); row <= std::min(config_.height - 1, cy + r); ++row) {

@@ -91,6 +91,8 @@ void VisualOdometry::restart() {
   have_keyframe_ = false;
   pending_reset_ = true;
   twist_.setZero();
+  state_.velocity.setZero();
+  state_.angular_velocity.setZero();
   lost_pairs_ = 0;
 }
 
@@ -121,6 +123,7 @@ bool VisualOdometry::make_keyframe(const vision::DescribedCorners& left,
   }
   landmark_count_ = static_cast<int>(kept);
   have_keyframe_ = true;
+  tracked_time_ = state_.time;
   keyframe_pose_ = state_.pose;
   keyframe_covariance_ = state_.covariance;
   since_keyframe_ = {};
@@ -173,14 +176,15 @@ calib::StereoMotion VisualOdometry::follow(vision::WindowMatcher& window,
 const OdometryState& VisualOdometry::update(hal::Nanoseconds time,
                                             const vision::DescribedCorners& left,
                                             std::span<const SparsePoint> points) {
-  require(static_cast<std::size_t>(left.count()) <= right_x_.size(), "odometry: ", left.count(),
-          " corners, more than ", right_x_.size());
-  const double dt = have_time_ ? static_cast<double>(time - last_time_) / 1e9 : 0.0;
-  last_time_ = time;
-  have_time_ = true;
+  constexpr std::size_t kBytes = vision::SparseStereoMatcher::kDescriptorBytes;
+  const auto corners = static_cast<std::size_t>(left.count());
+  require(corners <= right_x_.size(), "odometry: ", corners, " corners, more than ",
+          right_x_.size());
+  require(left.y.size() == corners && left.descriptors.size() == corners * kBytes &&
+              left.row_start.size() == static_cast<std::size_t>(height_) + 1,
+          "odometry: corners of another image size or without their descriptors");
   state_.time = time;
   state_.tracked = state_.inliers = 0;
-  const auto corners = static_cast<std::size_t>(left.count());
   std::fill_n(right_x_.begin(), corners, std::numeric_limits<float>::quiet_NaN());
   for (const SparsePoint& p : points) {
     if (p.left_feature >= 0 && static_cast<std::size_t>(p.left_feature) < corners) {
@@ -197,9 +201,12 @@ const OdometryState& VisualOdometry::update(hal::Nanoseconds time,
       state_.status = state_.keyframes == 0 && !pending_reset_ ? OdometryState::Status::starting
                                                                : OdometryState::Status::lost;
       state_.quality = state_.keyframes == 0 && !pending_reset_ ? 0 : -1;
+      state_.features = 0;
     }
     return state_;
   }
+  // Since the pair the motion so far describes: over the pairs lost meanwhile too.
+  const double dt = static_cast<double>(time - tracked_time_) / 1e9;
 
   // Where the keyframe's features should be: the motion so far, and the last step's again.
   const calib::RigidMotion step{rotation_of(twist_.head<3>() * dt), twist_.tail<3>() * dt};
@@ -219,6 +226,7 @@ const OdometryState& VisualOdometry::update(hal::Nanoseconds time,
     return state_;
   }
   lost_pairs_ = 0;
+  tracked_time_ = time;
   const Eigen::Vector3d before = state_.pose.translation;
   since_keyframe_ = estimate.motion;
   state_.pose = keyframe_pose_.after(since_keyframe_.inverse());
@@ -228,12 +236,19 @@ const OdometryState& VisualOdometry::update(hal::Nanoseconds time,
     state_.velocity = (state_.pose.translation - before) / dt;
     state_.angular_velocity = -twist_.head<3>();  // the camera turns against its points
   }
-  // The motion's uncertainty, in the current camera's frame, turned into the odometry frame
-  // and added to the keyframe's (first order; docs/odometry.md).
+  // The motion's uncertainty, in the current camera's frame, turned into the odometry frame, and
+  // the keyframe's carried to the current pose: its heading's error moves the position by the
+  // lever arm from the keyframe (first order; docs/odometry.md).
   Matrix6d turn = Matrix6d::Zero();
   turn.topLeftCorner<3, 3>() = state_.pose.rotation;
   turn.bottomRightCorner<3, 3>() = state_.pose.rotation;
-  state_.covariance = keyframe_covariance_ + turn * estimate.covariance * turn.transpose();
+  const Eigen::Vector3d arm = state_.pose.translation - keyframe_pose_.translation;
+  Eigen::Matrix3d arm_cross;
+  arm_cross << 0, -arm.z(), arm.y(), arm.z(), 0, -arm.x(), -arm.y(), arm.x(), 0;
+  Matrix6d carry = Matrix6d::Identity();
+  carry.bottomLeftCorner<3, 3>() = -arm_cross;
+  state_.covariance = carry * keyframe_covariance_ * carry.transpose() +
+                      turn * estimate.covariance * turn.transpose();
   state_.status = OdometryState::Status::tracking;
   state_.quality = static_cast<int>(std::clamp(
       std::lround(100.0 * estimate.inliers / (4.0 * config_.motion.min_inliers)), 1L, 100L));

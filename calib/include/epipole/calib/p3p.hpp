@@ -27,8 +27,8 @@ struct RigidMotion {
 // Haralick, Lee, Ottenberg and Nolle (IJCV 1994): the quartic in the ratio of two distances
 // along the rays, each real positive root giving the three distances, then the motion that
 // takes the points to those along their rays. Writes up to four poses into `poses` (points in
-// the camera's frame = pose.apply(point)) and returns how many; 0 for collinear points or
-// bearings, or coincident points.
+// the camera's frame = pose.apply(point)) and returns how many; 0 for collinear or coincident
+// points.
 int solve_p3p(const std::array<Eigen::Vector3d, 3>& points,
               const std::array<Eigen::Vector3d, 3>& bearings, std::array<RigidMotion, 4>& poses);
 

@@ -23,7 +23,7 @@
 namespace epipole::firmware {
 
 struct OdometryConfig {
-  int max_landmarks = 1000;            // a keyframe's features followed (its nearest matches)
+  int max_landmarks = 1000;            // a keyframe's features followed (its most distinctive)
   int search_radius_px = 40;           // the window around each feature's predicted place; a
                                        // pair whose motion is not found so is searched again at 3x
                                        // (a turn begun since the pair before: up to 256)
@@ -103,8 +103,9 @@ class VisualOdometry {
   // The last step's twist per second (rotation vector, translation; the camera's frame), for
   // the prediction.
   Eigen::Matrix<double, 6, 1> twist_ = Eigen::Matrix<double, 6, 1>::Zero();
-  hal::Nanoseconds last_time_ = 0;
-  bool have_time_ = false;
+  // The time of the pair since_keyframe_ describes (the last one tracked, or the keyframe's):
+  // the step since it spans every pair lost meanwhile.
+  hal::Nanoseconds tracked_time_ = 0;
   int lost_pairs_ = 0;
   // Per pair: the queries' predicted places, each corner's right column.
   std::vector<float> query_x_, query_y_;

@@ -4,7 +4,9 @@
 // pair: each query (a descriptor where the feature is expected to be) takes the corner of the
 // later image, within a square window around that place, whose descriptor is nearest in Hamming
 // distance; by the sparse stereo's tests (the nearest below max_distance, and below ratio % of
-// the second nearest). A corner two queries take goes to the nearer (the first among equals).
+// the second nearest). A corner two queries take goes to the nearer (the first among equals:
+// give the most distinctive first); the other finds nothing (its second candidate failed the
+// ratio test already).
 #include <cstdint>
 #include <span>
 #include <vector>
