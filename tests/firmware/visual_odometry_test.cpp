@@ -128,7 +128,7 @@ PairFeatures features_at(const Room& room, const calib::RigidMotion& pose, Split
     ++f.row_start[static_cast<std::size_t>(s.y) + 1];
     std::array<std::uint8_t, kBytes> d = room.descriptors[s.point];
     for (int flip = 0; flip < 8; ++flip) {  // a few bits differ at every sighting
-      const auto bit = random.below(kBytes * 8);
+      const auto bit = static_cast<std::size_t>(random.below(kBytes * 8));
       d[bit / 8] = static_cast<std::uint8_t>(d[bit / 8] ^ (1u << (bit % 8)));
     }
     f.descriptors.insert(f.descriptors.end(), d.begin(), d.end());
