@@ -51,7 +51,6 @@ VisualOdometry::VisualOdometry(const calib::RectifiedStereoCameras& cameras, int
                                int max_corners, int max_points, const OdometryConfig& config,
                                SimdPath path)
     : cameras_(cameras),
-      width_(width),
       height_(height),
       config_(config),
       window_(window_config(width, height, max_corners, config, config.search_radius_px), path),
@@ -117,7 +116,8 @@ bool VisualOdometry::make_keyframe(const vision::DescribedCorners& left,
   constexpr std::size_t kBytes = vision::SparseStereoMatcher::kDescriptorBytes;
   for (std::size_t k = 0; k < kept; ++k) {
     const SparsePoint& p = points[order_[k]];
-    landmarks_[k] = Eigen::Vector3d(p.x, p.y, p.z);
+    landmarks_[k] = Eigen::Vector3d(static_cast<double>(p.x), static_cast<double>(p.y),
+                                    static_cast<double>(p.z));
     std::copy_n(left.descriptors.data() + static_cast<std::size_t>(p.left_feature) * kBytes, kBytes,
                 descriptors_.data() + k * kBytes);
   }
@@ -166,7 +166,7 @@ calib::StereoMotion VisualOdometry::follow(vision::WindowMatcher& window,
     match.point = landmarks_[static_cast<std::size_t>(w.query)];
     match.left_x = left.x[c];
     match.left_y = left.y[c];
-    match.right_x = right_x_[c];
+    match.right_x = static_cast<double>(right_x_[c]);
   }
   state_.features = landmark_count_;
   state_.tracked = static_cast<int>(m);

@@ -86,7 +86,7 @@ class VisualOdometry {
   void lose();
 
   calib::RectifiedStereoCameras cameras_;
-  int width_, height_;
+  int height_;
   OdometryConfig config_;
   vision::WindowMatcher window_, wide_window_;
   calib::StereoMotionEstimator motion_;
