@@ -4,6 +4,7 @@
 #include <bit>
 #include <cstdlib>
 
+#include "descriptor_search.hpp"
 #include "epipole/core/error.hpp"
 #include "kernel_set.hpp"
 #include "sparse_stereo_kernels.hpp"
@@ -186,38 +187,13 @@ SparseStereoMatcher::Best SparseStereoMatcher::best_match(const Side& from, int 
   const int lo = direction > 0 ? x - config_.max_disparity + 1 : x;
   const int hi = direction > 0 ? x : x + config_.max_disparity - 1;
   const std::uint8_t* query = from.descriptors.data() + ui * kDescriptorBytes;
-  kernels::HammingKernel* const hamming = kernels::hamming_kernel(path_);
-  int best = -1;
-  int best_distance = kBits + 1;
-  int second = kBits + 1;
-  const int t = tolerance_;
-  for (int row = std::max(0, y - t); row <= std::min(config_.height - 1, y + t); ++row) {
-    const auto xs = to.x.begin();
-    const auto row_begin = xs + to.row_start[static_cast<std::size_t>(row)];
-    const auto row_end = xs + to.row_start[static_cast<std::size_t>(row) + 1];
-    const auto first = std::lower_bound(row_begin, row_end, static_cast<std::int16_t>(lo));
-    const auto last = std::upper_bound(first, row_end, static_cast<std::int16_t>(hi));
-    const int begin = static_cast<int>(first - xs);
-    const int n = static_cast<int>(last - first);
-    if (n == 0) continue;
-    hamming(query, to.descriptors.data() + static_cast<std::ptrdiff_t>(begin) * kDescriptorBytes, n,
-            distances_.data());
-    for (int k = 0; k < n; ++k) {
-      const int dist = distances_[static_cast<std::size_t>(k)];
-      if (dist < best_distance) {
-        second = best_distance;
-        best_distance = dist;
-        best = begin + k;
-      } else if (dist < second) {
-        second = dist;
-      }
-    }
-  }
+  const NearestDescriptor nearest =
+      nearest_descriptor(query, to.x, to.row_start, to.descriptors.data(), y - tolerance_,
+                         y + tolerance_, lo, hi, kernels::hamming_kernel(path_), distances_.data());
   Best result;
-  result.index = best;
-  result.distance = best_distance;
-  result.ok = best >= 0 && best_distance <= config_.max_distance &&
-              (second > kBits || best_distance * 100 < config_.ratio * second);
+  result.index = nearest.index;
+  result.distance = nearest.distance;
+  result.ok = nearest.passes(config_.max_distance, config_.ratio);
   return result;
 }
 

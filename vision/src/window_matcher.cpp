@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "descriptor_search.hpp"
 #include "epipole/core/error.hpp"
 #include "sparse_stereo_kernels.hpp"
 
@@ -68,32 +69,11 @@ std::span<const WindowMatch> WindowMatcher::match(std::span<const std::uint8_t> 
     const int cx = static_cast<int>(std::lround(x[q]));
     const int cy = static_cast<int>(std::lround(y[q]));
     const std::uint8_t* query = descriptors.data() + q * kBytes;
-    int best = -1, best_distance = kDescriptorBits + 1, second = kDescriptorBits + 1;
-    for (int row = std::max(0, cy - r); row <= std::min(config_.height - 1, cy + r); ++row) {
-      const auto xs = corners.x.begin();
-      const auto row_begin = xs + corners.row_start[static_cast<std::size_t>(row)];
-      const auto row_end = xs + corners.row_start[static_cast<std::size_t>(row) + 1];
-      const auto first = std::lower_bound(row_begin, row_end, static_cast<std::int16_t>(cx - r));
-      const auto last = std::upper_bound(first, row_end, static_cast<std::int16_t>(cx + r));
-      const int begin = static_cast<int>(first - xs);
-      const int n = static_cast<int>(last - first);
-      if (n == 0) continue;
-      hamming(query, corners.descriptors.data() + static_cast<std::size_t>(begin) * kBytes, n,
-              distances_.data());
-      for (int k = 0; k < n; ++k) {
-        const int d = distances_[static_cast<std::size_t>(k)];
-        if (d < best_distance) {
-          second = best_distance;
-          best_distance = d;
-          best = begin + k;
-        } else if (d < second) {
-          second = d;
-        }
-      }
-    }
-    const bool ok = best >= 0 && best_distance <= config_.max_distance &&
-                    (second > kDescriptorBits || best_distance * 100 < config_.ratio * second);
-    if (!ok) continue;
+    const NearestDescriptor nearest =
+        nearest_descriptor(query, corners.x, corners.row_start, corners.descriptors.data(), cy - r,
+                           cy + r, cx - r, cx + r, hamming, distances_.data());
+    if (!nearest.passes(config_.max_distance, config_.ratio)) continue;
+    const int best = nearest.index, best_distance = nearest.distance;
     std::int32_t& holder = holder_[static_cast<std::size_t>(best)];
     if (holder >= 0) {
       if (distance_[static_cast<std::size_t>(holder)] <= best_distance) continue;
