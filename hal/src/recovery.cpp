@@ -51,7 +51,14 @@ bool RecoveringCamera::try_reopen() {
   backoff_.failed(clock_.now());
   lost_ = false;
   timeouts_in_a_row_ = 0;
+  if (partner_ != nullptr && partner_->lost_ && !partner_->defer_reopen_) partner_->try_reopen();
   return true;
+}
+
+void RecoveringCamera::pair_with(RecoveringCamera& partner) {
+  require(&partner != this, "camera ", name(), " cannot be its own stereo partner");
+  partner_ = &partner;
+  partner.partner_ = this;
 }
 
 bool RecoveringCamera::trigger_was_quiet(Nanoseconds waited_from) const {

@@ -542,6 +542,55 @@ TEST(StereoPairing, TheOtherCameraIsStillReadWhileOneIsGone) {
   expect_counters_add_up(grabber.pairer());
 }
 
+// Both cameras go at once and come back at once (a driver reloaded). Paired, the one reopened
+// first brings the other back with it, though the other's own back-off would have waited for
+// far longer: free-running cameras start streaming back to back, as at start-up, and their
+// frames pair. Unpaired, each waits for its own back-off.
+TEST(Recovery, APairedCameraBringsItsLostPartnerBackWithIt) {
+  for (const bool paired : {true, false}) {
+    SCOPED_TRACE(paired ? "paired" : "apart");
+    Rig rig;
+    rig.left.inject({.kind = SimFaultKind::disconnect, .sequence = 50, .value = 2});
+    rig.right.inject({.kind = SimFaultKind::disconnect, .sequence = 50, .value = 1});
+    RecoveringCamera left(rig.left, rig.board.clock,
+                          {.backoff = {.initial = 10 * kMs, .max = 40 * kMs}});
+    RecoveringCamera right(rig.right, rig.board.clock,
+                           {.backoff = {.initial = 50 * kPeriod, .max = 50 * kPeriod}});
+    if (paired) left.pair_with(right);
+    StereoGrabber grabber(left, right, rig.board.clock, pairing(), &rig.record);
+    Nanoseconds left_back = 0;
+    Nanoseconds right_back = 0;
+    std::uint64_t pairs_after = 0;
+    while (rig.board.clock.now() < 200 * kPeriod) {
+      const PairResult r = grabber.next(5 * kPeriod);
+      if (left_back == 0 && left.counters().reopens == 1) left_back = rig.board.clock.now();
+      if (right_back == 0 && right.counters().reopens == 1) right_back = rig.board.clock.now();
+      if (r.status != PairStatus::ok) continue;
+      EXPECT_EQ(rig.left.true_sequence(r.pair.left), rig.right.true_sequence(r.pair.right));
+      if (left_back != 0 && right_back != 0) ++pairs_after;
+      grabber.release(r.pair);
+    }
+    ASSERT_NE(left_back, 0);
+    ASSERT_NE(right_back, 0);
+    EXPECT_EQ(left.counters().losses, 1u);
+    EXPECT_EQ(right.counters().losses, 1u);
+    if (paired) {
+      EXPECT_EQ(right_back, left_back);
+      EXPECT_GT(pairs_after, 130u);
+    } else {
+      EXPECT_GE(right_back - left_back, 40 * kPeriod);
+      EXPECT_LT(pairs_after, 110u);
+    }
+    expect_counters_add_up(grabber.pairer());
+  }
+}
+
+TEST(Recovery, ACameraCannotBeItsOwnPartner) {
+  Rig rig;
+  RecoveringCamera left(rig.left, rig.board.clock);
+  EXPECT_THROW(left.pair_with(left), Error);
+}
+
 // The camera stalls while the trigger fires on: three timeouts in a row are its fault, whether
 // it follows the trigger's record or not.
 TEST(Recovery, TimeoutsInARowReopenTheCamera) {

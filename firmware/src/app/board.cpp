@@ -25,6 +25,7 @@ Board::Board(hal::HardwareConfig hardware)
     : hardware_(std::move(hardware)),
       left_(hardware_.camera(hal::Side::left), hardware_.clock()),
       right_(hardware_.camera(hal::Side::right), hardware_.clock()) {
+  left_.pair_with(right_);
   if (hal::SerialPort* port = hardware_.serial()) {
     serial_ = std::make_unique<hal::RecoveringSerialPort>(*port, hardware_.clock());
   }

@@ -53,12 +53,12 @@ struct RecoveryConfig {
 };
 
 // A camera that reopens its device with exponential back-off when it is lost, keeps timing out
-// or is not there when it starts, without restarting anything else. While it is recovering,
-// acquire() waits for the next attempt (at most the timeout) and reports device_lost. It is
-// recovering from the loss until a frame comes again (recovering()): a device that opens but
-// delivers nothing (it fails every dequeue, or never gets a frame) is lost again at once, and
-// each such reopen waits twice as long as the one before, up to the back-off's maximum; the
-// first frame resets the back-off. A corrupt frame is counted apart and passed on: the device
+// or is not there when it starts, without restarting anything but its partner (pair_with). While it
+// is recovering, acquire() waits for the next attempt (at most the timeout) and reports
+// device_lost. It is recovering from the loss until a frame comes again (recovering()): a device
+// that opens but delivers nothing (it fails every dequeue, or never gets a frame) is lost again at
+// once, and each such reopen waits twice as long as the one before, up to the back-off's maximum;
+// the first frame resets the back-off. A corrupt frame is counted apart and passed on: the device
 // still streams, so it ends a run of timeouts and never makes it reopen. An externally
 // triggered camera given the trigger's record (follow_trigger) counts a timeout with no edge
 // during the wait as a wait for the trigger, never as a fault: a trigger that stops (an
@@ -90,6 +90,12 @@ class RecoveringCamera final : public CameraSource {
   void defer_reopen(bool defer) { defer_reopen_ = defer; }
   // The edges of the trigger that fires this camera (null: none); it must outlive the camera.
   void follow_trigger(const TriggerRecord* record) { trigger_ = record; }
+  // The other camera of the stereo pair (both ways; it must outlive this one). When one of them
+  // comes back while the other is lost too (a driver reloaded, a hub that lost power), the other
+  // is reopened at once, not at its own back-off: the two streams start back to back, as they did
+  // at start-up. Free-running cameras keep the phase they start with, and frames of two streams
+  // started a random time apart would never pair within the tolerance.
+  void pair_with(RecoveringCamera& partner);
 
   const RecoveryCounters& counters() const { return counters_; }
   bool recovering() const { return lost_ || !delivered_since_reopen_; }
@@ -109,6 +115,7 @@ class RecoveringCamera final : public CameraSource {
   bool delivered_since_reopen_ = true;  // false from a loss until the next frame
   bool defer_reopen_ = false;
   const TriggerRecord* trigger_ = nullptr;
+  RecoveringCamera* partner_ = nullptr;
   bool exposure_set_ = false;  // set_exposure() was called: its values outlive a reopen
   Nanoseconds exposure_ = 0;
   double gain_ = 0.0;
