@@ -136,6 +136,33 @@ nlohmann::json to_json(const mavlink::Frame& frame) {
     out["type"] = "statustext";
     out["severity"] = t->severity;
     out["text"] = printable(t->text.data());
+  } else if (const auto o = mavlink::decode_odometry(frame)) {
+    // Floats as sent; NaN (an unknown covariance) becomes null.
+    out["type"] = "odometry";
+    out["time_usec"] = o->time_usec;
+    out["frame_id"] = o->frame_id;
+    out["child_frame_id"] = o->child_frame_id;
+    out["x"] = o->x;
+    out["y"] = o->y;
+    out["z"] = o->z;
+    out["q"] = o->q;  // w, x, y, z
+    out["vx"] = o->vx;
+    out["vy"] = o->vy;
+    out["vz"] = o->vz;
+    out["rollspeed"] = o->rollspeed;
+    out["pitchspeed"] = o->pitchspeed;
+    out["yawspeed"] = o->yawspeed;
+    out["pose_covariance"] = o->pose_covariance;
+    out["velocity_covariance"] = o->velocity_covariance;
+    out["reset_counter"] = o->reset_counter;
+    out["estimator_type"] = o->estimator_type;
+    out["quality"] = o->quality;
+  } else if (const auto s = mavlink::decode_timesync(frame)) {
+    out["type"] = "timesync";
+    out["tc1"] = s->tc1;
+    out["ts1"] = s->ts1;
+    out["target_system"] = s->target_system;
+    out["target_component"] = s->target_component;
   }
   return out;
 }

@@ -72,8 +72,8 @@ TEST(FirmwareAllocations, TheMemoryReportIsTheHeapTheFirmwareHolds) {
     names.push_back(p.name);
   }
   EXPECT_EQ(names, (std::vector<std::string>{"rectify", "corners", "disparity", "sparse", "detect",
-                                             "ground", "link", "frame loop", "snapshots",
-                                             "output mcap", Firmware::kCameras}));
+                                             "ground", "odometry", "link", "frame loop",
+                                             "snapshots", "output mcap", Firmware::kCameras}));
   EXPECT_EQ(listed, report.total());
   std::printf("memory report %zu B, heap held %zu B\n", report.total(), held);
   EXPECT_LE(report.total(), held) << "nothing listed that was not allocated";

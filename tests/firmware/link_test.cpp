@@ -429,6 +429,66 @@ TEST(Link, MavlinkModeSendsMavlinkOnly) {
   EXPECT_EQ(distance->sequence, heartbeat->sequence + 1);
 }
 
+// An autopilot asks for the time (TIMESYNC, tc1 0) while frames wait in the queue: the answer
+// goes out before them, with the board's time and the request's ts1, addressed to the asker;
+// every frame is numbered as it goes onto the wire. Requests for another system, answers to
+// someone else's request and garbage are left alone.
+TEST(Link, MavlinkTimesyncRequestsAreAnsweredFirst) {
+  hal::PtySerialPort pty({});
+  hal::VirtualClock clock;
+  clock.advance(123'456'789'000);
+  LinkConfig config;
+  config.protocol = LinkProtocol::mavlink;
+  config.identity = {7, 197};
+  config.baud = 9600;  // slow: the queue is still full when the request comes
+  Link link(&pty, clock, config);
+  Robot robot(pty.peer_path());
+  for (int i = 0; i < 8; ++i) EXPECT_TRUE(link.publish_heartbeat());
+  link.start();
+  const auto send = [&](const mavlink::Timesync& t, std::uint8_t system, std::uint8_t sequence) {
+    std::array<std::uint8_t, mavlink::kMaxFrameSize> frame{};
+    const std::size_t n = mavlink::encode_timesync(t, {system, 1}, sequence, frame);
+    ASSERT_EQ(robot.port.write(std::as_bytes(std::span(frame.data(), n)), 1'000'000'000).status,
+              hal::IoStatus::ok);
+  };
+  const std::array<std::byte, 5> garbage{std::byte{0xFD}, std::byte{3}, std::byte{0},
+                                         std::byte{0xFD}, std::byte{0x55}};
+  ASSERT_EQ(robot.port.write(garbage, 1'000'000'000).status, hal::IoStatus::ok);
+  send({0, 111, 9, 197}, 1, 0);        // for system 9: not ours
+  send({5, 222, 7, 197}, 1, 1);        // an answer, not a request
+  send({0, 987'654'321, 7, 0}, 1, 2);  // ours (any component)
+  mavlink::StreamDecoder decoder;
+  std::vector<mavlink::Frame> frames;
+  std::array<std::byte, 512> buffer{};
+  for (;;) {
+    const hal::IoResult r = robot.port.read(buffer, 1'500'000'000);
+    if (r.status != hal::IoStatus::ok) break;
+    for (std::size_t i = 0; i < r.bytes; ++i) {
+      for (auto f = decoder.push(static_cast<std::uint8_t>(buffer[i])); f; f = decoder.next()) {
+        frames.push_back(*f);
+      }
+    }
+  }
+  link.stop();
+  ASSERT_EQ(frames.size(), 9u);
+  int answers = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i].sequence, i) << "numbered in the order written";
+    EXPECT_EQ(frames[i].system_id, 7);
+    const auto t = mavlink::decode_timesync(frames[i]);
+    if (!t) continue;
+    ++answers;
+    EXPECT_LT(i, 3u) << "ahead of the heartbeats still queued";
+    EXPECT_EQ(t->tc1, 123'456'789'000);
+    EXPECT_EQ(t->ts1, 987'654'321);
+    EXPECT_EQ(t->target_system, 1);
+    EXPECT_EQ(t->target_component, 1);
+  }
+  EXPECT_EQ(answers, 1);
+  EXPECT_EQ(link.counters().timesync_answers, 1u);
+  EXPECT_EQ(decoder.stats().lost + decoder.stats().bad_crc, 0u);
+}
+
 TEST(Link, WithoutAPortNothingIsSent) {
   hal::VirtualClock clock;
   Link link(nullptr, clock, {});

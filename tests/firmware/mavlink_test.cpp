@@ -4,7 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -264,6 +266,89 @@ TEST(Mavlink, StatusTextBytes) {
       << "severity and 50 characters; the zero extensions dropped";
   EXPECT_EQ(std::string(decode_status_text(*parse_frame(cut))->text.data()),
             long_text.substr(0, 50));
+}
+
+// ODOMETRY (id 331, CRC extra 91), from common.xml: time_usec u64, x y z, q[4], vx vy vz,
+// rollspeed pitchspeed yawspeed, pose_covariance[21], velocity_covariance[21] (floats), frame_id,
+// child_frame_id; extensions reset_counter, estimator_type, quality (int8): 233 bytes.
+TEST(Mavlink, OdometryLayout) {
+  Odometry m;
+  m.time_usec = 0x0102030405060708ull;
+  m.x = 1.5f;
+  m.z = -2.25f;
+  m.q = {0.5f, -0.5f, 0.5f, -0.5f};
+  m.vx = 0.75f;
+  m.yawspeed = -0.125f;
+  for (std::size_t i = 0; i < 21; ++i) m.pose_covariance[i] = static_cast<float>(i + 1);
+  m.velocity_covariance[0] = std::numeric_limits<float>::quiet_NaN();
+  m.reset_counter = 4;
+  m.quality = -1;
+  std::vector<std::uint8_t> frame(kMaxFrameSize);
+  frame.resize(encode_odometry(m, {1, 197}, 5, frame));
+  ASSERT_EQ(frame.size(), 10u + 233u + 2u);
+  EXPECT_EQ(frame[7] | frame[8] << 8 | frame[9] << 16, 331);
+  const std::uint8_t* p = frame.data() + 10;
+  EXPECT_EQ(p[0], 0x08);
+  EXPECT_EQ(p[7], 0x01);
+  EXPECT_EQ(read_float(p + 8), 1.5f);
+  EXPECT_EQ(read_float(p + 16), -2.25f);
+  EXPECT_EQ(read_float(p + 20), 0.5f);  // q w
+  EXPECT_EQ(read_float(p + 24), -0.5f);
+  EXPECT_EQ(read_float(p + 36), 0.75f);          // vx
+  EXPECT_EQ(read_float(p + 56), -0.125f);        // yawspeed
+  EXPECT_EQ(read_float(p + 60), 1.0f);           // pose_covariance[0]
+  EXPECT_EQ(read_float(p + 140), 21.0f);         // pose_covariance[20]
+  EXPECT_TRUE(std::isnan(read_float(p + 144)));  // velocity_covariance[0]: unknown
+  EXPECT_EQ(p[228], kMavFrameLocalFrd);
+  EXPECT_EQ(p[229], kMavFrameBodyFrd);
+  EXPECT_EQ(p[230], 4);
+  EXPECT_EQ(p[231], kMavEstimatorTypeVio);
+  EXPECT_EQ(p[232], 0xFF);  // quality -1
+  EXPECT_EQ(frame[frame.size() - 2] | frame[frame.size() - 1] << 8, frame_checksum(frame, 91));
+  const auto back = decode_odometry(*parse_frame(frame));
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->time_usec, m.time_usec);
+  EXPECT_EQ(back->q, m.q);
+  EXPECT_EQ(back->pose_covariance, m.pose_covariance);
+  EXPECT_EQ(back->quality, -1);
+  EXPECT_EQ(back->reset_counter, 4);
+  EXPECT_FALSE(decode_timesync(*parse_frame(frame)));
+}
+
+// TIMESYNC (id 111, CRC extra 34): tc1 i64, ts1 i64; extensions target_system, target_component.
+TEST(Mavlink, TimesyncBytes) {
+  std::vector<std::uint8_t> frame(kMaxFrameSize);
+  frame.resize(encode_timesync({-2, 0x0102030405060708, 3, 4}, {1, 197}, 6, frame));
+  ASSERT_EQ(frame.size(), 10u + 18u + 2u);
+  const std::vector<std::uint8_t> payload(frame.begin() + 10, frame.end() - 2);
+  const std::vector<std::uint8_t> expected{0xFE, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 8,
+                                           7,    6,    5,    4,    3,    2,    1,    3,    4};
+  EXPECT_EQ(payload, expected);
+  EXPECT_EQ(frame[frame.size() - 2] | frame[frame.size() - 1] << 8, frame_checksum(frame, 34));
+  // A request from a sender without the extensions: the targets read as 0.
+  std::vector<std::uint8_t> request(kMaxFrameSize);
+  request.resize(encode_timesync({0, 99, 0, 0}, {1, 1}, 0, request));
+  EXPECT_EQ(request[1], 9) << "the zero tail dropped";
+  const auto t = decode_timesync(*parse_frame(request));
+  ASSERT_TRUE(t);
+  EXPECT_EQ(t->tc1, 0);
+  EXPECT_EQ(t->ts1, 99);
+  EXPECT_EQ(t->target_system, 0);
+}
+
+// A sender numbers its frames as they leave: the number changes, the checksum follows.
+TEST(Mavlink, SetSequenceMakesTheChecksumAgain) {
+  std::vector<std::uint8_t> frame(kMaxFrameSize);
+  frame.resize(encode_heartbeat({1, 196}, 0, frame));
+  set_sequence(frame, 200);
+  const auto parsed = parse_frame(frame);
+  ASSERT_TRUE(parsed);
+  EXPECT_EQ(parsed->sequence, 200);
+  std::vector<std::uint8_t> damaged = frame;
+  damaged.pop_back();
+  EXPECT_THROW(set_sequence(damaged, 1), Error);
+  frame[7] = 99;  // another message
+  EXPECT_THROW(set_sequence(frame, 1), Error);
 }
 
 TEST(MavlinkStream, DecodesTheMessagesFields) {

@@ -120,8 +120,27 @@ std::vector<Message> sample_messages(std::uint32_t seed) {
     points.items[i] = {u16(), u16(), static_cast<std::int32_t>(rng()),
                        -static_cast<std::int32_t>(rng() % 1000), static_cast<std::int32_t>(rng())};
   }
+  Odometry odometry;
+  odometry.frame = rng();
+  odometry.trigger_ns = (std::uint64_t{rng()} << 32) | rng();
+  odometry.status = OdometryStatus::lost;
+  odometry.reset_counter = 3;
+  odometry.quality = 77;
+  odometry.x_mm = -static_cast<std::int32_t>(rng() % 100000);
+  odometry.z_mm = static_cast<std::int32_t>(rng() % 100000);
+  odometry.qw_e9 = 707106781;
+  odometry.qy_e9 = -707106781;
+  odometry.vx_mm_s = -1234;
+  odometry.wz_mrad_s = -5678;
+  odometry.sz_mm = 65535;
+  odometry.srx_cdeg = 12;
+  odometry.features = 900;
+  odometry.tracked = 800;
+  odometry.inliers = 700;
+  odometry.keyframes = rng();
   return {health,
           summary,
+          odometry,
           detections,
           obstacles,
           points,
@@ -371,16 +390,16 @@ TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays)
   health.outputs_dropped = 0x14131211;
   health.output_failures = 0x18171615;
   const Bytes h = payload_of(health);
-  // 3 x u32, u16, 2 x u32, 9 x u32 stage times, 4 x u32 dropped by cause, 8 x u32 counters,
+  // 3 x u32, u16, 2 x u32, 10 x u32 stage times, 4 x u32 dropped by cause, 8 x u32 counters,
   // u16 flags, 2 x u32 waits, u16 busy, 2 x u32 trigger glitches, 2 x u32 outputs.
-  ASSERT_EQ(h.size(), kHeaderSize + 134 + kCrcSize);
-  EXPECT_EQ(h[0], 8) << "version";
-  EXPECT_EQ(h[kHeaderSize + 106], 0x01);
-  EXPECT_EQ(h[kHeaderSize + 107], 0xA5);
-  for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 108 + i], i + 1) << i;
-  EXPECT_EQ(h[kHeaderSize + 116], 0xE8);
-  EXPECT_EQ(h[kHeaderSize + 117], 0x03);
-  for (int i = 0; i < 16; ++i) EXPECT_EQ(h[kHeaderSize + 118 + i], i + 9) << i;
+  ASSERT_EQ(h.size(), kHeaderSize + 138 + kCrcSize);
+  EXPECT_EQ(h[0], 9) << "version";
+  EXPECT_EQ(h[kHeaderSize + 110], 0x01);
+  EXPECT_EQ(h[kHeaderSize + 111], 0xA5);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(h[kHeaderSize + 112 + i], i + 1) << i;
+  EXPECT_EQ(h[kHeaderSize + 120], 0xE8);
+  EXPECT_EQ(h[kHeaderSize + 121], 0x03);
+  for (int i = 0; i < 16; ++i) EXPECT_EQ(h[kHeaderSize + 122 + i], i + 9) << i;
   FrameSummary frame;
   frame.flags = kFrameTriggerFromCapture;
   const Bytes f = payload_of(frame);
@@ -388,10 +407,49 @@ TEST(Protocol, HealthsFlagsAndOccupancyAndTheFramesFlagsAreWhereTheDocumentSays)
   EXPECT_EQ(f[kHeaderSize + 25], kFrameTriggerFromCapture);
 }
 
+// docs/protocol.md's table: the odometry's fields in order, little-endian, 89 bytes.
+TEST(Protocol, TheOdometryIsWhereTheDocumentSays) {
+  Odometry m;
+  m.frame = 0x04030201;
+  m.trigger_ns = 0x0C0B0A0908070605;
+  m.status = OdometryStatus::tracking;
+  m.reset_counter = 2;
+  m.quality = 100;
+  m.x_mm = -2;
+  m.qw_e9 = 1'000'000'000;
+  m.keyframes = 0x44434241;
+  Bytes payload(kMaxPayloadSize);
+  const Bytes frame = frame_of(m, 0);
+  const auto n = cobs_decode(std::span(frame.data(), frame.size() - 1), payload);
+  ASSERT_TRUE(n.has_value());
+  payload.resize(*n);
+  ASSERT_EQ(payload.size(), kHeaderSize + 89 + kCrcSize);
+  const auto at = [&](std::size_t i) { return payload[kHeaderSize + i]; };
+  EXPECT_EQ(payload[0], 9) << "version";
+  EXPECT_EQ(payload[1], static_cast<std::uint8_t>(MessageType::odometry));
+  for (std::size_t i = 0; i < 12; ++i) EXPECT_EQ(at(i), i + 1) << i;
+  EXPECT_EQ(at(12), 1) << "status tracking";
+  EXPECT_EQ(at(13), 2) << "reset_counter";
+  EXPECT_EQ(at(14), 100) << "quality";
+  EXPECT_EQ(at(15), 0xFE) << "x_mm -2";
+  EXPECT_EQ(at(18), 0xFF);
+  EXPECT_EQ(at(27), 0x00) << "qw_e9 1e9 = 0x3B9ACA00";
+  EXPECT_EQ(at(28), 0xCA);
+  EXPECT_EQ(at(29), 0x9A);
+  EXPECT_EQ(at(30), 0x3B);
+  for (std::size_t i = 0; i < 4; ++i) EXPECT_EQ(at(85 + i), 0x41 + i) << "keyframes";
+  // A status past `lost` is no odometry.
+  Bytes body(payload.begin() + kHeaderSize, payload.end() - kCrcSize);
+  body[12] = 3;
+  EXPECT_FALSE(decode_body(MessageType::odometry, body));
+  body[12] = 2;
+  EXPECT_TRUE(decode_body(MessageType::odometry, body));
+}
+
 TEST(Stages, OneTableGivesTheMasksTheNamesAndTheOrder) {
   EXPECT_EQ(kAlwaysOnStages, stage_bit(Stage::capture) | stage_bit(Stage::publish));
-  EXPECT_EQ(kSwitchableStages, 0x7E);
-  EXPECT_EQ(kAllStages, 0xFF) << "total is a time slot, not a stage a mask can hold";
+  EXPECT_EQ(kSwitchableStages, 0xFE);
+  EXPECT_EQ(kAllStages, 0x1FF) << "total is a time slot, not a stage a mask can hold";
   std::vector<std::string> names;
   for (const StageInfo& s : kStages) {
     EXPECT_EQ(std::string(s.time_field), std::string(s.name) + "_us");

@@ -1,7 +1,8 @@
 // libFuzzer target: arbitrary bytes into the MAVLink stream decoder (what `epipole link` and
-// `epipole sim` read a MAVLink board's link with). Every frame it delivers must decode as one of
-// its four messages, and every byte must be in exactly one place: a delivered frame, the skipped
-// bytes, or the buffer (empty once the stream has finished).
+// `epipole sim` read a MAVLink board's link with, and the firmware reads an autopilot's TIMESYNC
+// requests with). Every frame it delivers must decode as one of its six messages, and every byte
+// must be in exactly one place: a delivered frame, the skipped bytes, or the buffer (empty once the
+// stream has finished).
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -16,7 +17,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const auto take = [&](const std::optional<Frame>& frame) {
     frame_bytes += frame->wire_size;
     if (!decode_heartbeat(*frame) && !decode_obstacle_distance(*frame) &&
-        !decode_named_value_float(*frame) && !decode_status_text(*frame)) {
+        !decode_named_value_float(*frame) && !decode_status_text(*frame) &&
+        !decode_odometry(*frame) && !decode_timesync(*frame)) {
       std::abort();
     }
   };

@@ -68,6 +68,17 @@ void native_seeds(const fs::path& dir) {
   grid.count = 6;
   grid.nearest_mm = {1200, protocol::kUnknownDepth, 800, 20000, 650, 3000};
   append(pair, grid, 6);
+  protocol::Odometry odometry;
+  odometry.frame = 7;
+  odometry.status = protocol::OdometryStatus::tracking;
+  odometry.quality = 80;
+  odometry.z_mm = 1500;
+  odometry.qw_e9 = 999'000'000;
+  odometry.qy_e9 = 44'710'000;
+  odometry.features = 400;
+  odometry.tracked = 300;
+  odometry.inliers = 280;
+  append(pair, odometry, 7);
   write(dir / "frame_detections_obstacles_points", pair);
 
   Bytes commands;
@@ -115,6 +126,16 @@ void mavlink_seeds(const fs::path& dir) {
   add(mavlink::encode_status_text(mavlink::Severity::notice, "epipole: rig corrected", {1, 196}, 6,
                                   frame));
   write(dir / "calibration_values_text", stream);
+
+  stream.clear();
+  mavlink::Odometry odometry;
+  odometry.x = 1.5f;
+  odometry.q = {0.99f, 0, 0, 0.141f};
+  odometry.quality = 90;
+  odometry.velocity_covariance[0] = 1e-3f;
+  add(mavlink::encode_odometry(odometry, {1, 197}, 7, frame));
+  add(mavlink::encode_timesync({0, 123456789, 1, 197}, {1, 1}, 8, frame));
+  write(dir / "odometry_timesync", stream);
 
   stream = {0xFD, 0x13, 0xFD};
   const std::size_t damaged = mavlink::encode_obstacle_distance(m, {1, 196}, 2, frame);

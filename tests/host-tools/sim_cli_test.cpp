@@ -256,7 +256,8 @@ fs::path mavlink_board(const std::string& name, const std::string& extra = "") {
 
 // A board that speaks MAVLink to its flight controller: the robot's end of the link decodes
 // MAVLink 2 (HEARTBEAT at the health interval with the calibration's NAMED_VALUE_FLOATs, an
-// OBSTACLE_DISTANCE for every pair), not the native protocol; no STATUSTEXT without a correction.
+// OBSTACLE_DISTANCE and an ODOMETRY for every pair), not the native protocol; no STATUSTEXT without
+// a correction.
 TEST(SimCli, AMavlinkBoardsStreamIsDecodedAsMavlink) {
   const fs::path board = mavlink_board("sim-mavlink");
 
@@ -272,7 +273,9 @@ TEST(SimCli, AMavlinkBoardsStreamIsDecodedAsMavlink) {
   EXPECT_EQ(scene["received"]["obstacle_distance"], kFrames) << scene.dump(2);
   EXPECT_GE(scene["received"]["heartbeat"].get<int>(), 1) << scene.dump(2);
   EXPECT_GE(scene["received"]["named_value_float"].get<int>(), 1) << scene.dump(2);
-  EXPECT_EQ(scene["received"].size(), 3u) << scene.dump(2);
+  // Aloe stands still: the odometry tracks from the first pair (a pose, no motion).
+  EXPECT_EQ(scene["received"]["odometry"], kFrames) << scene.dump(2);
+  EXPECT_EQ(scene["received"].size(), 4u) << scene.dump(2);
 
   std::ifstream lines(out / "aloe" / "serial.jsonl");
   std::string line;

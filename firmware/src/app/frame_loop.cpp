@@ -13,6 +13,7 @@
 #include "epipole/core/error.hpp"
 #include "epipole/firmware/journal.hpp"
 #include "epipole/firmware/link_budget.hpp"
+#include "epipole/firmware/odometry_messages.hpp"
 #include "epipole/firmware/pair_messages.hpp"
 #include "epipole/firmware/protocol/mavlink.hpp"
 #include "epipole/firmware/thread_roles.hpp"
@@ -338,7 +339,8 @@ FrameLoop::Verdict FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& c
   }
   if (config_.has_link()) {  // the summaries must fit the link at the new rate
     if (const std::string problem =
-            link_capacity_problem(link_.protocol(), config_.serial.port.baud, period);
+            link_capacity_problem(link_.protocol(), config_.serial.port.baud, period,
+                                  protocol::has_stage(config_.stages, protocol::Stage::odometry));
         !problem.empty()) {
       pairer.set_trigger_period(old_period);
       return rejected(AckReason::out_of_range, problem);
@@ -404,6 +406,10 @@ void FrameLoop::publish_link(const FrameResult& r, hal::Nanoseconds latency,
     if (r.obstacles != nullptr) {
       link_.publish_obstacle_distance(
           obstacle_distance_message(*r.obstacles, r.trigger_ns, config_.obstacles));
+    }
+    // No pose yet, nothing to say: the autopilot's estimator waits for the first.
+    if (r.odometry != nullptr && r.odometry->status != OdometryState::Status::starting) {
+      link_.publish_odometry(mavlink_odometry(*r.odometry, r.trigger_ns));
     }
     return;
   }

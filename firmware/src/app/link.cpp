@@ -30,7 +30,7 @@ Link::Link(hal::SerialPort* port, hal::Clock& clock, LinkConfig config)
       config_(config),
       bytes_per_ns_(static_cast<double>(config.baud) / 10.0 * 1e-9),
       tokens_(bytes_per_ns_ * static_cast<double>(config.burst)),
-      reserve_(static_cast<double>(essential_reserve_bytes(config.protocol))),
+      reserve_(static_cast<double>(essential_reserve_bytes(config.protocol, config.odometry))),
       last_refill_(clock.now()) {
   require(config.baud > 0, "serial link: baud rate ", config.baud, " is not positive");
   require(config.queue_bytes >= 2 * sizeof(encode_buffer_), "serial link: a queue of ",
@@ -69,6 +69,10 @@ bool Link::within_budget(std::size_t bytes, double reserve) {
 bool Link::enqueue(std::span<const std::uint8_t> frame, bool essential) {
   if (port_ == nullptr) return true;
   const std::lock_guard lock(mutex_);
+  return enqueue_locked(frame, essential);
+}
+
+bool Link::enqueue_locked(std::span<const std::uint8_t> frame, bool essential) {
   const bool fits = within_budget(frame.size(), essential ? 0.0 : reserve_);
   if (!fits || frames_size_ == kMaxFrames || config_.queue_bytes - ring_size_ < frame.size()) {
     ++counters_.messages_dropped;
@@ -93,40 +97,41 @@ bool Link::publish(const protocol::Message& message) {
   return enqueue({encode_buffer_.data(), n}, is_essential(message));
 }
 
-// A MAVLink frame's sequence number counts the frames sent: one dropped here (the link's
-// budget) is not a frame lost on the wire.
-bool Link::enqueue_mavlink(std::span<const std::uint8_t> frame, bool essential) {
-  const bool queued = enqueue(frame, essential);
-  if (queued) ++mavlink_sequence_;
-  return queued;
+template <class Encode>
+bool Link::enqueue_mavlink(bool essential, const Encode& encode) {
+  if (config_.protocol != LinkProtocol::mavlink) return false;
+  const std::size_t n = encode(std::span(encode_buffer_));
+  return enqueue({encode_buffer_.data(), n}, essential);
 }
 
 bool Link::publish_heartbeat(std::uint8_t system_status) {
-  if (config_.protocol != LinkProtocol::mavlink) return false;
-  const std::size_t n =
-      mavlink::encode_heartbeat(config_.identity, mavlink_sequence_, encode_buffer_, system_status);
-  return enqueue_mavlink({encode_buffer_.data(), n}, true);
+  return enqueue_mavlink(true, [&](std::span<std::uint8_t> out) {
+    return mavlink::encode_heartbeat(config_.identity, 0, out, system_status);
+  });
 }
 
 bool Link::publish_obstacle_distance(const mavlink::ObstacleDistance& message) {
-  if (config_.protocol != LinkProtocol::mavlink) return false;
-  const std::size_t n = mavlink::encode_obstacle_distance(message, config_.identity,
-                                                          mavlink_sequence_, encode_buffer_);
-  return enqueue_mavlink({encode_buffer_.data(), n}, true);
+  return enqueue_mavlink(true, [&](std::span<std::uint8_t> out) {
+    return mavlink::encode_obstacle_distance(message, config_.identity, 0, out);
+  });
+}
+
+bool Link::publish_odometry(const mavlink::Odometry& message) {
+  return enqueue_mavlink(true, [&](std::span<std::uint8_t> out) {
+    return mavlink::encode_odometry(message, config_.identity, 0, out);
+  });
 }
 
 bool Link::publish_named_value(std::string_view name, float value, std::uint32_t time_boot_ms) {
-  if (config_.protocol != LinkProtocol::mavlink) return false;
-  const std::size_t n = mavlink::encode_named_value_float(
-      name, value, time_boot_ms, config_.identity, mavlink_sequence_, encode_buffer_);
-  return enqueue_mavlink({encode_buffer_.data(), n}, false);
+  return enqueue_mavlink(false, [&](std::span<std::uint8_t> out) {
+    return mavlink::encode_named_value_float(name, value, time_boot_ms, config_.identity, 0, out);
+  });
 }
 
 bool Link::publish_status_text(mavlink::Severity severity, std::string_view text) {
-  if (config_.protocol != LinkProtocol::mavlink) return false;
-  const std::size_t n = mavlink::encode_status_text(severity, text, config_.identity,
-                                                    mavlink_sequence_, encode_buffer_);
-  return enqueue_mavlink({encode_buffer_.data(), n}, true);
+  return enqueue_mavlink(true, [&](std::span<std::uint8_t> out) {
+    return mavlink::encode_status_text(severity, text, config_.identity, 0, out);
+  });
 }
 
 bool Link::next_command(Command& out) {
@@ -166,6 +171,9 @@ bool Link::write_front() {
     for (std::size_t i = 0; i < length; ++i) {
       write_buffer_[i] = ring_[(ring_head_ + i) % config_.queue_bytes];
     }
+  }
+  if (config_.protocol == LinkProtocol::mavlink) {
+    mavlink::set_sequence(std::span(write_buffer_.data(), length), mavlink_sequence_++);
   }
   // A frame given up half written would run into this one at the robot's decoder: end it first.
   if (broken_frame_) {
@@ -217,6 +225,8 @@ void Link::read_commands(hal::Nanoseconds timeout) {
   const hal::IoResult r = port_->read(read_buffer_, timeout);
   if (r.status == hal::IoStatus::closed || r.status == hal::IoStatus::hung_up) {
     decoder_.reset();  // whoever is there when it opens again starts afresh
+    mavlink_decoder_ = mavlink::StreamDecoder{};
+    timesync_request_.reset();
   }
   if (r.status != hal::IoStatus::ok) {
     // A closed port (waiting for its next reopen attempt) returns at once: do not spin.
@@ -225,8 +235,59 @@ void Link::read_commands(hal::Nanoseconds timeout) {
     }
     return;
   }
-  if (config_.protocol != LinkProtocol::epipole) return;  // MAVLink input is not read
-  take_bytes(std::span(read_buffer_.data(), r.bytes));
+  const std::span<const std::byte> bytes(read_buffer_.data(), r.bytes);
+  if (config_.protocol == LinkProtocol::mavlink) {
+    take_mavlink_bytes(bytes);
+  } else {
+    take_bytes(bytes);
+  }
+}
+
+// TIMESYNC requests (tc1 0) for everyone or for this component; the newest one waiting is
+// answered. Every other frame, and an answer to someone else's request, is left alone.
+void Link::take_mavlink_bytes(std::span<const std::byte> bytes) {
+  const auto note = [&](const mavlink::Frame& frame) {
+    const auto request = mavlink::decode_timesync(frame);
+    if (!request || request->tc1 != 0) return;
+    const mavlink::Identity& me = config_.identity;
+    if ((request->target_system != 0 && request->target_system != me.system_id) ||
+        (request->target_component != 0 && request->target_component != me.component_id)) {
+      return;
+    }
+    timesync_request_ = mavlink::Timesync{0, request->ts1, frame.system_id, frame.component_id};
+  };
+  for (const std::byte byte : bytes) {
+    for (auto frame = mavlink_decoder_.push(static_cast<std::uint8_t>(byte)); frame;
+         frame = mavlink_decoder_.next()) {
+      note(*frame);
+    }
+  }
+}
+
+// At the front of the queue, so that the time in it is the time it leaves: the autopilot takes
+// half the round trip for the way back.
+void Link::answer_timesync() {
+  if (!timesync_request_) return;
+  mavlink::Timesync answer = *timesync_request_;
+  timesync_request_.reset();
+  answer.tc1 = clock_.now();
+  const std::size_t n =
+      mavlink::encode_timesync(answer, config_.identity, 0, std::span(timesync_buffer_));
+  const std::lock_guard lock(mutex_);
+  if (!within_budget(n, 0.0) || frames_size_ == kMaxFrames ||
+      config_.queue_bytes - ring_size_ < n) {
+    ++counters_.messages_dropped;
+    return;
+  }
+  ring_head_ = (ring_head_ + config_.queue_bytes - n) % config_.queue_bytes;
+  for (std::size_t i = 0; i < n; ++i) {
+    ring_[(ring_head_ + i) % config_.queue_bytes] = timesync_buffer_[i];
+  }
+  ring_size_ += n;
+  frames_head_ = (frames_head_ + kMaxFrames - 1) % kMaxFrames;
+  lengths_[frames_head_] = static_cast<std::uint16_t>(n);
+  ++frames_size_;
+  ++counters_.timesync_answers;
 }
 
 void Link::take_bytes(std::span<const std::byte> bytes) {
@@ -259,6 +320,7 @@ void Link::run() {
   for (;;) {
     last_round_ = steady_now();
     try {
+      answer_timesync();
       const bool wrote = write_front();
       if (stopping_) {
         bool empty = false;

@@ -10,6 +10,7 @@
 
 namespace epipole::firmware {
 
+using detail::in_units;
 using detail::saturate;
 using detail::to_us;
 
@@ -93,33 +94,26 @@ PairMessages pair_messages(const FrameResult& r, hal::Nanoseconds latency,
 protocol::CalibrationHealth calibration_health_message(
     const calib::HealthFigure& figure, const std::optional<calib::DriftEstimate>& drift,
     const RigCorrection* correction) {
-  // A number in units of `unit`, rounded and saturated to T's range (NaN: 0).
-  const auto in_units = []<typename T>(double value, double unit, T) {
-    const double v = value / unit;
-    if (std::isnan(v)) return T{0};
-    return static_cast<T>(std::lround(std::clamp(v, double{std::numeric_limits<T>::min()},
-                                                 double{std::numeric_limits<T>::max()})));
-  };
   protocol::CalibrationHealth c;
   c.matches = saturate<std::uint16_t>(static_cast<std::uint64_t>(std::max(figure.matches, 0)));
-  c.median_offset_centipx = in_units(figure.median_signed_px, 0.01, std::int16_t{});
-  c.p90_offset_centipx = in_units(figure.p90_px, 0.01, std::uint16_t{});
+  c.median_offset_centipx = in_units<std::int16_t>(figure.median_signed_px, 0.01);
+  c.p90_offset_centipx = in_units<std::uint16_t>(figure.p90_px, 0.01);
   if (drift && drift->valid) {
     constexpr double kMilliDegree = radians(0.001);
     c.flags |= protocol::kDriftEstimated;
     c.window_pairs = saturate<std::uint16_t>(static_cast<std::uint64_t>(drift->pairs));
-    c.pitch_mdeg = in_units(drift->pitch, kMilliDegree, std::int16_t{});
-    c.roll_mdeg = in_units(drift->roll, kMilliDegree, std::int16_t{});
-    c.pitch_sigma_mdeg = in_units(drift->pitch_sigma, kMilliDegree, std::uint16_t{});
-    c.roll_sigma_mdeg = in_units(drift->roll_sigma, kMilliDegree, std::uint16_t{});
+    c.pitch_mdeg = in_units<std::int16_t>(drift->pitch, kMilliDegree);
+    c.roll_mdeg = in_units<std::int16_t>(drift->roll, kMilliDegree);
+    c.pitch_sigma_mdeg = in_units<std::uint16_t>(drift->pitch_sigma, kMilliDegree);
+    c.roll_sigma_mdeg = in_units<std::uint16_t>(drift->roll_sigma, kMilliDegree);
   }
   if (correction != nullptr) {
     constexpr double kMilliDegree = radians(0.001);
     if (correction->rebuilding()) c.flags |= protocol::kRigCorrecting;
     c.corrections = saturate<std::uint16_t>(static_cast<std::uint64_t>(correction->corrections()));
     const calib::CameraTurn total = correction->total();
-    c.corrected_pitch_mdeg = in_units(total.pitch, kMilliDegree, std::int16_t{});
-    c.corrected_roll_mdeg = in_units(total.roll, kMilliDegree, std::int16_t{});
+    c.corrected_pitch_mdeg = in_units<std::int16_t>(total.pitch, kMilliDegree);
+    c.corrected_roll_mdeg = in_units<std::int16_t>(total.roll, kMilliDegree);
   }
   return c;
 }

@@ -577,7 +577,8 @@ struct Checks {
                                       ? LinkProtocol::mavlink
                                       : LinkProtocol::epipole;
     if (const std::string problem =
-            link_capacity_problem(protocol, c.serial.port.baud, c.frame_period());
+            link_capacity_problem(protocol, c.serial.port.baud, c.frame_period(),
+                                  protocol::has_stage(c.stages, protocol::Stage::odometry));
         !problem.empty()) {
       fail("serial.baud", problem);
     }

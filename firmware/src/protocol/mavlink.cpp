@@ -16,6 +16,8 @@ std::optional<std::uint8_t> crc_extra_of(std::uint32_t message_id) {
   if (message_id == kObstacleDistanceId) return kObstacleDistanceCrcExtra;
   if (message_id == kNamedValueFloatId) return kNamedValueFloatCrcExtra;
   if (message_id == kStatusTextId) return kStatusTextCrcExtra;
+  if (message_id == kOdometryId) return kOdometryCrcExtra;
+  if (message_id == kTimesyncId) return kTimesyncCrcExtra;
   return std::nullopt;
 }
 
@@ -154,6 +156,35 @@ std::size_t encode_status_text(Severity severity, std::string_view text, const I
   return finish_frame(payload, kStatusTextId, identity, sequence, out);
 }
 
+std::size_t encode_odometry(const Odometry& m, const Identity& identity, std::uint8_t sequence,
+                            std::span<std::uint8_t> out) {
+  std::array<std::uint8_t, 233> payload{};
+  ByteWriter w(payload);
+  w.u64(m.time_usec);
+  for (const float v : {m.x, m.y, m.z}) w.f32(v);
+  for (const float v : m.q) w.f32(v);
+  for (const float v : {m.vx, m.vy, m.vz, m.rollspeed, m.pitchspeed, m.yawspeed}) w.f32(v);
+  for (const float v : m.pose_covariance) w.f32(v);
+  for (const float v : m.velocity_covariance) w.f32(v);
+  w.u8(m.frame_id);
+  w.u8(m.child_frame_id);
+  w.u8(m.reset_counter);  // extensions
+  w.u8(m.estimator_type);
+  w.u8(static_cast<std::uint8_t>(m.quality));
+  return finish_frame(payload, kOdometryId, identity, sequence, out);
+}
+
+std::size_t encode_timesync(const Timesync& m, const Identity& identity, std::uint8_t sequence,
+                            std::span<std::uint8_t> out) {
+  std::array<std::uint8_t, 18> payload{};
+  ByteWriter w(payload);
+  w.u64(static_cast<std::uint64_t>(m.tc1));
+  w.u64(static_cast<std::uint64_t>(m.ts1));
+  w.u8(m.target_system);  // extensions
+  w.u8(m.target_component);
+  return finish_frame(payload, kTimesyncId, identity, sequence, out);
+}
+
 ObstacleDistance to_obstacle_distance(const protocol::Obstacles& sectors, std::uint64_t time_usec,
                                       std::uint16_t min_distance_cm,
                                       std::uint16_t max_distance_cm) {
@@ -176,6 +207,21 @@ ObstacleDistance to_obstacle_distance(const protocol::Obstacles& sectors, std::u
         cm > max_distance_cm ? max_distance_cm + 1 : std::max<long>(cm, min_distance_cm));
   }
   return out;
+}
+
+void set_sequence(std::span<std::uint8_t> frame, std::uint8_t sequence) {
+  require(frame.size() >= kHeaderSize + kChecksumSize && frame[0] == kStx && frame[2] == 0 &&
+              frame.size() == kHeaderSize + frame[1] + kChecksumSize,
+          "mavlink: not an unsigned MAVLink 2 frame");
+  const auto extra = crc_extra_of(message_id_of(frame));
+  require(extra.has_value(), "mavlink: a frame of message ", message_id_of(frame),
+          ", which this encoder does not make");
+  frame[4] = sequence;
+  const std::size_t length = frame[1];
+  std::uint16_t crc = crc16_x25(frame.subspan(1, kHeaderSize - 1 + length));
+  crc = crc16_x25(std::span(&*extra, 1), crc);
+  frame[kHeaderSize + length] = static_cast<std::uint8_t>(crc);
+  frame[kHeaderSize + length + 1] = static_cast<std::uint8_t>(crc >> 8);
 }
 
 std::optional<Frame> parse_frame(std::span<const std::uint8_t> bytes) {
@@ -232,6 +278,35 @@ std::optional<StatusText> decode_status_text(const Frame& frame) {
   std::memcpy(m.text.data(), frame.payload.data() + 1, kStatusTextSize);
   m.id = static_cast<std::uint16_t>(frame.payload[51] | frame.payload[52] << 8);
   m.chunk_seq = frame.payload[53];
+  return m;
+}
+
+std::optional<Odometry> decode_odometry(const Frame& frame) {
+  if (frame.message_id != kOdometryId) return std::nullopt;
+  ByteReader r(frame.payload);
+  Odometry m;
+  m.time_usec = r.u64();
+  for (float* v : {&m.x, &m.y, &m.z}) *v = r.f32();
+  for (float& v : m.q) v = r.f32();
+  for (float* v : {&m.vx, &m.vy, &m.vz, &m.rollspeed, &m.pitchspeed, &m.yawspeed}) *v = r.f32();
+  for (float& v : m.pose_covariance) v = r.f32();
+  for (float& v : m.velocity_covariance) v = r.f32();
+  m.frame_id = r.u8();
+  m.child_frame_id = r.u8();
+  m.reset_counter = r.u8();
+  m.estimator_type = r.u8();
+  m.quality = static_cast<std::int8_t>(r.u8());
+  return m;
+}
+
+std::optional<Timesync> decode_timesync(const Frame& frame) {
+  if (frame.message_id != kTimesyncId) return std::nullopt;
+  ByteReader r(frame.payload);
+  Timesync m;
+  m.tc1 = static_cast<std::int64_t>(r.u64());
+  m.ts1 = static_cast<std::int64_t>(r.u64());
+  m.target_system = r.u8();
+  m.target_component = r.u8();
   return m;
 }
 

@@ -71,6 +71,7 @@ class SparseStage final : public PipelineStage {
   void match(const PairWork& work) {
     FrameResult& r = work.result;
     r.matches = matcher_.match(r.left, r.corners_left, r.right, r.corners_right);
+    r.left_features = matcher_.left_features();
     if (triangulator_ != nullptr) triangulate(r);
     if (protocol::has_stage(work.run, protocol::Stage::rectify)) measure_rows(r);
   }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <string_view>
 #include <thread>
@@ -29,6 +30,7 @@ struct LinkConfig {
   int baud = 115200;
   hal::Nanoseconds burst = 250'000'000;  // the budget may be saved up for this long
   std::size_t queue_bytes = 16 * 1024;   // encoded frames waiting for the port
+  bool odometry = false;  // the odometry is sent every pair (essential, like the summaries)
 };
 
 struct LinkCounters {
@@ -36,11 +38,12 @@ struct LinkCounters {
   std::uint64_t messages_dropped = 0;  // over budget, queue full, or lost to a hang-up
   std::uint64_t over_budget = 0;       // of those, more than the baud rate carries
   std::uint64_t bytes_written = 0;
-  std::uint64_t commands = 0;         // valid commands received
-  std::uint64_t rejected_frames = 0;  // received frames the decoder rejected (and overflows
-                                      // that could not even be answered)
-  std::uint64_t stuck_writes = 0;     // frames given up because the port took nothing
-  std::uint64_t thread_faults = 0;    // exceptions from the port the thread caught and went on
+  std::uint64_t commands = 0;          // valid commands received
+  std::uint64_t rejected_frames = 0;   // received frames the decoder rejected (and overflows
+                                       // that could not even be answered)
+  std::uint64_t stuck_writes = 0;      // frames given up because the port took nothing
+  std::uint64_t thread_faults = 0;     // exceptions from the port the thread caught and went on
+  std::uint64_t timesync_answers = 0;  // MAVLink: the autopilot's TIMESYNC requests answered
 };
 
 // A command from the robot, with the sequence number its ack must carry.
@@ -82,6 +85,8 @@ class Link {
   // native protocol's larger messages; a rare event said (STATUSTEXT), as essential as heartbeats.
   bool publish_named_value(std::string_view name, float value, std::uint32_t time_boot_ms);
   bool publish_status_text(mavlink::Severity severity, std::string_view text);
+  // Where the rig is (ODOMETRY), as essential as the obstacles.
+  bool publish_odometry(const mavlink::Odometry& message);
   bool next_command(Command& out);
   // The robot's bytes, decoded into the command queue as the link's thread does with what it
   // reads. Only while that thread does not run (a link without a port; the fuzz target).
@@ -102,11 +107,19 @@ class Link {
   // An essential message (link_budget.hpp) may take the whole budget; the others leave the
   // reserve for the essential ones.
   bool enqueue(std::span<const std::uint8_t> frame, bool essential);
-  bool enqueue_mavlink(std::span<const std::uint8_t> frame, bool essential);
+  bool enqueue_locked(std::span<const std::uint8_t> frame, bool essential);
+  // Queues the frame `encode(out)` writes; MAVLink frames are numbered as they go onto the wire
+  // (write_front), so one dropped here is no gap in the sequence.
+  template <class Encode>
+  bool enqueue_mavlink(bool essential, const Encode& encode);
   bool within_budget(std::size_t bytes, double reserve);
   void run();
   bool write_front();
   void read_commands(hal::Nanoseconds timeout);
+  // MAVLink input: the autopilot's TIMESYNC requests (nothing else is read).
+  void take_mavlink_bytes(std::span<const std::byte> bytes);
+  // The last request's answer, at the front of the queue (its time stamped now).
+  void answer_timesync();
 
   hal::SerialPort* port_;
   hal::Clock& clock_;
@@ -117,7 +130,6 @@ class Link {
   JournalLimit faults_said_{10'000'000'000};  // runs of the port's exceptions: a line in 10 s
   hal::Nanoseconds last_refill_;
   std::uint16_t sequence_ = 0;
-  std::uint8_t mavlink_sequence_ = 0;
   std::array<std::uint8_t, protocol::kMaxFrameSize + mavlink::kMaxFrameSize> encode_buffer_{};
 
   // The queue of encoded frames: a byte ring with each frame's length, guarded by mutex_.
@@ -139,7 +151,11 @@ class Link {
   std::array<std::byte, 512> read_buffer_{};
   // Replays delivered: the frame loop answers a resend by its content (CommandMemory).
   protocol::FrameDecoder decoder_{true};
-  bool broken_frame_ = false;                    // the last frame was given up half written
+  bool broken_frame_ = false;          // the last frame was given up half written
+  std::uint8_t mavlink_sequence_ = 0;  // of the next MAVLink frame written
+  mavlink::StreamDecoder mavlink_decoder_;
+  std::optional<mavlink::Timesync> timesync_request_;  // to answer, with its sender as target
+  std::array<std::uint8_t, mavlink::kMaxFrameSize> timesync_buffer_{};
   std::atomic<hal::Nanoseconds> last_round_{0};  // steady time the thread last went round
   std::atomic<bool> stopping_{false};
   std::atomic<hal::Nanoseconds> drain_deadline_{0};

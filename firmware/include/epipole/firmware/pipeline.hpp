@@ -27,6 +27,7 @@
 #include "epipole/firmware/protocol/messages.hpp"
 #include "epipole/firmware/rig_correction.hpp"
 #include "epipole/firmware/sparse_points.hpp"
+#include "epipole/firmware/visual_odometry.hpp"
 #include "epipole/vision/cascade.hpp"
 #include "epipole/vision/corner.hpp"
 #include "epipole/vision/sparse_stereo.hpp"
@@ -67,6 +68,7 @@ struct FrameResult {
   const protocol::Obstacles* obstacles = nullptr;   // null without disparity or calibration
   const protocol::DepthGrid* depth_grid = nullptr;  // the same, or without the board's grid
   std::span<const vision::SparseMatch> matches;     // sparse matches along the rows
+  vision::DescribedCorners left_features;           // the left corners the matches index
   std::span<const SparsePoint> points;              // their 3-D points (with a calibration)
   // The matches to send as 3-D points (sparse.max_points, smallest descriptor distance first):
   // indices into `points`.
@@ -78,6 +80,8 @@ struct FrameResult {
   std::optional<calib::DriftEstimate> drift;
   // Viola-Jones detections in the rectified left image, and each one's depth (valid when the
   // disparity ran and the box holds valid disparities).
+  // Where the rig is and how it moves (the odometry stage's; null when it did not run).
+  const OdometryState* odometry = nullptr;
   std::span<const vision::Detection> detections;
   std::span<const DetectionDepth> detection_depths;
   StageTimes times{};

@@ -1,8 +1,8 @@
 #pragma once
 
-// MAVLink 2 output for PX4 and ArduPilot: HEARTBEAT, OBSTACLE_DISTANCE, NAMED_VALUE_FLOAT and
-// STATUSTEXT, encoded to the common message set's definitions (no generated headers needed for
-// four messages).
+// MAVLink 2 for PX4 and ArduPilot: HEARTBEAT, OBSTACLE_DISTANCE, NAMED_VALUE_FLOAT, STATUSTEXT,
+// ODOMETRY and TIMESYNC, encoded to the common message set's definitions (no generated headers
+// needed for six messages).
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -27,6 +27,10 @@ inline constexpr std::uint32_t kNamedValueFloatId = 251;
 inline constexpr std::uint8_t kNamedValueFloatCrcExtra = 170;
 inline constexpr std::uint32_t kStatusTextId = 253;
 inline constexpr std::uint8_t kStatusTextCrcExtra = 83;
+inline constexpr std::uint32_t kOdometryId = 331;
+inline constexpr std::uint8_t kOdometryCrcExtra = 91;
+inline constexpr std::uint32_t kTimesyncId = 111;
+inline constexpr std::uint8_t kTimesyncCrcExtra = 34;
 inline constexpr std::size_t kNamedValueNameSize = 10;  // NAMED_VALUE_FLOAT.name, char[10]
 inline constexpr std::size_t kStatusTextSize = 50;      // STATUSTEXT.text, char[50]
 
@@ -36,6 +40,8 @@ inline constexpr std::uint8_t kMavStateCalibrating = 2;  // not ready: no calibr
 inline constexpr std::uint8_t kMavStateActive = 4;
 inline constexpr std::uint8_t kMavCompIdObstacleAvoidance = 196;
 inline constexpr std::uint8_t kMavFrameBodyFrd = 12;
+inline constexpr std::uint8_t kMavFrameLocalFrd = 20;
+inline constexpr std::uint8_t kMavEstimatorTypeVio = 3;
 inline constexpr std::uint8_t kMavDistanceSensorUnknown = 4;
 inline constexpr std::uint16_t kUnknownDistance = 0xFFFF;
 
@@ -67,6 +73,33 @@ struct ObstacleDistance {
   std::uint8_t frame = kMavFrameBodyFrd;
 };
 
+// ODOMETRY: the pose of child_frame_id (the vehicle's body) in frame_id, its velocity in the
+// child frame and its rates; covariances as the upper triangle of 6x6 row-major matrices
+// (x, y, z, roll, pitch, yaw), NaN in the first element: unknown.
+struct Odometry {
+  std::uint64_t time_usec = 0;
+  float x = 0, y = 0, z = 0;
+  std::array<float, 4> q{1, 0, 0, 0};  // w, x, y, z
+  float vx = 0, vy = 0, vz = 0;
+  float rollspeed = 0, pitchspeed = 0, yawspeed = 0;
+  std::array<float, 21> pose_covariance{};
+  std::array<float, 21> velocity_covariance{};
+  std::uint8_t frame_id = kMavFrameLocalFrd;
+  std::uint8_t child_frame_id = kMavFrameBodyFrd;
+  std::uint8_t reset_counter = 0;
+  std::uint8_t estimator_type = kMavEstimatorTypeVio;
+  std::int8_t quality = 0;  // 0 unknown, -1 failed, 1..100
+};
+
+// TIMESYNC: a request has tc1 0 and ts1 the sender's time (ns); the answer, tc1 the answerer's
+// time and ts1 the request's. target_system/component (extensions): the request's sender.
+struct Timesync {
+  std::int64_t tc1 = 0;
+  std::int64_t ts1 = 0;
+  std::uint8_t target_system = 0;
+  std::uint8_t target_component = 0;
+};
+
 // CRC-16/MCRF4XX ("X.25" in MAVLink): crc16("123456789") = 0x6F91.
 std::uint16_t crc16_x25(std::span<const std::uint8_t> bytes, std::uint16_t crc = 0xFFFF);
 
@@ -79,6 +112,10 @@ std::size_t encode_named_value_float(std::string_view name, float value, std::ui
 // STATUSTEXT: `text` cut at kStatusTextSize characters (one message; no chunks).
 std::size_t encode_status_text(Severity severity, std::string_view text, const Identity& identity,
                                std::uint8_t sequence, std::span<std::uint8_t> out);
+std::size_t encode_odometry(const Odometry& message, const Identity& identity,
+                            std::uint8_t sequence, std::span<std::uint8_t> out);
+std::size_t encode_timesync(const Timesync& message, const Identity& identity,
+                            std::uint8_t sequence, std::span<std::uint8_t> out);
 std::size_t encode_heartbeat(const Identity& identity, std::uint8_t sequence,
                              std::span<std::uint8_t> out,
                              std::uint8_t system_status = kMavStateActive);
@@ -91,6 +128,10 @@ std::size_t encode_obstacle_distance(const ObstacleDistance& message, const Iden
 ObstacleDistance to_obstacle_distance(const protocol::Obstacles& sectors, std::uint64_t time_usec,
                                       std::uint16_t min_distance_cm, std::uint16_t max_distance_cm);
 
+// Gives an encoded frame of the messages above (unsigned) another sequence number, its checksum
+// made again: a sender numbers its frames as they go onto the wire.
+void set_sequence(std::span<std::uint8_t> frame, std::uint8_t sequence);
+
 // A received MAVLink 2 frame whose checksum matched (for tests and the host tool).
 struct Frame {
   std::uint8_t sequence = 0;
@@ -102,7 +143,7 @@ struct Frame {
   std::size_t wire_size = 0;  // the frame's bytes: header, payload, checksum (and signature)
 };
 
-// Parses one frame at the start of `bytes` (of the four messages above: the checksum needs the
+// Parses one frame at the start of `bytes` (of the six messages above: the checksum needs the
 // message's CRC extra); nullopt when it is not a valid, complete frame of those.
 std::optional<Frame> parse_frame(std::span<const std::uint8_t> bytes);
 
@@ -136,6 +177,8 @@ std::optional<Heartbeat> decode_heartbeat(const Frame& frame);
 std::optional<ObstacleDistance> decode_obstacle_distance(const Frame& frame);
 std::optional<NamedValueFloat> decode_named_value_float(const Frame& frame);
 std::optional<StatusText> decode_status_text(const Frame& frame);
+std::optional<Odometry> decode_odometry(const Frame& frame);
+std::optional<Timesync> decode_timesync(const Frame& frame);
 
 // What the stream decoder has seen.
 struct StreamStats {

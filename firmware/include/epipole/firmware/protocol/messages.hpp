@@ -14,7 +14,7 @@ namespace epipole::protocol {
 // fields(io, m): protocol/fields.hpp says what `io` offers) and its place in the Message variant
 // below; the codec, the decoder's checks and the host tool's JSON take all from there.
 
-inline constexpr std::uint8_t kVersion = 8;
+inline constexpr std::uint8_t kVersion = 9;
 
 enum class MessageType : std::uint8_t {
   // firmware -> robot
@@ -27,6 +27,7 @@ enum class MessageType : std::uint8_t {
   command_ack = 0x07,
   depth_grid = 0x08,
   ground = 0x09,
+  odometry = 0x0A,
   // robot -> firmware
   set_trigger_rate = 0x80,
   set_exposure = 0x81,
@@ -252,6 +253,70 @@ struct Ground {
   friend bool operator==(const Ground&, const Ground&) = default;
 };
 
+// Where the rig is and how it moves (the odometry stage, docs/odometry.md), version 9. The
+// odometry frame is the left camera's at the first keyframe, OpenCV's axes (x right, y down,
+// z forward); the pose is the left camera's in it. `status` lost: the pose is the last one
+// tracked, kept; starting: no pose yet (every other field 0). `reset_counter` goes up each time
+// the pose starts again after lost tracking (from the pose it had: the frame stays).
+enum class OdometryStatus : std::uint8_t { starting = 0, tracking = 1, lost = 2 };
+constexpr OdometryStatus last_value(OdometryStatus) {
+  return OdometryStatus::lost;
+}
+struct Odometry {
+  static constexpr MessageType kType = MessageType::odometry;
+  static constexpr const char* kName = "odometry";
+  std::uint32_t frame = 0;
+  std::uint64_t trigger_ns = 0;  // the pair's time, as its frame summary's
+  OdometryStatus status = OdometryStatus::starting;
+  std::uint8_t reset_counter = 0;
+  std::uint8_t quality = 0;                   // 0..100: the share of features consistent, scaled
+  std::int32_t x_mm = 0, y_mm = 0, z_mm = 0;  // the camera's position
+  // Its orientation (camera to odometry frame), a unit quaternion x 1e9, w >= 0.
+  std::int32_t qw_e9 = 1'000'000'000, qx_e9 = 0, qy_e9 = 0, qz_e9 = 0;
+  std::int32_t vx_mm_s = 0, vy_mm_s = 0, vz_mm_s = 0;        // velocity, odometry frame
+  std::int32_t wx_mrad_s = 0, wy_mrad_s = 0, wz_mrad_s = 0;  // angular velocity, camera frame
+  // The pose's uncertainty: standard deviations of the position (odometry frame's axes) and of
+  // the rotation about them (the covariance's diagonal; saturated at 65 535).
+  std::uint16_t sx_mm = 0, sy_mm = 0, sz_mm = 0;
+  std::uint16_t srx_cdeg = 0, sry_cdeg = 0, srz_cdeg = 0;
+  std::uint16_t features = 0;  // the keyframe's features looked for
+  std::uint16_t tracked = 0;   // found again in this pair
+  std::uint16_t inliers = 0;   // consistent with its motion
+  std::uint32_t keyframes = 0;
+  template <class Io, class Self>
+  static void fields(Io& io, Self& m) {
+    io("frame", m.frame);
+    io("trigger_ns", m.trigger_ns);
+    io("status", m.status);
+    io("reset_counter", m.reset_counter);
+    io("quality", m.quality);
+    io("x_mm", m.x_mm);
+    io("y_mm", m.y_mm);
+    io("z_mm", m.z_mm);
+    io("qw_e9", m.qw_e9);
+    io("qx_e9", m.qx_e9);
+    io("qy_e9", m.qy_e9);
+    io("qz_e9", m.qz_e9);
+    io("vx_mm_s", m.vx_mm_s);
+    io("vy_mm_s", m.vy_mm_s);
+    io("vz_mm_s", m.vz_mm_s);
+    io("wx_mrad_s", m.wx_mrad_s);
+    io("wy_mrad_s", m.wy_mrad_s);
+    io("wz_mrad_s", m.wz_mrad_s);
+    io("sx_mm", m.sx_mm);
+    io("sy_mm", m.sy_mm);
+    io("sz_mm", m.sz_mm);
+    io("srx_cdeg", m.srx_cdeg);
+    io("sry_cdeg", m.sry_cdeg);
+    io("srz_cdeg", m.srz_cdeg);
+    io("features", m.features);
+    io("tracked", m.tracked);
+    io("inliers", m.inliers);
+    io("keyframes", m.keyframes);
+  }
+  friend bool operator==(const Odometry&, const Odometry&) = default;
+};
+
 struct Point {
   std::uint16_t u_x16 = 0, v_x16 = 0;         // rectified left image position x 16
   std::int32_t x_mm = 0, y_mm = 0, z_mm = 0;  // left camera frame
@@ -434,7 +499,7 @@ struct SaveCalibration {
 
 using Message = std::variant<Health, FrameSummary, Detections, Obstacles, Points, CalibrationHealth,
                              CommandAck, SetTriggerRate, SetExposure, SetStages, Snapshot,
-                             DepthGrid, Record, Ground, Recalibrate, SaveCalibration>;
+                             DepthGrid, Record, Ground, Recalibrate, SaveCalibration, Odometry>;
 
 MessageType type_of(const Message& message);
 const char* name_of(MessageType type);

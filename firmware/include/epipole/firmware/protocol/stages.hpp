@@ -21,8 +21,9 @@ enum class Stage : std::uint8_t {
   sparse = 4,
   detect = 5,
   ground = 6,
-  publish = 7,
-  total = 8,
+  odometry = 7,
+  publish = 8,
+  total = 9,
 };
 
 using StageMask = std::uint16_t;
@@ -47,7 +48,7 @@ struct StageInfo {
   StageMask needs;  // stages whose results it reads: it is skipped when they did not run
 };
 
-inline constexpr std::array<StageInfo, 9> kStages{{
+inline constexpr std::array<StageInfo, 10> kStages{{
     {Stage::capture, "capture", "capture_us", StageKind::always, 0},
     {Stage::rectify, "rectify", "rectify_us", StageKind::switchable, 0},
     {Stage::corners, "corners", "corners_us", StageKind::switchable, 0},
@@ -55,6 +56,7 @@ inline constexpr std::array<StageInfo, 9> kStages{{
     {Stage::sparse, "sparse", "sparse_us", StageKind::switchable, stage_bit(Stage::corners)},
     {Stage::detect, "detect", "detect_us", StageKind::switchable, 0},
     {Stage::ground, "ground", "ground_us", StageKind::switchable, stage_bit(Stage::disparity)},
+    {Stage::odometry, "odometry", "odometry_us", StageKind::switchable, stage_bit(Stage::sparse)},
     {Stage::publish, "publish", "publish_us", StageKind::always, 0},
     {Stage::total, "total", "total_us", StageKind::sum, 0},
 }};

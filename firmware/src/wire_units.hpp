@@ -1,6 +1,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -18,6 +19,15 @@ T saturate(std::uint64_t value) {
 inline std::uint32_t to_us(hal::Nanoseconds ns) {
   return saturate<std::uint32_t>(static_cast<std::uint64_t>(std::max<hal::Nanoseconds>(ns, 0)) /
                                  1000);
+}
+
+// `value` in units of `unit`, rounded and saturated to T's range (NaN: 0).
+template <typename T>
+T in_units(double value, double unit) {
+  const double v = value / unit;
+  if (std::isnan(v)) return T{0};
+  return static_cast<T>(std::llround(
+      std::clamp(v, double{std::numeric_limits<T>::min()}, double{std::numeric_limits<T>::max()})));
 }
 
 }  // namespace epipole::firmware::detail
