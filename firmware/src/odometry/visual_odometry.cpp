@@ -208,11 +208,16 @@ const OdometryState& VisualOdometry::update(hal::Nanoseconds time,
   // Since the pair the motion so far describes: over the pairs lost meanwhile too.
   const double dt = static_cast<double>(time - tracked_time_) / 1e9;
 
-  // Where the keyframe's features should be: the motion so far, and the last step's again.
+  // Where the keyframe's features should be: the motion so far, and the last step's again; that
+  // failing, in a wider window, and then as the last tracked pair saw them.
   const calib::RigidMotion step{rotation_of(twist_.head<3>() * dt), twist_.tail<3>() * dt};
   const calib::RigidMotion predicted = step.after(since_keyframe_);
   calib::StereoMotion estimate = follow(window_, left, predicted);
   if (!estimate.valid) estimate = follow(wide_window_, left, predicted);
+  // The motion changed (a turn ended, the rig stopped): where the last tracked pair saw them.
+  if (!estimate.valid && dt > 0 && !twist_.isZero()) {
+    estimate = follow(wide_window_, left, since_keyframe_);
+  }
   state_.inliers = estimate.inliers;
 
   // The step from the last pair, refused when faster than the board allows (a wrong motion).

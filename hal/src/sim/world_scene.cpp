@@ -4,8 +4,10 @@
 #include "sim/world_scene.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -14,6 +16,7 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -432,10 +435,10 @@ std::string truth_number(double v) {
 
 StereoImages render_world(const SimWorld& world, const calib::StereoCalibration& rig, int width,
                           int height) {
-  const std::vector<RigPose> poses(static_cast<std::size_t>(std::max(world.frames, 1)), world.rig);
-  return render_world(world, poses, rig, width, height);
+  return render_world(world, world_poses(world), rig, width, height);
 }
 
+// The poses' pairs rendered on every core: each run of equal poses once, its noise per frame.
 StereoImages render_world(const SimWorld& world, std::span<const RigPose> poses,
                           const calib::StereoCalibration& rig, int width, int height) {
   require(rig.width == width && rig.height == height,
@@ -445,20 +448,50 @@ StereoImages render_world(const SimWorld& world, std::span<const RigPose> poses,
   require(!poses.empty(), "no pose of the rig to render the world from");
   calib::validate(rig);
   const std::vector<WorldSurface> surfaces = load_world_surfaces(world);
-  StereoImages images;
-  Image<float> left;
-  Image<float> right;
+  std::vector<std::size_t> runs;  // the first frame of each run of equal poses
   for (std::size_t i = 0; i < poses.size(); ++i) {
-    if (i == 0 || poses[i] != poses[i - 1]) {
-      const WorldView view = left_camera_view(poses[i]);
-      left = render_world_view(world, surfaces, view, rig.left.camera, width, height);
-      right = render_world_view(world, surfaces, right_camera_view(view, rig), rig.right.camera,
-                                width, height);
-    }
-    images.left.push_back(with_sensor_noise(left, world.noise, 2 * i));
-    images.right.push_back(with_sensor_noise(right, world.noise, 2 * i + 1));
+    if (i == 0 || poses[i] != poses[i - 1]) runs.push_back(i);
   }
+  StereoImages images;
+  images.left.resize(poses.size());
+  images.right.resize(poses.size());
+  std::atomic<std::size_t> next_run{0};
+  const auto render_runs = [&] {
+    for (std::size_t r = next_run++; r < runs.size(); r = next_run++) {
+      const std::size_t end = r + 1 < runs.size() ? runs[r + 1] : poses.size();
+      const WorldView view = left_camera_view(poses[runs[r]]);
+      const Image<float> left =
+          render_world_view(world, surfaces, view, rig.left.camera, width, height);
+      const Image<float> right = render_world_view(world, surfaces, right_camera_view(view, rig),
+                                                   rig.right.camera, width, height);
+      for (std::size_t i = runs[r]; i < end; ++i) {
+        images.left[i] = with_sensor_noise(left, world.noise, 2 * i);
+        images.right[i] = with_sensor_noise(right, world.noise, 2 * i + 1);
+      }
+    }
+  };
+  const std::size_t helpers =
+      std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), runs.size()) - 1;
+  std::vector<std::jthread> threads;
+  threads.reserve(helpers);
+  for (std::size_t t = 0; t < helpers; ++t) threads.emplace_back(render_runs);
+  render_runs();
   return images;
+}
+
+std::vector<calib::RigidMotion> world_trajectory(const SimWorld& world,
+                                                 const calib::StereoCalibration& rig) {
+  const std::vector<RigPose> poses = world_poses(world);
+  // The rectified left camera's axes in the world: its directions d are R1^T d in the left's.
+  const auto rectified = [&](const RigPose& pose) {
+    const WorldView view = left_camera_view(pose);
+    return calib::RigidMotion{view.to_world * rig.left.rectification.transpose(), view.centre};
+  };
+  const calib::RigidMotion first_inverse = rectified(poses.front()).inverse();
+  std::vector<calib::RigidMotion> out;
+  out.reserve(poses.size());
+  for (const RigPose& pose : poses) out.push_back(first_inverse.after(rectified(pose)));
+  return out;
 }
 
 GroundTruth ground_truth(const RigPose& pose, const calib::StereoCalibration& rig) {
@@ -556,7 +589,27 @@ void write_world_truth(const SimWorld& world, const calib::StereoCalibration& ri
   }
   yaml << "# The rectified left view's disparity x 16 (16-bit PNG), 0 where nothing is hit.\n"
        << "true_disparity: true_disparity.png\n";
+  if (world.path) {
+    yaml << "# The rig's path: the rectified left camera's pose at each pair (TUM: seconds from\n"
+         << "# the first pair, tx ty tz qx qy qz qw) in the first pair's rectified left frame.\n"
+         << "trajectory: trajectory.tum\n";
+    write_text_file_atomically(directory / "trajectory.tum",
+                               tum_trajectory(world_trajectory(world, rig), world.path->rate_hz));
+  }
   write_text_file_atomically(directory / "truth.yaml", yaml.str());
+}
+
+std::string tum_trajectory(std::span<const calib::RigidMotion> poses, double rate_hz) {
+  std::ostringstream out;
+  out.precision(9);
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const Eigen::Quaterniond q(poses[i].rotation);
+    const Eigen::Vector3d& t = poses[i].translation;
+    out << std::fixed << static_cast<double>(i) / rate_hz << std::defaultfloat << ' ' << t.x()
+        << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' '
+        << q.w() << '\n';
+  }
+  return out.str();
 }
 
 }  // namespace epipole::hal

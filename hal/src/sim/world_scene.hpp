@@ -3,8 +3,11 @@
 #include <Eigen/Core>
 #include <filesystem>
 #include <span>
+#include <string>
+#include <vector>
 
 #include "epipole/calib/calibration.hpp"
+#include "epipole/calib/p3p.hpp"
 #include "epipole/core/image.hpp"
 #include "sim/sim_files.hpp"
 #include "sim/world_settings.hpp"
@@ -19,18 +22,27 @@ namespace epipole::hal {
 // towards y about z (positive: the image's right side lower), yaw turns the level heading
 // towards +X. The right camera is where the calibration puts it (x_right = R x_left + T).
 
-// The raw pairs of the world seen from world.rig: world.frames pairs of one geometry, each
-// camera's noise its own per frame (deterministic). Each raw pixel averages 2x2 rays cast
-// through PinholeCamera::normalize() (distortion included; a ray outside the lens's domain is
-// black), the nearest hit's texture sampled trilinearly from its mip pyramid at the ray's
-// footprint; no hit is black. Textures are read with load_gray. Throws Error when the
-// calibration is not width x height, or naming a texture that cannot be read.
+// The raw pairs of the world seen from world_poses(world) (world.frames pairs of one geometry, or
+// one pair per pose of its path), each camera's noise its own per frame (deterministic). Each raw
+// pixel averages 2x2 rays cast through PinholeCamera::normalize() (distortion included; a ray
+// outside the lens's domain is black), the nearest hit's texture sampled trilinearly from its mip
+// pyramid at the ray's footprint; no hit is black. Textures are read with load_gray. Throws Error
+// when the calibration is not width x height, or naming a texture that cannot be read.
 StereoImages render_world(const SimWorld& world, const calib::StereoCalibration& rig, int width,
                           int height);
 // The same, one pair per pose (a trajectory), frame i's noise that of frame i above; pairs of
 // the same pose as the one before are rendered once.
 StereoImages render_world(const SimWorld& world, std::span<const RigPose> poses,
                           const calib::StereoCalibration& rig, int width, int height);
+
+// The rectified left camera's pose at each pair of world_poses(world), in the first pair's
+// rectified left camera frame (where the firmware's odometry starts): the odometry's truth.
+// odometry point = trajectory[i].apply(point in pair i's rectified left frame).
+std::vector<calib::RigidMotion> world_trajectory(const SimWorld& world,
+                                                 const calib::StereoCalibration& rig);
+
+// Poses as a TUM trajectory file's lines (timestamp tx ty tz qx qy qz qw), pose i at i / rate_hz.
+std::string tum_trajectory(std::span<const calib::RigidMotion> poses, double rate_hz);
 
 // The floor in the rectified left camera frame (R1 * left), as the firmware defines it.
 struct GroundTruth {

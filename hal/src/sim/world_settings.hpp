@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -56,8 +57,22 @@ struct WorldBox {
   WorldTexture texture;
 };
 
+// A path the rig follows (the world rendered as a trajectory, one pair per pose): from the first
+// waypoint facing the second, straight from each waypoint to the next at speed_mps, turning on
+// the spot at each to face the next one at turn_dps (the shorter way); at the end of a closed
+// path (the last waypoint the first), it turns to face the second again. Its poses are taken at
+// rate_hz, from the start: the board's trigger rate, so that pair i is the pose at i / rate_hz.
+// Height, pitch and roll are the world's rig's.
+struct WorldPath {
+  std::vector<std::array<double, 2>> waypoints_m;  // X, Z over the floor; at least 2
+  double speed_mps = 1;
+  double turn_dps = 90;
+  double rate_hz = 15;
+};
+
 struct SimWorld {
   RigPose rig;
+  std::optional<WorldPath> path;  // the rig moves: `frames` is not used
   WorldTexture floor;
   std::optional<WorldWall> wall;
   std::vector<WorldBox> boxes;
@@ -68,5 +83,8 @@ struct SimWorld {
 // The map `world` at `key` ("sim.scenes.NAME.world") of the board file: every number checked,
 // unknown keys refused; Error naming the file and the key. Textures are not read here.
 SimWorld read_world(const yaml::Fields& file, const YAML::Node& world, const std::string& key);
+
+// The rig's pose at each pair: along the world's path, or world.frames times world.rig.
+std::vector<RigPose> world_poses(const SimWorld& world);
 
 }  // namespace epipole::hal
