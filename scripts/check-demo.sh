@@ -76,6 +76,16 @@ while read -r scene; do
       ((.last_ground.roll_cdeg - .truth.roll_cdeg) | fabs) <= 100' \
       "the ground $(jq -c .last_ground <<<"$s") is not the world's $(jq -c .truth <<<"$s")"
     echo "check-demo: $scene: ground $(jq -r '"\(.last_ground.height_mm) mm high, pitch \(.last_ground.pitch_cdeg / 100) deg, roll \(.last_ground.roll_cdeg / 100) deg; truth \(.truth.height_mm | round) mm, \(.truth.pitch_cdeg | round / 100) deg, \(.truth.roll_cdeg | round / 100) deg"' <<<"$s")"
+    # A rendered path: the odometry at its last pair against the exact path (docs/odometry.md).
+    if jq -e '.odometry' <<<"$s" >/dev/null; then
+      nonempty "$dir/trajectory.tum"
+      nonempty "$dir/odometry.tum"
+      nonempty "$dir/trajectory.png"
+      check '.odometry.path_m >= 19.9 and .odometry.end_error_percent <= 1 and
+        .odometry.end_heading_deg <= 1 and .odometry.lost == 0' \
+        "the odometry $(jq -c .odometry <<<"$s") strays from the path"
+      echo "check-demo: $scene: odometry $(jq -r '"\(.odometry.tracked) pairs tracked; at the last, \(.odometry.end_error_m * 1000 | round) mm (\(.odometry.end_error_percent * 100 | round / 100) % of \(.odometry.path_m * 10 | round / 10) m) and \(.odometry.end_heading_deg * 100 | round / 100) deg off the path"' <<<"$s")"
+    fi
   fi
   echo "check-demo: $scene: $(jq -r --arg type "$per_frame" \
     '"\(.frames) pairs, \(.received[$type] // 0) \($type) messages decoded (\(.decoder.protocol), \(.decoder.errors) errors), \(.pictures | length) pictures"' <<<"$s")"

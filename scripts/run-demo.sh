@@ -4,8 +4,10 @@
 #   1. calibrates the chessboard stereo rig from its 13 pairs (rig.yaml, a JSON report and a
 #      rectified preview), as a user does before flashing a board;
 #   2. runs the firmware on the simulated board over real stereo images (epipole sim): the
-#      chessboard rig with its calibration, Middlebury Aloe, and a synthetic pair with faces at a
-#      known depth. For each scene: the rectified pair with epipolar lines, corners, colour
+#      chessboard rig with its calibration, Middlebury Aloe, a synthetic pair with faces at a
+#      known depth, a rendered floor with boxes, and a rendered room walked round a 5 m square
+#      (its whole path; the odometry drawn over the exact path in sim/loop/trajectory.png). For
+#      each scene: the rectified pair with epipolar lines, corners, colour
 #      disparity with a legend, the raw serial stream as the robot received it and its decoded
 #      messages (serial.jsonl), and a summary; the chessboard scene is also recorded, every pair,
 #      as ROS 2 messages in an MCAP file (docs/outputs.md) that Foxglove, Lichtblick and ros2 bag

@@ -32,6 +32,7 @@
 #include "sim/sim_settings.hpp"
 #include "sim/world_scene.hpp"
 #include "stereo_preview.hpp"
+#include "trajectory_check.hpp"
 
 namespace epipole::tools {
 
@@ -97,6 +98,8 @@ class LinkRecorder {
   nlohmann::json stats() const { return decoder_.stats(); }
   const nlohmann::json& last_health() const { return last_health_; }
   const nlohmann::json& last_ground() const { return last_ground_; }
+  // The native odometry messages, in order (after finish()).
+  const std::vector<nlohmann::json>& odometry() const { return odometry_; }
 
  private:
   void run() {
@@ -119,6 +122,7 @@ class LinkRecorder {
     ++counts_[json["type"].get<std::string>()];
     if (json["type"] == "health") last_health_ = json;
     if (json["type"] == "ground") last_ground_ = json;
+    if (json["type"] == "odometry") odometry_.push_back(json);
     return true;
   }
 
@@ -129,6 +133,7 @@ class LinkRecorder {
   std::map<std::string, int> counts_;
   nlohmann::json last_health_;
   nlohmann::json last_ground_;
+  std::vector<nlohmann::json> odometry_;
   std::atomic<bool> stopping_{false};
   std::thread thread_;
 };
@@ -277,8 +282,12 @@ nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
   const nlohmann::json truth = write_truth(config, directory);
   firmware::Firmware fw(config);
   const int images = static_cast<int>(hal::simulated_board(fw.board().hardware())->scene_images());
+  // A rendered path is walked to its end: one pair per pose.
+  const hal::SimScene& chosen_scene = hal::sim_settings(config.sections).chosen();
+  const bool path = chosen_scene.world && chosen_scene.world->path;
+  const std::uint64_t frames = path ? static_cast<std::uint64_t>(images) : options.frames;
   PictureWriter pictures(directory, images, options.pictures, config.stereo.max_disparity);
-  FrameProgress progress(pictures, scene, options.frames);
+  FrameProgress progress(pictures, scene, frames);
   fw.frame_loop().set_observer(&progress);
   std::unique_ptr<LinkRecorder> recorder;
   if (!fw.board().serial_peer().empty()) {
@@ -286,8 +295,14 @@ nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
         std::make_unique<LinkRecorder>(fw.board().serial_peer(), config.serial.protocol, directory);
   }
   const std::atomic<bool> stop{false};
-  const firmware::RunSummary s = fw.run(options.frames, stop);
+  const firmware::RunSummary s = fw.run(frames, stop);
   if (recorder) recorder->finish();
+  nlohmann::json odometry;
+  if (path && recorder && fw.calibration()) {
+    odometry = check_trajectory(recorder->odometry(),
+                                hal::world_trajectory(*chosen_scene.world, *fw.calibration()),
+                                chosen_scene.world->path->rate_hz, directory);
+  }
 
   nlohmann::json out = {{"scene", scene},
                         {"images", images},
@@ -310,6 +325,7 @@ nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
     out["recordings"] = files;
   }
   if (!truth.is_null()) out["truth"] = truth;
+  if (!odometry.is_null()) out["odometry"] = odometry;
   if (recorder) {
     out["last_ground"] = recorder->last_ground();
     out["received"] = recorder->counts();
@@ -337,6 +353,12 @@ void print_scene(const nlohmann::json& s) {
               << h["corners_us"].get<int>() / 1000.0 << " ms, disparity "
               << h["disparity_us"].get<int>() / 1000.0 << " ms, busy "
               << h["busy_permille"].get<int>() / 10.0 << " %";
+  }
+  if (s.contains("odometry") && !s["odometry"].is_null()) {
+    const nlohmann::json& o = s["odometry"];
+    std::cout << "; odometry at the last pair " << o["end_error_m"].get<double>() << " m ("
+              << o["end_error_percent"].get<double>() << " % of " << o["path_m"].get<double>()
+              << " m) and " << o["end_heading_deg"].get<double>() << " deg off";
   }
   std::cout << "\n";
 }
@@ -394,7 +416,8 @@ void add_sim_command(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("--board", options->board, "The simulated board's folder or file")
       ->capture_default_str();
   cmd->add_option("--scene", options->scenes, "Scenes to run (default: all of the board's)");
-  cmd->add_option("--frames,-n", options->frames, "Frame pairs per scene")
+  cmd->add_option("--frames,-n", options->frames,
+                  "Frame pairs per scene (a rendered path: its whole path, one pair per pose)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_option("--pictures", options->pictures,
