@@ -4,10 +4,12 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <vector>
 
 #include "commands.hpp"
@@ -32,6 +34,44 @@ struct LinkOptions {
   int count = 0;         // stop after this many messages (0: no limit)
   double seconds = 0.0;  // stop after this long (0: until the stream ends)
   std::vector<std::string> send;
+  std::string trajectory;  // the poses decoded, as a TUM trajectory file
+};
+
+// The odometry's poses as they are decoded, one TUM line each (timestamp tx ty tz qx qy qz qw):
+// the native message's tracked pairs (the rectified left camera in the odometry frame, at its
+// trigger time), or MAVLink ODOMETRY's (the body in LOCAL_FRD, at time_usec), lost ones left out.
+class TrajectoryWriter {
+ public:
+  explicit TrajectoryWriter(const std::string& file) : out_(file) {
+    require(out_.good(), file, ": cannot write the trajectory");
+  }
+  void add(const nlohmann::json& m) {
+    if (m["type"] != "odometry") return;
+    if (m.contains("status")) {  // native
+      if (m["status"].get<int>() != static_cast<int>(OdometryStatus::tracking)) return;
+      line(static_cast<double>(m["trigger_ns"].get<std::uint64_t>()) / 1e9,
+           {m["x_mm"].get<double>() / 1000, m["y_mm"].get<double>() / 1000,
+            m["z_mm"].get<double>() / 1000},
+           {m["qx_e9"].get<double>() * 1e-9, m["qy_e9"].get<double>() * 1e-9,
+            m["qz_e9"].get<double>() * 1e-9, m["qw_e9"].get<double>() * 1e-9});
+      return;
+    }
+    if (m["quality"].get<int>() < 0) return;  // MAVLink: lost
+    const nlohmann::json& q = m["q"];         // w, x, y, z
+    line(static_cast<double>(m["time_usec"].get<std::uint64_t>()) / 1e6,
+         {m["x"].get<double>(), m["y"].get<double>(), m["z"].get<double>()},
+         {q[1].get<double>(), q[2].get<double>(), q[3].get<double>(), q[0].get<double>()});
+  }
+
+ private:
+  void line(double time, std::array<double, 3> t, std::array<double, 4> q) {
+    char text[256];
+    std::snprintf(text, sizeof text, "%.9f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", time, t[0], t[1],
+                  t[2], q[0], q[1], q[2], q[3]);
+    out_ << text;
+    out_.flush();
+  }
+  std::ofstream out_;
 };
 
 std::string to_text(const nlohmann::json& json) {
@@ -108,7 +148,9 @@ class Printer {
   explicit Printer(const LinkOptions& options)
       : options_(options),
         decoder_(options.protocol == "mavlink" ? JsonStreamDecoder::Protocol::mavlink
-                                               : JsonStreamDecoder::Protocol::epipole) {}
+                                               : JsonStreamDecoder::Protocol::epipole) {
+    if (!options.trajectory.empty()) trajectory_.emplace(options.trajectory);
+  }
   // Feeds bytes; false once enough messages were printed.
   bool feed(std::span<const std::uint8_t> bytes) {
     const bool more =
@@ -129,6 +171,7 @@ class Printer {
  private:
   // False once enough messages were printed.
   bool print(const nlohmann::json& json) {
+    if (trajectory_) trajectory_->add(json);
     std::cout << (options_.json ? json.dump() : to_text(json)) << "\n";
     ++printed_;
     return !enough();
@@ -137,6 +180,7 @@ class Printer {
 
   const LinkOptions& options_;
   JsonStreamDecoder decoder_;
+  std::optional<TrajectoryWriter> trajectory_;
   int printed_ = 0;
 };
 
@@ -207,7 +251,7 @@ void add_link_command(CLI::App& app, const GlobalOptions&) {
                   "Serial device (e.g. /dev/ttyUSB0) or a recorded stream file")
       ->required();
   cmd->add_option("--protocol", options->protocol,
-                  "The board's serial.protocol: epipole, or mavlink (HEARTBEAT, OBSTACLE_DISTANCE)")
+                  "The board's serial.protocol: epipole, or mavlink")
       ->check(CLI::IsMember({"epipole", "mavlink"}))
       ->capture_default_str();
   cmd->add_option("--baud,-b", options->baud, "Baud rate of a serial device")
@@ -220,6 +264,9 @@ void add_link_command(CLI::App& app, const GlobalOptions&) {
       })
       ->capture_default_str();
   cmd->add_flag("--json", options->json, "One JSON object per message, then the decoder's counts");
+  cmd->add_option("--trajectory", options->trajectory,
+                  "Write the odometry's tracked poses to FILE as a TUM trajectory (timestamp tx ty "
+                  "tz qx qy qz qw), for evo and other trajectory tools");
   cmd->add_option("--count,-n", options->count, "Stop after N messages")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--seconds,-s", options->seconds, "Stop after this long (serial devices)")

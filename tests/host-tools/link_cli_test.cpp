@@ -200,6 +200,73 @@ TEST(LinkCli, DecodesAMavlinkStream) {
   std::remove(path.c_str());
 }
 
+// --trajectory: the odometry's tracked poses as a TUM trajectory, native and MAVLink; pairs
+// starting or lost are not poses.
+TEST(LinkCli, WritesTheOdometryAsATumTrajectory) {
+  const auto odometry = [](std::uint32_t frame, OdometryStatus status, std::int32_t z_mm) {
+    Odometry m;
+    m.frame = frame;
+    m.trigger_ns = 1'500'000'000ull + frame * 66'666'667ull;
+    m.status = status;
+    m.z_mm = z_mm;
+    m.qw_e9 = 707'106'781;
+    m.qy_e9 = 707'106'781;
+    return m;
+  };
+  Bytes stream;
+  append_frame(stream, odometry(0, OdometryStatus::starting, 0), 0);
+  append_frame(stream, odometry(1, OdometryStatus::tracking, 1234), 1);
+  append_frame(stream, odometry(2, OdometryStatus::lost, 1234), 2);
+  append_frame(stream, odometry(3, OdometryStatus::tracking, -50), 3);
+  const std::string path = write_stream("epipole-link-odometry.bin", stream);
+  const std::string tum = ::testing::TempDir() + "epipole-link-odometry.tum";
+  const Result r = finish(start_tool("link " + path + " --trajectory " + tum));
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  std::ifstream in(tum);
+  std::vector<std::vector<double>> rows;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream fields(line);
+    std::vector<double> row;
+    for (double v = 0; fields >> v;) row.push_back(v);
+    EXPECT_EQ(row.size(), 8u) << line;
+    rows.push_back(row);
+  }
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_NEAR(rows[0][0], 1.566666667, 1e-9);
+  EXPECT_NEAR(rows[0][3], 1.234, 1e-9);
+  EXPECT_NEAR(rows[0][5], 0.707106781, 1e-9) << "qy";
+  EXPECT_NEAR(rows[0][7], 0.707106781, 1e-9) << "qw last";
+  EXPECT_NEAR(rows[1][3], -0.05, 1e-9);
+
+  Bytes mavlink_stream;
+  Bytes frame(mavlink::kMaxFrameSize);
+  mavlink::Odometry m;
+  m.time_usec = 2'000'000;
+  m.x = 1.5f;
+  m.q = {1, 0, 0, 0};
+  m.quality = 80;
+  std::size_t n = mavlink::encode_odometry(m, {1, 197}, 0, frame);
+  mavlink_stream.insert(mavlink_stream.end(), frame.begin(), frame.begin() + n);
+  m.quality = -1;  // lost
+  n = mavlink::encode_odometry(m, {1, 197}, 1, frame);
+  mavlink_stream.insert(mavlink_stream.end(), frame.begin(), frame.begin() + n);
+  const std::string mavlink_path =
+      write_stream("epipole-link-odometry-mavlink.bin", mavlink_stream);
+  const Result mr =
+      finish(start_tool("link " + mavlink_path + " --protocol mavlink --trajectory " + tum));
+  ASSERT_EQ(mr.exit_code, 0) << mr.out;
+  std::ifstream again(tum);
+  std::string line;
+  ASSERT_TRUE(std::getline(again, line));
+  EXPECT_EQ(line.substr(0, 20), "2.000000000 1.500000");
+  EXPECT_FALSE(std::getline(again, line)) << "the lost pose is no pose";
+
+  const Result bad = finish(start_tool("link " + path + " --trajectory /no/such/dir/t.tum"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.out.find("cannot write the trajectory"), std::string::npos) << bad.out;
+  for (const std::string& p : {path, mavlink_path, tum}) std::remove(p.c_str());
+}
+
 TEST(LinkCli, BadArgumentsAreOneLineErrors) {
   const std::string file = ::testing::TempDir() + "epipole-link-empty.bin";
   std::ofstream(file).put('x');
