@@ -39,7 +39,7 @@ echo "demo: calibrating the chessboard rig"
   --report "$out/calibration/report.json" --preview "$out/calibration/preview.png"
 
 echo "demo: the firmware on the simulated board (board/sim)"
-"$tool" sim --board board/sim --frames 60 --pictures 2 --record chessboard --out "$out/sim"
+"$tool" sim --board board/sim --pictures 2 --record chessboard --out "$out/sim"
 shopt -s nullglob
 recordings=("$out"/sim/chessboard/recordings/*.mcap)
 shopt -u nullglob

@@ -40,10 +40,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
+constexpr std::uint64_t kDefaultFrames = 30;  // a replayed scene's pairs without --frames
+
 struct SimOptions {
   std::string board = "board/sim";
   std::vector<std::string> scenes;  // empty: every scene of the board
-  std::uint64_t frames = 30;
+  std::uint64_t frames = 0;         // 0 (not given): 30, and a rendered path's whole path
   int pictures = 1;
   std::string out = "out/sim";
   bool json = false;                // the summary on stdout instead of a line per scene
@@ -122,7 +124,8 @@ class LinkRecorder {
     ++counts_[json["type"].get<std::string>()];
     if (json["type"] == "health") last_health_ = json;
     if (json["type"] == "ground") last_ground_ = json;
-    if (json["type"] == "odometry") odometry_.push_back(json);
+    // The native message (MAVLink's ODOMETRY is in the vehicle's frames).
+    if (json["type"] == "odometry" && json.contains("status")) odometry_.push_back(json);
     return true;
   }
 
@@ -263,6 +266,15 @@ nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
     for (std::string& setting : recording_overrides(recordings)) overrides.push_back(setting);
   }
   firmware::BoardConfig config = firmware::load_board_config(options.board, overrides, chosen);
+  // A rendered path is walked to its end, one pair per pose; with --frames, its first poses.
+  hal::SimSettings& sim = hal::sim_settings(config.sections);
+  const hal::SimScene& chosen_scene = sim.chosen();
+  const bool path = chosen_scene.world && chosen_scene.world->path;
+  if (path && options.frames > 0) {
+    for (hal::SimScene& s : sim.scenes) {
+      if (s.name == chosen_scene.name) s.world->path->max_poses = options.frames;
+    }
+  }
   fs::create_directories(directory);
   // The pty's robot end: a link in the output folder, so the firmware's link is easy to find.
   if (hal::BackendRegistry::builtin().serial_traits(config.serial.backend).simulated &&
@@ -282,10 +294,9 @@ nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
   const nlohmann::json truth = write_truth(config, directory);
   firmware::Firmware fw(config);
   const int images = static_cast<int>(hal::simulated_board(fw.board().hardware())->scene_images());
-  // A rendered path is walked to its end: one pair per pose.
-  const hal::SimScene& chosen_scene = hal::sim_settings(config.sections).chosen();
-  const bool path = chosen_scene.world && chosen_scene.world->path;
-  const std::uint64_t frames = path ? static_cast<std::uint64_t>(images) : options.frames;
+  const std::uint64_t frames = options.frames > 0 ? options.frames
+                               : path             ? static_cast<std::uint64_t>(images)
+                                                  : kDefaultFrames;
   PictureWriter pictures(directory, images, options.pictures, config.stereo.max_disparity);
   FrameProgress progress(pictures, scene, frames);
   fw.frame_loop().set_observer(&progress);
@@ -417,9 +428,9 @@ void add_sim_command(CLI::App& app, const GlobalOptions&) {
       ->capture_default_str();
   cmd->add_option("--scene", options->scenes, "Scenes to run (default: all of the board's)");
   cmd->add_option("--frames,-n", options->frames,
-                  "Frame pairs per scene (a rendered path: its whole path, one pair per pose)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+                  "Frame pairs per scene (default 30; a rendered path: its whole path, one pair "
+                  "per pose, or with this its first N poses)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--pictures", options->pictures,
                   "Pictures of the first N distinct images of each scene")
       ->check(CLI::NonNegativeNumber)

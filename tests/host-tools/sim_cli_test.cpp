@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -68,7 +69,7 @@ TEST(SimCli, RunsEverySceneOfTheSimulatedBoard) {
   const auto& r = sim_run();
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const nlohmann::json s = summary();
-  ASSERT_EQ(s["scenes"].size(), 4u) << s.dump(2);
+  ASSERT_EQ(s["scenes"].size(), 5u) << s.dump(2);
   std::vector<std::string> names;
   for (const auto& scene : s["scenes"]) {
     names.push_back(scene["scene"]);
@@ -87,15 +88,16 @@ TEST(SimCli, RunsEverySceneOfTheSimulatedBoard) {
         << d.dump();
     EXPECT_GT(scene["last_health"]["fps_centi"].get<int>(), 0);
   }
-  EXPECT_EQ(names, (std::vector<std::string>{"chessboard", "aloe", "faces", "ground"}));
+  // The loop's path cut to its first kFrames poses (--frames).
+  EXPECT_EQ(names, (std::vector<std::string>{"chessboard", "aloe", "faces", "ground", "loop"}));
   if (!r.out.empty()) {
-    EXPECT_EQ(scene_lines(r.out), 4) << r.out;
+    EXPECT_EQ(scene_lines(r.out), 5) << r.out;
   }
 }
 
 TEST(SimCli, WritesThePicturesAndTheStream) {
   ASSERT_EQ(sim_run().exit_code, 0) << sim_run().out;
-  for (const char* scene : {"chessboard", "aloe", "faces", "ground"}) {
+  for (const char* scene : {"chessboard", "aloe", "faces", "ground", "loop"}) {
     const fs::path dir = out_dir() / scene;
     const epipole::GrayImage pair = epipole::load_gray(dir / "frame0-rectified-pair.png");
     EXPECT_EQ(pair.width(), 1280) << scene;
@@ -387,6 +389,98 @@ calibration_health: {online_correction: true}
   EXPECT_EQ(after["rig_corr"], 1);
   EXPECT_NEAR(after["rig_cpitch"], 0.3, 0.03);
   EXPECT_NEAR(after["rig_croll"], 0.2, 0.03);
+}
+
+// The rig's odometry as a flight controller reads it, with an independent MAVLink decoder
+// (node-mavlink): a rendered walk (2 m ahead at 1 m/s, a right turn of 90 degrees, 2 m on) on a
+// MAVLink board; every ODOMETRY in LOCAL_FRD / BODY_FRD from the VIO estimator, its time rising,
+// and the last one where the exact path (the sim's trajectory.tum, in the rectified camera's
+// axes, turned here to FRD: x its z, y its x, z its y) says the rig is.
+TEST(SimCli, AMavlinkBoardSendsItsOdometryToTheAutopilot) {
+  ASSERT_TRUE(epipole::test::clients_installed()) << "the test clients: scripts/setup.sh";
+  const fs::path board = mavlink_board("sim-mavlink-walk");
+  std::ifstream in(board / "board.yaml");
+  std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string faces = "    faces:";
+  ASSERT_NE(yaml.find(faces), std::string::npos);
+  yaml.insert(yaml.find(faces), R"(    walk:
+      world:
+        rig: {height_m: 0.8, pitch_deg: 8, roll_deg: 0}
+        floor:
+          texture: ${EPIPOLE_DATA_DIR}/samples/baboon.jpg
+          texel_mm: 4
+        boxes:
+          - at_m: [1, 6]
+            size_m: [8, 2.5, 0.2]
+            texture: ${EPIPOLE_DATA_DIR}/samples/building.jpg
+            texel_mm: 5
+          - at_m: [5, -2]
+            size_m: [0.2, 2.5, 8]
+            texture: ${EPIPOLE_DATA_DIR}/samples/fruits.jpg
+            texel_mm: 5
+        path: {waypoints_m: [[0, 0], [0, 2], [2, 2]], speed_mps: 1, turn_dps: 90, rate_hz: 15}
+      calibration: chessboard-rig.yaml
+)");
+  std::ofstream(board / "board.yaml") << yaml;
+  const fs::path out = fs::path(::testing::TempDir()) / "sim-mavlink-walk-out";
+  const auto r = run_tool("sim --board '" + board.string() + "' --scene walk --pictures 0 --out '" +
+                          out.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+
+  // The exact path's last pose, turned to FRD.
+  std::ifstream truth_file(out / "walk" / "trajectory.tum");
+  std::string line, last_line;
+  int poses = 0;
+  while (std::getline(truth_file, line)) {
+    last_line = line;
+    ++poses;
+  }
+  ASSERT_EQ(poses, 76) << "5 s at 15 pairs a second, and the start";
+  std::istringstream fields(last_line);
+  double t = 0, tx = 0, ty = 0, tz = 0, qx = 0, qy = 0, qz = 0, qw = 0;
+  ASSERT_TRUE(fields >> t >> tx >> ty >> tz >> qx >> qy >> qz >> qw) << last_line;
+  const std::array<double, 3> position{tz, tx, ty};
+  const std::array<double, 4> q{qw, qz, qx, qy};
+
+  const auto read = epipole::test::run_client("mavlink-read.mjs",
+                                              "'" + (out / "walk" / "serial.bin").string() + "'");
+  ASSERT_EQ(read.exit_code, 0) << read.out;
+  const nlohmann::json got = nlohmann::json::parse(read.out);
+  EXPECT_EQ(got["crc_errors"], 0);
+  EXPECT_EQ(got["invalid"], 0);
+  EXPECT_EQ(got["unknown"], 0);
+  int count = 0;
+  double last_time = -1;
+  nlohmann::json last;
+  for (const nlohmann::json& m : got["messages"]) {
+    if (m["name"] != "ODOMETRY") continue;
+    ++count;
+    const nlohmann::json& f = m["fields"];
+    EXPECT_EQ(f["frame_id"], 20) << "MAV_FRAME_LOCAL_FRD";
+    EXPECT_EQ(f["child_frame_id"], 12) << "MAV_FRAME_BODY_FRD";
+    EXPECT_EQ(f["estimator_type"], 3) << "MAV_ESTIMATOR_TYPE_VIO";
+    EXPECT_EQ(f["reset_counter"], 0);
+    EXPECT_GT(f["time_usec"].get<double>(), last_time);
+    last_time = f["time_usec"].get<double>();
+    last = f;
+  }
+  EXPECT_GE(count, 70) << "a pose for (nearly) every pair";
+  ASSERT_FALSE(last.is_null()) << read.out;
+  std::printf("walk: the last ODOMETRY (%.3f, %.3f, %.3f) m, truth (%.3f, %.3f, %.3f) m\n",
+              last["x"].get<double>(), last["y"].get<double>(), last["z"].get<double>(),
+              position[0], position[1], position[2]);
+  EXPECT_GT(last["quality"].get<int>(), 0);
+  EXPECT_NEAR(last["x"].get<double>(), position[0], 0.05);
+  EXPECT_NEAR(last["y"].get<double>(), position[1], 0.05);
+  EXPECT_NEAR(last["z"].get<double>(), position[2], 0.05);
+  double dot = 0;
+  for (std::size_t i = 0; i < 4; ++i) dot += last["q"][i].get<double>() * q[i];
+  EXPECT_LT(2 * std::acos(std::min(1.0, std::abs(dot))) * 180 / M_PI, 1.0) << "attitude";
+  // Walking on at 1 m/s, straight ahead in the body's frame.
+  EXPECT_NEAR(last["vx"].get<double>(), std::cos(8 * M_PI / 180), 0.15);
+  EXPECT_NEAR(last["vy"].get<double>(), 0, 0.15);
+  EXPECT_TRUE(std::isfinite(last["pose_covariance"][0].get<double>()));
+  EXPECT_GT(last["pose_covariance"][0].get<double>(), 0);
 }
 
 }  // namespace

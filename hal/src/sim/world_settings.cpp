@@ -215,6 +215,7 @@ std::vector<RigPose> world_poses(const SimWorld& world) {
     p.z_m += a * l.dz;
     p.yaw_deg += a * l.dyaw;
     poses.push_back(p);
+    if (poses.size() == path.max_poses) break;
   }
   return poses;
 }

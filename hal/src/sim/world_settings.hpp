@@ -68,6 +68,7 @@ struct WorldPath {
   double speed_mps = 1;
   double turn_dps = 90;
   double rate_hz = 15;
+  std::size_t max_poses = 0;  // 0: the whole path; else its first poses only (a short run)
 };
 
 struct SimWorld {
