@@ -88,13 +88,19 @@ nlohmann::json check_trajectory(const std::vector<nlohmann::json>& odometry,
     frames.push_back(m["frame"].get<std::uint64_t>());
   }
   if (tracked.empty()) return nullptr;
-  const auto truth_at = [&](std::uint64_t frame) -> const calib::RigidMotion& {
-    return truth[static_cast<std::size_t>(frame % n)];
+  // The odometry frame is the first keyframe's: the first pair tracked (pairs before it dropped
+  // or too poor); the truth, in pair 0's, is taken to it.
+  const calib::RigidMotion from_first =
+      truth[static_cast<std::size_t>(frames.front() % n)].inverse();
+  const auto truth_at = [&](std::uint64_t frame) {
+    return from_first.after(truth[static_cast<std::size_t>(frame % n)]);
   };
   std::vector<calib::RigidMotion> timeline;  // the truth up to the last pair
   double path_m = 0;
-  for (std::uint64_t f = 0; f <= frames.back(); ++f) {
-    if (f > 0) path_m += (truth_at(f).translation - truth_at(f - 1).translation).norm();
+  for (std::uint64_t f = frames.front(); f <= frames.back(); ++f) {
+    if (f > frames.front()) {
+      path_m += (truth_at(f).translation - truth_at(f - 1).translation).norm();
+    }
     timeline.push_back(truth_at(f));
   }
   std::vector<Eigen::Vector3d> estimate;
@@ -112,7 +118,7 @@ nlohmann::json check_trajectory(const std::vector<nlohmann::json>& odometry,
   }());
   draw_trajectories(timeline, estimate, directory / "trajectory.png");
   const calib::RigidMotion& last = tracked.back();
-  const calib::RigidMotion& true_last = truth_at(frames.back());
+  const calib::RigidMotion true_last = truth_at(frames.back());
   const double error = (last.translation - true_last.translation).norm();
   const double heading =
       degrees(Eigen::AngleAxisd(true_last.rotation.transpose() * last.rotation).angle());

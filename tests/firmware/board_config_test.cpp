@@ -154,8 +154,8 @@ TEST(BoardConfig, EveryBadValueNamesTheFileAndTheKey) {
        "serial.baud: 12345 is not a baud rate termios supports"},
       {"a baud rate that cannot carry the summaries", "serial: {backend: none}",
        "serial: {backend: pty, baud: 9600}",
-       "serial.baud: 9600 baud carries 960 bytes/s, but the pair summaries, the odometry and "
-       "health alone need"},
+       "serial.baud: 9600 baud carries 960 bytes/s, but the pair summaries and health alone "
+       "need"},
       {"nor MAVLink's obstacle distances", "serial: {backend: none}",
        "serial: {backend: pty, baud: 19200, protocol: mavlink}",
        "serial.baud: 19200 baud carries 1920 bytes/s, but the obstacle distances"},

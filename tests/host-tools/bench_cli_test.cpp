@@ -166,9 +166,9 @@ TEST_F(BenchCli, BadArgumentsAreUsageErrorsAndBadInputOneLine) {
   EXPECT_NE(no_scenes.out.find("--left and --right"), std::string::npos) << no_scenes.out;
   const auto no_scene = run_tool("bench " + board("sim") + " --scene nosuch -n 1");
   EXPECT_EQ(no_scene.exit_code, 1) << no_scene.out;
-  EXPECT_NE(
-      no_scene.out.find("'nosuch' is not a scene of this board (chessboard, aloe, faces, ground, loop)"),
-      std::string::npos)
+  EXPECT_NE(no_scene.out.find(
+                "'nosuch' is not a scene of this board (chessboard, aloe, faces, ground, loop)"),
+            std::string::npos)
       << no_scene.out;
 }
 

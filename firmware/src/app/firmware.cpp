@@ -98,7 +98,10 @@ void Firmware::build(std::unique_ptr<Board> board, bool offline) {
   link.identity.system_id = config_.serial.mavlink_system_id;
   link.identity.component_id = config_.serial.mavlink_component_id;
   link.baud = config_.serial.port.baud;
-  link.odometry = protocol::has_stage(config_.stages, protocol::Stage::odometry);
+  link.odometry =
+      protocol::has_stage(config_.stages & pipeline_->available(), protocol::Stage::odometry) &&
+      protocol::has_stage(config_.stages, protocol::Stage::sparse) &&
+      protocol::has_stage(config_.stages, protocol::Stage::corners);
   link_ = std::make_unique<Link>(board_->serial(), board_->clock(), link);
   outputs_ = std::make_unique<Outputs>(config_, calibration_, offline);
   loop_ = std::make_unique<FrameLoop>(config_, *board_, *pipeline_, *link_, outputs_.get());

@@ -338,9 +338,8 @@ FrameLoop::Verdict FrameLoop::set_trigger_rate(const protocol::SetTriggerRate& c
     return rejected(AckReason::timing, e.what());
   }
   if (config_.has_link()) {  // the summaries must fit the link at the new rate
-    if (const std::string problem =
-            link_capacity_problem(link_.protocol(), config_.serial.port.baud, period,
-                                  protocol::has_stage(config_.stages, protocol::Stage::odometry));
+    if (const std::string problem = link_capacity_problem(
+            link_.protocol(), config_.serial.port.baud, period, odometry_runs());
         !problem.empty()) {
       pairer.set_trigger_period(old_period);
       return rejected(AckReason::out_of_range, problem);
@@ -390,6 +389,13 @@ FrameLoop::Verdict FrameLoop::set_exposure(const protocol::SetExposure& command)
     return rejected(AckReason::out_of_range, e.what());
   }
   return {AckStatus::ok, AckReason::none};
+}
+
+bool FrameLoop::odometry_runs() const {
+  constexpr StageMask needs = protocol::stage_bit(protocol::Stage::odometry) |
+                              protocol::stage_bit(protocol::Stage::sparse) |
+                              protocol::stage_bit(protocol::Stage::corners);
+  return (stages_ & pipeline_.available() & needs) == needs;
 }
 
 void FrameLoop::publish(const FrameResult& r, hal::Nanoseconds latency, bool trigger_from_capture) {

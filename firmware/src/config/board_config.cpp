@@ -511,6 +511,15 @@ std::string watchdog_problem(const BoardConfig& c, hal::Nanoseconds watchdog_int
 namespace {
 
 // The checks across keys, each failing with the file and the key.
+// The odometry goes out every pair: the stage on with what it reads, and a calibration (its
+// points in metres).
+bool odometry_sent(const BoardConfig& c) {
+  constexpr protocol::StageMask needs = protocol::stage_bit(protocol::Stage::odometry) |
+                                        protocol::stage_bit(protocol::Stage::sparse) |
+                                        protocol::stage_bit(protocol::Stage::corners);
+  return (c.stages & needs) == needs && !c.calibration.empty();
+}
+
 struct Checks {
   const BoardConfig& c;
   const std::string& file;
@@ -577,8 +586,7 @@ struct Checks {
                                       ? LinkProtocol::mavlink
                                       : LinkProtocol::epipole;
     if (const std::string problem =
-            link_capacity_problem(protocol, c.serial.port.baud, c.frame_period(),
-                                  protocol::has_stage(c.stages, protocol::Stage::odometry));
+            link_capacity_problem(protocol, c.serial.port.baud, c.frame_period(), odometry_sent(c));
         !problem.empty()) {
       fail("serial.baud", problem);
     }

@@ -11,8 +11,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <exception>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -456,7 +458,9 @@ StereoImages render_world(const SimWorld& world, std::span<const RigPose> poses,
   images.left.resize(poses.size());
   images.right.resize(poses.size());
   std::atomic<std::size_t> next_run{0};
-  const auto render_runs = [&] {
+  std::mutex failed_mutex;
+  std::exception_ptr failed;  // the first worker's exception, thrown once all have stopped
+  const auto render_all = [&] {
     for (std::size_t r = next_run++; r < runs.size(); r = next_run++) {
       const std::size_t end = r + 1 < runs.size() ? runs[r + 1] : poses.size();
       const WorldView view = left_camera_view(poses[runs[r]]);
@@ -470,12 +474,24 @@ StereoImages render_world(const SimWorld& world, std::span<const RigPose> poses,
       }
     }
   };
-  const std::size_t helpers =
-      std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), runs.size()) - 1;
-  std::vector<std::jthread> threads;
-  threads.reserve(helpers);
-  for (std::size_t t = 0; t < helpers; ++t) threads.emplace_back(render_runs);
-  render_runs();
+  const auto render_runs = [&] {
+    try {
+      render_all();
+    } catch (...) {
+      next_run = runs.size();  // the others stop after the run in hand
+      const std::lock_guard lock(failed_mutex);
+      if (!failed) failed = std::current_exception();
+    }
+  };
+  {
+    const std::size_t helpers =
+        std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), runs.size()) - 1;
+    std::vector<std::jthread> threads;
+    threads.reserve(helpers);
+    for (std::size_t t = 0; t < helpers; ++t) threads.emplace_back(render_runs);
+    render_runs();
+  }  // every worker joined before the images are used
+  if (failed) std::rethrow_exception(failed);
   return images;
 }
 

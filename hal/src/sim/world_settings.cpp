@@ -117,8 +117,8 @@ WorldPath read_world_path(const yaml::Fields& f, const YAML::Node& map, const st
     }
     return s;
   }();
-  if (seconds * path.rate_hz > kWorldMaxPathPoses) {
-    f.fail(key, cat("takes up to ", std::lround(seconds * path.rate_hz),
+  if (seconds * path.rate_hz + 1 > kWorldMaxPathPoses) {
+    f.fail(key, cat("takes up to ", std::llround(seconds * path.rate_hz) + 1,
                     " poses at rate_hz; at most ", kWorldMaxPathPoses, " are rendered"));
   }
   return path;

@@ -117,6 +117,8 @@ class FrameLoop {
   void say_device_changes();
   void say_link_capacity();
   bool trigger_quiet() const;
+  // The odometry runs on the pairs (and goes out on the link): the link's capacity counts it.
+  bool odometry_runs() const;
   hal::PairResult next_pair();
   bool take_freshest(hal::PairResult& got);
   struct TriggerTime {

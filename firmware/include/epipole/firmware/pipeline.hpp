@@ -78,10 +78,10 @@ struct FrameResult {
   // and the right camera's turn since the calibration, estimated over a window of pairs.
   std::optional<calib::HealthFigure> calibration_health;
   std::optional<calib::DriftEstimate> drift;
-  // Viola-Jones detections in the rectified left image, and each one's depth (valid when the
-  // disparity ran and the box holds valid disparities).
   // Where the rig is and how it moves (the odometry stage's; null when it did not run).
   const OdometryState* odometry = nullptr;
+  // Viola-Jones detections in the rectified left image, and each one's depth (valid when the
+  // disparity ran and the box holds valid disparities).
   std::span<const vision::Detection> detections;
   std::span<const DetectionDepth> detection_depths;
   StageTimes times{};
