@@ -230,10 +230,19 @@ class FrameProgress final : public firmware::FrameObserver {
     next_.on_frame(r);
     ++done_;
     progress_.show(cat("sim: ", scene_, ": pair ", done_, " of ", frames_), done_ == frames_);
+    if (stop_ != nullptr && r.frame >= last_frame_) *stop_ = true;
   }
   void on_message(const protocol::Message& message) override { next_.on_message(message); }
+  // A path ends at its last pose: the run stops once its pair is done (pairs skipped for the
+  // loop's time would otherwise run on into the path's first poses again).
+  void stop_after(std::uint32_t frame, std::atomic<bool>& stop) {
+    last_frame_ = frame;
+    stop_ = &stop;
+  }
 
  private:
+  std::atomic<bool>* stop_ = nullptr;
+  std::uint32_t last_frame_ = 0;
   firmware::FrameObserver& next_;
   std::string scene_;
   std::uint64_t frames_;
@@ -305,7 +314,8 @@ nlohmann::json run_scene(const std::string& scene, const SimOptions& options,
     recorder =
         std::make_unique<LinkRecorder>(fw.board().serial_peer(), config.serial.protocol, directory);
   }
-  const std::atomic<bool> stop{false};
+  std::atomic<bool> stop{false};
+  if (path) progress.stop_after(static_cast<std::uint32_t>(frames - 1), stop);
   const firmware::RunSummary s = fw.run(frames, stop);
   if (recorder) recorder->finish();
   nlohmann::json odometry;

@@ -73,13 +73,21 @@ TEST(SimCli, RunsEverySceneOfTheSimulatedBoard) {
   std::vector<std::string> names;
   for (const auto& scene : s["scenes"]) {
     names.push_back(scene["scene"]);
-    EXPECT_EQ(scene["frames"], kFrames) << scene.dump(2);
+    // A path (the loop, cut to its first kFrames poses) ends at its last pose: the pairs the
+    // loop's time skipped are not made up after it.
+    const int frames = scene["frames"].get<int>();
+    if (scene["scene"] == "loop") {
+      EXPECT_GT(frames, kFrames / 2) << scene.dump(2);
+      EXPECT_LE(frames, kFrames) << scene.dump(2);
+    } else {
+      EXPECT_EQ(frames, kFrames) << scene.dump(2);
+    }
     EXPECT_EQ(scene["timeouts"], 0) << scene.dump(2);
     EXPECT_EQ(scene["messages_dropped"], 0) << scene.dump(2);
     EXPECT_EQ(scene["calibration"], "yes");
     // What the robot's end of the link received and decoded.
-    EXPECT_EQ(scene["received"]["frame"], kFrames) << scene.dump(2);
-    EXPECT_EQ(scene["received"]["obstacles"], kFrames) << scene.dump(2);
+    EXPECT_EQ(scene["received"]["frame"], frames) << scene.dump(2);
+    EXPECT_EQ(scene["received"]["obstacles"], frames) << scene.dump(2);
     EXPECT_GE(scene["received"]["health"].get<int>(), 1) << scene.dump(2);
     const auto& d = scene["decoder"];
     EXPECT_EQ(d["bad_cobs"].get<int>() + d["bad_crc"].get<int>() + d["bad_body"].get<int>() +
@@ -462,7 +470,7 @@ TEST(SimCli, AMavlinkBoardSendsItsOdometryToTheAutopilot) {
     EXPECT_EQ(f["reset_counter"], 0);
     EXPECT_GT(f["time_usec"].get<double>(), last_time);
     last_time = f["time_usec"].get<double>();
-    last = f;
+    if (f["quality"].get<int>() >= 0) last = f;  // the last pose tracked
   }
   EXPECT_GE(count, 70) << "a pose for (nearly) every pair";
   ASSERT_FALSE(last.is_null()) << read.out;
@@ -470,6 +478,7 @@ TEST(SimCli, AMavlinkBoardSendsItsOdometryToTheAutopilot) {
               last["x"].get<double>(), last["y"].get<double>(), last["z"].get<double>(),
               position[0], position[1], position[2]);
   EXPECT_GT(last["quality"].get<int>(), 0);
+  EXPECT_GE(last["time_usec"].get<double>(), last_time - 100'000) << "tracked to the end";
   EXPECT_NEAR(last["x"].get<double>(), position[0], 0.05);
   EXPECT_NEAR(last["y"].get<double>(), position[1], 0.05);
   EXPECT_NEAR(last["z"].get<double>(), position[2], 0.05);
