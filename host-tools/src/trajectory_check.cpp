@@ -107,12 +107,8 @@ nlohmann::json check_trajectory(const std::vector<nlohmann::json>& odometry,
   for (const calib::RigidMotion& p : tracked) estimate.push_back(p.translation);
   write_text_file_atomically(directory / "odometry.tum", [&] {
     std::string text;
-    for (std::size_t i = 0; i < tracked.size(); ++i) {
-      const std::vector<calib::RigidMotion> one{tracked[i]};
-      std::string line = hal::tum_trajectory(one, 1.0);
-      // tum_trajectory stamps pose 0 at 0: this one's time is its frame's on the path.
-      line.replace(0, line.find(' '), cat(static_cast<double>(frames[i]) / rate_hz));
-      text += line;
+    for (std::size_t i = 0; i < tracked.size(); ++i) {  // at its frame's time on the path
+      text += hal::tum_line(static_cast<double>(frames[i]) / rate_hz, tracked[i]);
     }
     return text;
   }());

@@ -615,17 +615,22 @@ void write_world_truth(const SimWorld& world, const calib::StereoCalibration& ri
   write_text_file_atomically(directory / "truth.yaml", yaml.str());
 }
 
-std::string tum_trajectory(std::span<const calib::RigidMotion> poses, double rate_hz) {
+std::string tum_line(double seconds, const calib::RigidMotion& pose) {
   std::ostringstream out;
   out.precision(9);
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    const Eigen::Quaterniond q(poses[i].rotation);
-    const Eigen::Vector3d& t = poses[i].translation;
-    out << std::fixed << static_cast<double>(i) / rate_hz << std::defaultfloat << ' ' << t.x()
-        << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' '
-        << q.w() << '\n';
-  }
+  const Eigen::Quaterniond q(pose.rotation);
+  const Eigen::Vector3d& t = pose.translation;
+  out << std::fixed << seconds << std::defaultfloat << ' ' << t.x() << ' ' << t.y() << ' ' << t.z()
+      << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
   return out.str();
+}
+
+std::string tum_trajectory(std::span<const calib::RigidMotion> poses, double rate_hz) {
+  std::string text;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    text += tum_line(static_cast<double>(i) / rate_hz, poses[i]);
+  }
+  return text;
 }
 
 }  // namespace epipole::hal

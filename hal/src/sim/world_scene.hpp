@@ -43,6 +43,8 @@ std::vector<calib::RigidMotion> world_trajectory(const SimWorld& world,
 
 // Poses as a TUM trajectory file's lines (timestamp tx ty tz qx qy qz qw), pose i at i / rate_hz.
 std::string tum_trajectory(std::span<const calib::RigidMotion> poses, double rate_hz);
+// One pose's line of a TUM trajectory file at `seconds`.
+std::string tum_line(double seconds, const calib::RigidMotion& pose);
 
 // The floor in the rectified left camera frame (R1 * left), as the firmware defines it.
 struct GroundTruth {
